@@ -1,0 +1,60 @@
+#pragma once
+// Type support shared by every message of the auv message set: what the middleware needs to
+// carry a type on either DDS vendor and what the CLI needs to print or build any message.
+
+#include <array>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <fastdds/dds/topic/TopicDataType.hpp>
+#include <yaml-cpp/yaml.h>
+
+namespace auv::msg {
+
+/// Compile-time facts about one IDL struct; specialised by the generated `auv/msg/all.h`.
+template <class T>
+struct MessageTraits;
+
+/// Value names of one IDL enum; specialised by the generated `auv/msg/all.h`.
+template <class T>
+struct EnumTraits {
+  static constexpr bool kIsEnum = false;
+};
+
+/// Run-time description of one message type, used where the type is only known by name.
+struct TypeSupport {
+  std::string name;  ///< DDS type name, identical on both vendors, e.g. "auv::msg::Odometry".
+  bool keyed = false;  ///< True when the type has @key members (instances matter).
+  /// A new Fast DDS TopicDataType (fastddsgen's CDR code); the caller owns it.
+  std::function<eprosima::fastdds::dds::TopicDataType*()> make_topic_data_type;
+  std::function<std::shared_ptr<void>()> create_sample;  ///< A default-constructed sample.
+  std::function<YAML::Node(const void*)> to_yaml;  ///< Sample -> YAML map of its fields.
+  /// Fills a sample from YAML; throws std::invalid_argument naming the offending field.
+  std::function<void(const YAML::Node&, void*)> from_yaml;
+};
+
+/// Every type of the message set (generated).
+const std::vector<TypeSupport>& allTypes();
+
+/// The type called `name` ("auv::msg::X", "auv/msg/X" or just "X"), or nullptr.
+const TypeSupport* findType(const std::string& name);
+
+/// Builds the TypeSupport of a generated message type.
+template <class T>
+TypeSupport makeTypeSupport() {
+  using Traits = MessageTraits<T>;
+  TypeSupport ts;
+  ts.name = Traits::kTypeName;
+  ts.keyed = Traits::kKeyed;
+  ts.make_topic_data_type = [] { return new typename Traits::PubSubType(); };
+  ts.create_sample = [] { return std::shared_ptr<void>(std::make_shared<T>()); };
+  ts.to_yaml = [](const void* sample) { return toYaml(*static_cast<const T*>(sample)); };
+  ts.from_yaml = [](const YAML::Node& node, void* sample) {
+    fromYaml(node, *static_cast<T*>(sample), "");
+  };
+  return ts;
+}
+
+}  // namespace auv::msg

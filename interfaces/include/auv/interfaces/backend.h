@@ -1,0 +1,102 @@
+#pragma once
+// The vendor-neutral DDS layer underneath Node: one participant per node, typed by the
+// fastddsgen TopicDataType of each message (see auv/msg/type_support.h). Components use
+// Node/Publisher/Subscription; tools such as the `auv` CLI use this level directly when
+// they only know a type by name.
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "auv/interfaces/qos.h"
+#include "auv/msg/type_support.h"
+
+namespace auv::interfaces {
+
+enum class Vendor { CYCLONEDDS, FASTDDS };
+
+/// "cyclonedds" or "fastdds".
+std::string toString(Vendor vendor);
+/// Parses "cyclonedds"/"fastdds"; throws std::invalid_argument naming the value otherwise.
+Vendor vendorFromString(const std::string& name);
+/// The vendor chosen by AUV_DDS (default cyclonedds); throws on an unknown value.
+Vendor vendorFromEnvironment();
+/// The domain chosen by AUV_DOMAIN_ID (default 0); throws unless it is an integer in [0, 232].
+int domainFromEnvironment();
+
+using Guid = std::array<uint8_t, 16>;
+/// Hex form "0110a3...": unique per endpoint/participant, printed by the CLI.
+std::string toString(const Guid& guid);
+
+/// What came with a taken sample besides its data.
+struct SampleInfo {
+  int64_t source_timestamp_ns = 0;  ///< Writer's clock at write time (system time).
+  Guid publication{};               ///< GUID of the writer that wrote the sample.
+};
+
+/// A typed DDS data writer of one vendor.
+class DataWriter {
+ public:
+  virtual ~DataWriter() = default;
+  /// Writes one sample (a pointer to the message type); throws std::runtime_error on failure.
+  virtual void write(const void* sample) = 0;
+  /// Number of currently matched readers (both vendors).
+  virtual int matchedReaders() const = 0;
+  virtual Guid guid() const = 0;
+};
+
+/// A typed DDS data reader of one vendor.
+class DataReader {
+ public:
+  virtual ~DataReader() = default;
+  /// Takes the next valid sample into `sample`; false when none is left.
+  virtual bool take(void* sample, SampleInfo* info) = 0;
+  /// Number of currently matched writers (both vendors).
+  virtual int matchedWriters() const = 0;
+  virtual Guid guid() const = 0;
+};
+
+/// Identity a participant advertises in its USER_DATA so `auv node list` can show it.
+struct ParticipantOptions {
+  int domain_id = 0;
+  std::string node_name;  ///< Shown by `auv node list`.
+};
+
+/// One DDS domain participant of one vendor.
+class Participant {
+ public:
+  virtual ~Participant() = default;
+  virtual Vendor vendor() const = 0;
+  virtual Guid guid() const = 0;
+  /// Creates a writer on `topic`; throws std::runtime_error with the topic name on failure.
+  virtual std::unique_ptr<DataWriter> createWriter(const std::string& topic,
+                                                   const msg::TypeSupport& type,
+                                                   const QosProfile& qos) = 0;
+  /// Creates a reader; `on_data` is called from a middleware thread when samples arrive and
+  /// must only signal (take happens elsewhere).
+  virtual std::unique_ptr<DataReader> createReader(const std::string& topic,
+                                                   const msg::TypeSupport& type,
+                                                   const QosProfile& qos,
+                                                   std::function<void()> on_data) = 0;
+};
+
+/// Creates a participant of `vendor`. Unless the user set the vendor's own configuration
+/// (CYCLONEDDS_URI or FASTRTPS_DEFAULT_PROFILES_FILE), it binds to loopback only.
+std::unique_ptr<Participant> createParticipant(Vendor vendor, const ParticipantOptions& options);
+
+/// Topic names are given ROS-style ("/nav/odometry" or "nav/odometry"); DDS sees
+/// "nav/odometry". Throws std::invalid_argument for an empty name or invalid characters.
+std::string toDdsTopicName(const std::string& topic);
+
+/// The USER_DATA string every participant of this layer advertises:
+/// "auv:node=<name>;host=<hostname>;pid=<pid>;vendor=<vendor>".
+std::string participantUserData(Vendor vendor, const std::string& node_name);
+
+namespace detail {
+std::unique_ptr<Participant> createCycloneParticipant(const ParticipantOptions& options);
+std::unique_ptr<Participant> createFastddsParticipant(const ParticipantOptions& options);
+}  // namespace detail
+
+}  // namespace auv::interfaces

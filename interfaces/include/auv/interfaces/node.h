@@ -1,0 +1,175 @@
+#pragma once
+// A Node is one component's presence on DDS: its own participant (so `auv node list` shows
+// it), its parameters, logger and clock, and the publishers, subscriptions, timers and
+// services it creates. Like an rclcpp node, its callbacks run when an Executor spins it.
+
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "auv/interfaces/backend.h"
+#include "auv/interfaces/clock.h"
+#include "auv/interfaces/logging.h"
+#include "auv/interfaces/parameters.h"
+#include "auv/interfaces/publisher.h"
+#include "auv/interfaces/service.h"
+#include "auv/interfaces/subscription.h"
+#include "auv/interfaces/timer.h"
+#include "auv/interfaces/waitable.h"
+#include "auv/msg/all.h"
+
+namespace auv::interfaces {
+
+struct NodeOptions {
+  std::optional<Vendor> vendor;          ///< Default: AUV_DDS (cyclonedds).
+  std::optional<int> domain_id;          ///< Default: AUV_DOMAIN_ID (0).
+  std::vector<std::string> params_files; ///< YAML parameter files, loaded in order.
+  std::vector<std::string> overrides;    ///< "name:=value" assignments (command line).
+};
+
+class Node {
+ public:
+  /// Creates the participant and reads the node's built-in parameters: `use_sim_time`
+  /// (bool, follow the `clock` topic) and `log_level`. Throws ParameterError or
+  /// std::runtime_error with the offending parameter, file or vendor.
+  explicit Node(const std::string& name, const NodeOptions& options = {});
+  ~Node();
+  Node(const Node&) = delete;
+  Node& operator=(const Node&) = delete;
+
+  const std::string& name() const { return name_; }
+  Vendor vendor() const { return participant_->vendor(); }
+  int domainId() const { return domain_id_; }
+  Parameters& parameters() { return *parameters_; }
+  const Logger& logger() const { return logger_; }
+  const Clock& clock() const { return *clock_; }
+  Participant& participant() { return *participant_; }
+
+  /// Publisher of T on `topic` with the `qos` profile (overridable by the string parameter
+  /// `qos.<topic>`, e.g. `qos.nav/odometry: sensor_data`).
+  template <class T>
+  std::shared_ptr<Publisher<T>> createPublisher(const std::string& topic, const QosProfile& qos);
+
+  /// Subscription of T; `callback` runs on the executor spinning this node.
+  template <class T>
+  std::shared_ptr<Subscription<T>> createSubscription(
+      const std::string& topic, const QosProfile& qos,
+      std::function<void(const T&)> callback);
+  template <class T>
+  std::shared_ptr<Subscription<T>> createSubscription(
+      const std::string& topic, const QosProfile& qos,
+      typename Subscription<T>::Callback callback);
+
+  /// Timer on the node's clock; the first call is one period from now.
+  std::shared_ptr<Timer> createTimer(double period_s, std::function<void()> callback);
+
+  /// Service on `<name>/request` and `<name>/reply`.
+  template <class Req, class Rep>
+  std::shared_ptr<Service<Req, Rep>> createService(const std::string& name,
+                                                   typename Service<Req, Rep>::Handler handler,
+                                                   const QosProfile& qos = commandQos());
+  template <class Req, class Rep>
+  std::shared_ptr<Client<Req, Rep>> createClient(const std::string& name,
+                                                 const QosProfile& qos = commandQos());
+
+  /// Runs every ready callback of this node once; returns true if any ran.
+  bool executeReady();
+  /// Steady-clock nanoseconds until the earliest timer is due (nullopt: no system timer).
+  std::optional<int64_t> nanosecondsUntilNextTimer() const;
+  /// Woken whenever this node has work; an Executor forwards it to its own.
+  const std::shared_ptr<Waker>& waker() const { return waker_; }
+
+ private:
+  QosProfile resolveQos(const std::string& topic, const QosProfile& qos);
+  template <class T>
+  static const msg::TypeSupport& typeSupport();
+  void addWaitable(const std::shared_ptr<Waitable>& waitable);
+
+  std::string name_;
+  int domain_id_ = 0;
+  std::unique_ptr<Parameters> parameters_;
+  Logger logger_;
+  std::unique_ptr<Clock> clock_;
+  std::unique_ptr<Participant> participant_;
+  std::shared_ptr<Waker> waker_;
+  mutable std::mutex mutex_;
+  std::vector<std::weak_ptr<Waitable>> waitables_;
+  std::unique_ptr<DataReader> clock_reader_;   // simulation time, taken in the DDS thread
+  std::unique_ptr<DataWriter> log_writer_;     // LogEntry on `log`
+};
+
+// ---------------------------------------------------------------------------------------
+// Template definitions.
+
+template <class T>
+const msg::TypeSupport& Node::typeSupport() {
+  static const msg::TypeSupport support = msg::makeTypeSupport<T>();
+  return support;
+}
+
+template <class T>
+std::shared_ptr<Publisher<T>> Node::createPublisher(const std::string& topic,
+                                                    const QosProfile& qos) {
+  const QosProfile resolved = resolveQos(topic, qos);
+  return std::make_shared<Publisher<T>>(
+      topic, resolved, participant_->createWriter(topic, typeSupport<T>(), resolved));
+}
+
+template <class T>
+std::shared_ptr<Subscription<T>> Node::createSubscription(
+    const std::string& topic, const QosProfile& qos,
+    typename Subscription<T>::Callback callback) {
+  const QosProfile resolved = resolveQos(topic, qos);
+  auto subscription = std::make_shared<Subscription<T>>(topic, resolved, std::move(callback));
+  std::weak_ptr<Subscription<T>> weak = subscription;
+  std::weak_ptr<Waker> waker = waker_;
+  subscription->attach(participant_->createReader(topic, typeSupport<T>(), resolved, [weak, waker] {
+    if (auto s = weak.lock()) s->markReady();
+    if (auto w = waker.lock()) w->notify();
+  }));
+  addWaitable(subscription);
+  return subscription;
+}
+
+template <class T>
+std::shared_ptr<Subscription<T>> Node::createSubscription(
+    const std::string& topic, const QosProfile& qos, std::function<void(const T&)> callback) {
+  return createSubscription<T>(
+      topic, qos, typename Subscription<T>::Callback([cb = std::move(callback)](
+                      const T& message, const SampleInfo&) { cb(message); }));
+}
+
+template <class Req, class Rep>
+std::shared_ptr<Service<Req, Rep>> Node::createService(
+    const std::string& name, typename Service<Req, Rep>::Handler handler, const QosProfile& qos) {
+  auto service = std::make_shared<Service<Req, Rep>>(name, std::move(handler));
+  std::weak_ptr<Service<Req, Rep>> weak = service;
+  std::weak_ptr<Waker> waker = waker_;
+  auto requests = participant_->createReader(name + "/request", typeSupport<Req>(), qos,
+                                             [weak, waker] {
+                                               if (auto s = weak.lock()) s->markReady();
+                                               if (auto w = waker.lock()) w->notify();
+                                             });
+  service->attach(std::move(requests),
+                  participant_->createWriter(name + "/reply", typeSupport<Rep>(), qos));
+  addWaitable(service);
+  return service;
+}
+
+template <class Req, class Rep>
+std::shared_ptr<Client<Req, Rep>> Node::createClient(const std::string& name,
+                                                     const QosProfile& qos) {
+  auto client = std::make_shared<Client<Req, Rep>>(name);
+  std::weak_ptr<Client<Req, Rep>> weak = client;
+  auto replies = participant_->createReader(name + "/reply", typeSupport<Rep>(), qos, [weak] {
+    if (auto c = weak.lock()) c->onReplies();
+  });
+  client->attach(participant_->createWriter(name + "/request", typeSupport<Req>(), qos),
+                 std::move(replies));
+  return client;
+}
+
+}  // namespace auv::interfaces

@@ -1,0 +1,225 @@
+// Cyclone DDS backend: plain C API plus the custom sertype of cyclone_sertype.cc.
+#include <dds/dds.h>
+
+#include <cstdlib>
+#include <cstring>
+#include <map>
+#include <mutex>
+#include <stdexcept>
+
+#include "auv/interfaces/backend.h"
+#include "cyclone_config.h"
+#include "cyclone_sertype.h"
+
+namespace auv::interfaces::detail {
+namespace {
+
+// Binds Cyclone to loopback unless the user configured it (CYCLONEDDS_URI). Multicast is
+// forced on `lo` so discovery works without peers lists (DDS_NOTES.md).
+constexpr const char* kLoopbackConfig =
+    "<CycloneDDS><Domain Id=\"any\"><General><Interfaces>"
+    "<NetworkInterface name=\"lo\" multicast=\"true\"/>"
+    "</Interfaces><AllowMulticast>true</AllowMulticast></General>"
+    "<Internal><SocketReceiveBufferSize min=\"default\"/></Internal>"
+    "</Domain></CycloneDDS>";
+
+void check(dds_return_t rc, const std::string& what) {
+  if (rc < 0) throw std::runtime_error("cyclonedds: " + what + ": " + dds_strretcode(rc));
+}
+
+}  // namespace
+
+// One explicitly created domain per domain id and process, kept for the process lifetime.
+void ensureCycloneDomain(int domain_id) {
+  static std::mutex mutex;
+  static std::map<int, dds_entity_t> domains;
+  const char* uri = std::getenv("CYCLONEDDS_URI");
+  if (uri != nullptr && *uri != '\0') return;  // Cyclone reads the user's configuration itself
+  std::lock_guard<std::mutex> lock(mutex);
+  if (domains.count(domain_id)) return;
+  const dds_entity_t domain = dds_create_domain(static_cast<dds_domainid_t>(domain_id),
+                                                kLoopbackConfig);
+  if (domain < 0 && domain != DDS_RETCODE_PRECONDITION_NOT_MET)
+    check(domain, "create domain " + std::to_string(domain_id));
+  domains[domain_id] = domain;
+}
+
+namespace {
+
+dds_duration_t toDuration(double seconds) {
+  return seconds <= 0 ? DDS_INFINITY : static_cast<dds_duration_t>(seconds * 1e9);
+}
+
+struct QosDeleter {
+  void operator()(dds_qos_t* q) const { dds_delete_qos(q); }
+};
+using QosPtr = std::unique_ptr<dds_qos_t, QosDeleter>;
+
+QosPtr toCycloneQos(const QosProfile& p) {
+  QosPtr q(dds_create_qos());
+  dds_qset_reliability(q.get(),
+                       p.reliability == Reliability::RELIABLE ? DDS_RELIABILITY_RELIABLE
+                                                              : DDS_RELIABILITY_BEST_EFFORT,
+                       toDuration(p.max_blocking_time_s));
+  dds_qset_durability(q.get(), p.durability == Durability::TRANSIENT_LOCAL
+                                   ? DDS_DURABILITY_TRANSIENT_LOCAL
+                                   : DDS_DURABILITY_VOLATILE);
+  const dds_history_kind_t history =
+      p.history == History::KEEP_LAST ? DDS_HISTORY_KEEP_LAST : DDS_HISTORY_KEEP_ALL;
+  dds_qset_history(q.get(), history, p.depth);
+  if (p.durability == Durability::TRANSIENT_LOCAL) {
+    // Without this Cyclone keeps only one historical sample per writer (DDS_NOTES.md).
+    dds_qset_durability_service(q.get(), 0, history, p.depth, p.max_samples, p.max_instances,
+                                p.max_samples_per_instance);
+  }
+  dds_qset_deadline(q.get(), toDuration(p.deadline_s));
+  dds_qset_liveliness(q.get(),
+                      p.liveliness == Liveliness::AUTOMATIC ? DDS_LIVELINESS_AUTOMATIC
+                                                            : DDS_LIVELINESS_MANUAL_BY_TOPIC,
+                      toDuration(p.liveliness_lease_s));
+  dds_qset_resource_limits(q.get(), p.max_samples, p.max_instances, p.max_samples_per_instance);
+  const dds_data_representation_id_t xcdr1 = DDS_DATA_REPRESENTATION_XCDR1;
+  dds_qset_data_representation(q.get(), 1, &xcdr1);
+  return q;
+}
+
+Guid guidOf(dds_entity_t entity) {
+  dds_guid_t g;
+  check(dds_get_guid(entity, &g), "get guid");
+  Guid guid;
+  std::memcpy(guid.data(), g.v, 16);
+  return guid;
+}
+
+class CycloneWriter : public DataWriter {
+ public:
+  explicit CycloneWriter(dds_entity_t writer) : writer_(writer) {}
+  ~CycloneWriter() override { dds_delete(writer_); }
+  void write(const void* sample) override { check(dds_write(writer_, sample), "write"); }
+  int matchedReaders() const override {
+    dds_publication_matched_status_t status;
+    return dds_get_publication_matched_status(writer_, &status) == 0
+               ? static_cast<int>(status.current_count)
+               : 0;
+  }
+  Guid guid() const override { return guidOf(writer_); }
+
+ private:
+  dds_entity_t writer_;
+};
+
+class CycloneReader : public DataReader {
+ public:
+  CycloneReader(std::function<void()> on_data) : on_data_(std::move(on_data)) {}
+  ~CycloneReader() override {
+    if (reader_ > 0) dds_delete(reader_);
+  }
+  void attach(dds_entity_t reader) { reader_ = reader; }
+  bool take(void* sample, SampleInfo* info) override {
+    for (;;) {
+      void* buffers[1] = {sample};
+      dds_sample_info_t si;
+      const dds_return_t n = dds_take(reader_, buffers, &si, 1, 1);
+      if (n <= 0) return false;
+      if (!si.valid_data) continue;  // dispose/unregister notifications carry no data
+      if (info != nullptr) {
+        info->source_timestamp_ns = si.source_timestamp;
+        dds_builtintopic_endpoint_t* pub = dds_get_matched_publication_data(reader_,
+                                                                            si.publication_handle);
+        if (pub != nullptr) {
+          std::memcpy(info->publication.data(), pub->key.v, 16);
+          dds_builtintopic_free_endpoint(pub);
+        }
+      }
+      return true;
+    }
+  }
+  int matchedWriters() const override {
+    dds_subscription_matched_status_t status;
+    return dds_get_subscription_matched_status(reader_, &status) == 0
+               ? static_cast<int>(status.current_count)
+               : 0;
+  }
+  Guid guid() const override { return guidOf(reader_); }
+  static void onDataAvailable(dds_entity_t, void* arg) {
+    auto* self = static_cast<CycloneReader*>(arg);
+    if (self->on_data_) self->on_data_();
+  }
+
+ private:
+  std::function<void()> on_data_;
+  dds_entity_t reader_ = 0;
+};
+
+class CycloneParticipant : public Participant {
+ public:
+  explicit CycloneParticipant(const ParticipantOptions& options) {
+    ensureCycloneDomain(options.domain_id);
+    QosPtr q(dds_create_qos());
+    const std::string user_data = participantUserData(Vendor::CYCLONEDDS, options.node_name);
+    dds_qset_userdata(q.get(), user_data.data(), user_data.size());
+    dds_qset_entity_name(q.get(), options.node_name.c_str());
+    participant_ = dds_create_participant(static_cast<dds_domainid_t>(options.domain_id), q.get(),
+                                          nullptr);
+    check(participant_, "create participant on domain " + std::to_string(options.domain_id));
+  }
+  ~CycloneParticipant() override { dds_delete(participant_); }
+
+  Vendor vendor() const override { return Vendor::CYCLONEDDS; }
+  Guid guid() const override { return guidOf(participant_); }
+
+  std::unique_ptr<DataWriter> createWriter(const std::string& topic, const msg::TypeSupport& type,
+                                           const QosProfile& qos) override {
+    const dds_entity_t t = createTopic(topic, type);
+    QosPtr q = toCycloneQos(qos);
+    const dds_entity_t w = dds_create_writer(participant_, t, q.get(), nullptr);
+    check(w, "create writer on '" + topic + "'");
+    return std::make_unique<CycloneWriter>(w);
+  }
+
+  std::unique_ptr<DataReader> createReader(const std::string& topic, const msg::TypeSupport& type,
+                                           const QosProfile& qos,
+                                           std::function<void()> on_data) override {
+    const dds_entity_t t = createTopic(topic, type);
+    QosPtr q = toCycloneQos(qos);
+    auto reader = std::make_unique<CycloneReader>(std::move(on_data));
+    dds_listener_t* listener = dds_create_listener(reader.get());
+    dds_lset_data_available(listener, &CycloneReader::onDataAvailable);
+    const dds_entity_t r = dds_create_reader(participant_, t, q.get(), listener);
+    dds_delete_listener(listener);
+    check(r, "create reader on '" + topic + "'");
+    reader->attach(r);
+    return reader;
+  }
+
+ private:
+  dds_entity_t createTopic(const std::string& topic, const msg::TypeSupport& type) {
+    const std::string name = toDdsTopicName(topic);
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto it = topics_.find(name);
+    if (it != topics_.end()) {
+      if (it->second.second != type.name)
+        throw std::runtime_error("topic '" + topic + "' already has type " + it->second.second +
+                                 ", not " + type.name);
+      return it->second.first;
+    }
+    ddsi_sertype* sertype = createSertype(type);
+    const dds_entity_t t =
+        dds_create_topic_sertype(participant_, name.c_str(), &sertype, nullptr, nullptr, nullptr);
+    check(t, "create topic '" + topic + "' of type " + type.name);
+    topics_[name] = {t, type.name};
+    return t;
+  }
+
+  dds_entity_t participant_;
+  std::mutex mutex_;
+  std::map<std::string, std::pair<dds_entity_t, std::string>> topics_;
+};
+
+}  // namespace
+
+std::unique_ptr<Participant> createCycloneParticipant(const ParticipantOptions& options) {
+  return std::make_unique<CycloneParticipant>(options);
+}
+
+}  // namespace auv::interfaces::detail

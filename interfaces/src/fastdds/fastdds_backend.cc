@@ -1,0 +1,249 @@
+// Fast DDS backend: the DDS-DCPS C++ API with the fastddsgen TopicDataTypes.
+#include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/dds/publisher/DataWriter.hpp>
+#include <fastdds/dds/publisher/Publisher.hpp>
+#include <fastdds/dds/subscriber/DataReader.hpp>
+#include <fastdds/dds/subscriber/DataReaderListener.hpp>
+#include <fastdds/dds/subscriber/SampleInfo.hpp>
+#include <fastdds/dds/subscriber/Subscriber.hpp>
+#include <fastdds/dds/topic/Topic.hpp>
+#include <fastdds/dds/topic/TypeSupport.hpp>
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+
+#include <cstdlib>
+#include <cstring>
+#include <map>
+#include <mutex>
+#include <stdexcept>
+
+#include "auv/interfaces/backend.h"
+#include "fastdds_config.h"
+
+namespace auv::interfaces::detail {
+namespace {
+
+namespace dds = eprosima::fastdds::dds;
+using eprosima::fastrtps::types::ReturnCode_t;
+
+void check(bool ok, const std::string& what) {
+  if (!ok) throw std::runtime_error("fastdds: " + what + " failed");
+}
+
+eprosima::fastrtps::Duration_t toDuration(double seconds) {
+  if (seconds <= 0) return eprosima::fastrtps::c_TimeInfinite;
+  return eprosima::fastrtps::Duration_t(seconds);
+}
+
+// The parts of the profile common to readers and writers.
+template <class EndpointQos>
+void applyCommon(const QosProfile& p, EndpointQos& q) {
+  q.reliability().kind = p.reliability == Reliability::RELIABLE ? dds::RELIABLE_RELIABILITY_QOS
+                                                                : dds::BEST_EFFORT_RELIABILITY_QOS;
+  q.reliability().max_blocking_time = toDuration(p.max_blocking_time_s);
+  q.durability().kind = p.durability == Durability::TRANSIENT_LOCAL
+                            ? dds::TRANSIENT_LOCAL_DURABILITY_QOS
+                            : dds::VOLATILE_DURABILITY_QOS;
+  q.history().kind =
+      p.history == History::KEEP_LAST ? dds::KEEP_LAST_HISTORY_QOS : dds::KEEP_ALL_HISTORY_QOS;
+  q.history().depth = p.depth;
+  q.deadline().period = toDuration(p.deadline_s);
+  q.liveliness().kind = p.liveliness == Liveliness::AUTOMATIC
+                            ? dds::AUTOMATIC_LIVELINESS_QOS
+                            : dds::MANUAL_BY_TOPIC_LIVELINESS_QOS;
+  q.liveliness().lease_duration = toDuration(p.liveliness_lease_s);
+  // Fast DDS defaults (10 instances, 5000 samples) would silently cap keyed topics.
+  q.resource_limits().max_samples = p.max_samples > 0 ? p.max_samples : dds::LENGTH_UNLIMITED;
+  q.resource_limits().max_instances =
+      p.max_instances > 0 ? p.max_instances : dds::LENGTH_UNLIMITED;
+  q.resource_limits().max_samples_per_instance =
+      p.max_samples_per_instance > 0 ? p.max_samples_per_instance : dds::LENGTH_UNLIMITED;
+  // Messages have unbounded sequences: payloads are sized per sample.
+  q.endpoint().history_memory_policy =
+      eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
+  q.data_sharing().off();
+}
+
+Guid toGuid(const eprosima::fastrtps::rtps::GUID_t& g) {
+  Guid guid;
+  std::memcpy(guid.data(), g.guidPrefix.value, 12);
+  std::memcpy(guid.data() + 12, g.entityId.value, 4);
+  return guid;
+}
+
+class FastddsWriter : public DataWriter {
+ public:
+  FastddsWriter(dds::Publisher* publisher, dds::DataWriter* writer)
+      : publisher_(publisher), writer_(writer) {}
+  ~FastddsWriter() override { publisher_->delete_datawriter(writer_); }
+  void write(const void* sample) override {
+    if (!writer_->write(const_cast<void*>(sample)))
+      throw std::runtime_error("fastdds: write on '" + writer_->get_topic()->get_name() +
+                               "' failed");
+  }
+  int matchedReaders() const override {
+    dds::PublicationMatchedStatus status;
+    return writer_->get_publication_matched_status(status) == ReturnCode_t::RETCODE_OK
+               ? status.current_count
+               : 0;
+  }
+  Guid guid() const override { return toGuid(writer_->guid()); }
+
+ private:
+  dds::Publisher* publisher_;
+  dds::DataWriter* writer_;
+};
+
+class FastddsReader : public DataReader, public dds::DataReaderListener {
+ public:
+  explicit FastddsReader(std::function<void()> on_data) : on_data_(std::move(on_data)) {}
+  ~FastddsReader() override {
+    if (reader_ != nullptr) {
+      reader_->set_listener(nullptr);
+      subscriber_->delete_datareader(reader_);
+    }
+  }
+  void attach(dds::Subscriber* subscriber, dds::DataReader* reader) {
+    subscriber_ = subscriber;
+    reader_ = reader;
+  }
+  bool take(void* sample, SampleInfo* info) override {
+    dds::SampleInfo si;
+    while (reader_->take_next_sample(sample, &si) == ReturnCode_t::RETCODE_OK) {
+      if (!si.valid_data) continue;
+      if (info != nullptr) {
+        info->source_timestamp_ns =
+            static_cast<int64_t>(si.source_timestamp.seconds()) * 1000000000LL +
+            si.source_timestamp.nanosec();
+        std::memcpy(info->publication.data(), si.publication_handle.value, 16);
+      }
+      return true;
+    }
+    return false;
+  }
+  int matchedWriters() const override {
+    dds::SubscriptionMatchedStatus status;
+    return reader_->get_subscription_matched_status(status) == ReturnCode_t::RETCODE_OK
+               ? status.current_count
+               : 0;
+  }
+  Guid guid() const override { return toGuid(reader_->guid()); }
+  void on_data_available(dds::DataReader*) override {
+    if (on_data_) on_data_();
+  }
+
+ private:
+  std::function<void()> on_data_;
+  dds::Subscriber* subscriber_ = nullptr;
+  dds::DataReader* reader_ = nullptr;
+};
+
+}  // namespace
+
+dds::DomainParticipantQos fastddsParticipantQos(const ParticipantOptions& options) {
+  auto* factory = dds::DomainParticipantFactory::get_instance();
+  dds::DomainParticipantQos qos;
+  const char* profiles = std::getenv("FASTRTPS_DEFAULT_PROFILES_FILE");
+  if (profiles != nullptr && *profiles != '\0') {
+    // XML profiles only apply through load_profiles + the factory default (DDS_NOTES.md).
+    static std::once_flag loaded;
+    std::call_once(loaded, [factory] { factory->load_profiles(); });
+    qos = factory->get_default_participant_qos();
+  } else {
+    // Loopback only: one UDPv4 transport on 127.0.0.1, no shared memory, no other interface.
+    auto udp = std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>();
+    udp->interfaceWhiteList.emplace_back("127.0.0.1");
+    qos.transport().user_transports.push_back(udp);
+    qos.transport().use_builtin_transports = false;
+  }
+  qos.name(options.node_name);
+  const std::string user_data = participantUserData(Vendor::FASTDDS, options.node_name);
+  qos.user_data().setValue(std::vector<eprosima::fastrtps::rtps::octet>(user_data.begin(),
+                                                                        user_data.end()));
+  return qos;
+}
+
+namespace {
+
+class FastddsParticipant : public Participant {
+ public:
+  explicit FastddsParticipant(const ParticipantOptions& options) {
+    auto* factory = dds::DomainParticipantFactory::get_instance();
+    participant_ = factory->create_participant(options.domain_id, fastddsParticipantQos(options));
+    check(participant_ != nullptr,
+          "create participant on domain " + std::to_string(options.domain_id));
+    publisher_ = participant_->create_publisher(dds::PUBLISHER_QOS_DEFAULT);
+    subscriber_ = participant_->create_subscriber(dds::SUBSCRIBER_QOS_DEFAULT);
+    check(publisher_ != nullptr && subscriber_ != nullptr, "create publisher/subscriber");
+  }
+  ~FastddsParticipant() override {
+    participant_->delete_contained_entities();
+    dds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
+  }
+
+  Vendor vendor() const override { return Vendor::FASTDDS; }
+  Guid guid() const override { return toGuid(participant_->guid()); }
+
+  std::unique_ptr<DataWriter> createWriter(const std::string& topic, const msg::TypeSupport& type,
+                                           const QosProfile& qos) override {
+    dds::Topic* t = createTopic(topic, type);
+    dds::DataWriterQos wqos = publisher_->get_default_datawriter_qos();
+    applyCommon(qos, wqos);
+    dds::DataWriter* w = publisher_->create_datawriter(t, wqos);
+    check(w != nullptr, "create writer on '" + topic + "'");
+    return std::make_unique<FastddsWriter>(publisher_, w);
+  }
+
+  std::unique_ptr<DataReader> createReader(const std::string& topic, const msg::TypeSupport& type,
+                                           const QosProfile& qos,
+                                           std::function<void()> on_data) override {
+    dds::Topic* t = createTopic(topic, type);
+    dds::DataReaderQos rqos = subscriber_->get_default_datareader_qos();
+    applyCommon(qos, rqos);
+    auto reader = std::make_unique<FastddsReader>(std::move(on_data));
+    dds::DataReader* r =
+        subscriber_->create_datareader(t, rqos, reader.get(), dds::StatusMask::data_available());
+    check(r != nullptr, "create reader on '" + topic + "'");
+    reader->attach(subscriber_, r);
+    return reader;
+  }
+
+ private:
+  dds::Topic* createTopic(const std::string& topic, const msg::TypeSupport& type) {
+    const std::string name = toDdsTopicName(topic);
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (participant_->find_type(type.name).empty()) {
+      dds::TypeSupport support(type.make_topic_data_type());
+      // Type information would make Cyclone reject our discovery data (DDS_NOTES.md).
+      support->auto_fill_type_information(false);
+      support->auto_fill_type_object(false);
+      check(participant_->register_type(support) == ReturnCode_t::RETCODE_OK,
+            "register type " + type.name);
+    }
+    auto it = topics_.find(name);
+    if (it != topics_.end()) {
+      if (it->second->get_type_name() != type.name)
+        throw std::runtime_error("topic '" + topic + "' already has type " +
+                                 it->second->get_type_name() + ", not " + type.name);
+      return it->second;
+    }
+    dds::Topic* t = participant_->create_topic(name, type.name, dds::TOPIC_QOS_DEFAULT);
+    check(t != nullptr, "create topic '" + topic + "' of type " + type.name);
+    topics_[name] = t;
+    return t;
+  }
+
+  dds::DomainParticipant* participant_ = nullptr;
+  dds::Publisher* publisher_ = nullptr;
+  dds::Subscriber* subscriber_ = nullptr;
+  std::mutex mutex_;
+  std::map<std::string, dds::Topic*> topics_;
+};
+
+}  // namespace
+
+std::unique_ptr<Participant> createFastddsParticipant(const ParticipantOptions& options) {
+  return std::make_unique<FastddsParticipant>(options);
+}
+
+}  // namespace auv::interfaces::detail

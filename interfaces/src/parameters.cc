@@ -1,0 +1,975 @@
+#include "auv/interfaces/parameters.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <exception>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <sstream>
+#include <system_error>
+
+#include <yaml-cpp/yaml.h>
+
+namespace auv::interfaces {
+
+// ParameterType is the index of the ParameterValue alternative; check the two orders agree.
+template <ParameterType kType>
+using AlternativeOf = std::variant_alternative_t<static_cast<size_t>(kType), ParameterValue>;
+static_assert(
+    std::is_same_v<AlternativeOf<ParameterType::BOOL>, bool> &&
+        std::is_same_v<AlternativeOf<ParameterType::INTEGER>, int64_t> &&
+        std::is_same_v<AlternativeOf<ParameterType::DOUBLE>, double> &&
+        std::is_same_v<AlternativeOf<ParameterType::STRING>, std::string> &&
+        std::is_same_v<AlternativeOf<ParameterType::BOOL_ARRAY>, std::vector<bool>> &&
+        std::is_same_v<AlternativeOf<ParameterType::INTEGER_ARRAY>, std::vector<int64_t>> &&
+        std::is_same_v<AlternativeOf<ParameterType::DOUBLE_ARRAY>, std::vector<double>> &&
+        std::is_same_v<AlternativeOf<ParameterType::STRING_ARRAY>, std::vector<std::string>>,
+    "ParameterType must follow the order of the ParameterValue alternatives");
+
+namespace {
+
+constexpr int64_t kInt64Min = std::numeric_limits<int64_t>::min();
+constexpr int64_t kInt64Max = std::numeric_limits<int64_t>::max();
+
+// Precedence levels of an override; higher wins, then later sequence number wins.
+enum class Rank { WILDCARD = 0, NODE = 1, COMMAND_LINE = 2 };
+
+// One value for one parameter name from one source.
+struct Override {
+  std::string name;    // dotted parameter name
+  YAML::Node value;    // scalar, sequence or null
+  std::string source;  // file path or kCommandLineSource
+  Rank rank;           // wildcard, node-specific or command line
+  uint64_t sequence;   // load order; later wins within a rank
+  YAML::Mark mark;     // position of the key in the source (null for the command line)
+};
+
+// A declared parameter.
+struct Declared {
+  ParameterValue value;            // current value; its index is the declared type
+  ParameterDescriptor descriptor;  // as declared
+  int64_t int_min;                 // range of the C++ integer type (integers only)
+  int64_t int_max;
+  std::string source;  // where the current value came from: "default", a file, "set()"
+};
+
+// Why a value was rejected: element index in an array, if the fault is one element.
+struct Violation {
+  std::optional<size_t> element;  // faulty element of an array value
+  std::string element_text;       // that element as written
+};
+
+bool isNumeric(ParameterType type) {
+  return type == ParameterType::INTEGER || type == ParameterType::DOUBLE ||
+         type == ParameterType::INTEGER_ARRAY || type == ParameterType::DOUBLE_ARRAY;
+}
+
+bool isInteger(ParameterType type) {
+  return type == ParameterType::INTEGER || type == ParameterType::INTEGER_ARRAY;
+}
+
+bool isString(ParameterType type) {
+  return type == ParameterType::STRING || type == ParameterType::STRING_ARRAY;
+}
+
+std::string formatDouble(double value) {
+  if (std::isnan(value)) return ".nan";
+  if (std::isinf(value)) return value > 0 ? ".inf" : "-.inf";
+  char buffer[64];
+  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
+  return std::string(buffer, result.ptr);
+}
+
+template <class T>
+std::string formatScalar(const T& value) {
+  if constexpr (std::is_same_v<T, bool>) {
+    return value ? "true" : "false";
+  } else if constexpr (std::is_same_v<T, int64_t>) {
+    return std::to_string(value);
+  } else if constexpr (std::is_same_v<T, double>) {
+    return formatDouble(value);
+  } else {
+    return value.empty() ? std::string("\"\"") : value;
+  }
+}
+
+template <class T>
+std::string formatList(const std::vector<T>& values) {
+  std::string text = "[";
+  for (size_t i = 0; i < values.size(); ++i) {
+    if (i > 0) text += ", ";
+    text += formatScalar<T>(values[i]);
+  }
+  return text + "]";
+}
+
+std::string joinStrings(const std::vector<std::string>& values) { return formatList(values); }
+
+// Clamps a double to int64_t (NaN is handled by the callers' descriptor check).
+int64_t clampToInt64(double value) {
+  if (!(value > -9.223372036854775808e18)) return kInt64Min;
+  if (value >= 9.223372036854775808e18) return kInt64Max;
+  return static_cast<int64_t>(value);
+}
+
+// Effective inclusive bounds of an integer parameter: C++ type range and descriptor together.
+std::pair<int64_t, int64_t> integerBounds(const Declared& declared) {
+  int64_t low = declared.int_min;
+  int64_t high = declared.int_max;
+  const auto& d = declared.descriptor;
+  if (d.min) low = std::max(low, clampToInt64(std::ceil(*d.min)));
+  if (d.max) high = std::min(high, clampToInt64(std::floor(*d.max)));
+  return {low, high};
+}
+
+// " in [a, b]", " >= a", " <= b" or "" for the numeric range of a declaration.
+std::string rangeText(const Declared& declared, ParameterType type) {
+  std::optional<std::string> low;
+  std::optional<std::string> high;
+  if (isInteger(type)) {
+    const auto [int_low, int_high] = integerBounds(declared);
+    if (int_low != kInt64Min) low = std::to_string(int_low);
+    if (int_high != kInt64Max) high = std::to_string(int_high);
+  } else {
+    if (declared.descriptor.min) low = formatDouble(*declared.descriptor.min);
+    if (declared.descriptor.max) high = formatDouble(*declared.descriptor.max);
+  }
+  if (low && high) return " in [" + *low + ", " + *high + "]";
+  if (low) return " >= " + *low;
+  if (high) return " <= " + *high;
+  return "";
+}
+
+// What a value of this declaration must look like: "a number in [0.1, 50]".
+std::string expectation(const Declared& declared) {
+  const ParameterType type = typeOf(declared.value);
+  const auto& choices = declared.descriptor.choices;
+  switch (type) {
+    case ParameterType::BOOL:
+      return "a boolean (true or false)";
+    case ParameterType::INTEGER:
+      return "an integer" + rangeText(declared, type);
+    case ParameterType::DOUBLE:
+      return "a number" + rangeText(declared, type);
+    case ParameterType::STRING:
+      return choices.empty() ? "a string" : "one of " + joinStrings(choices);
+    case ParameterType::BOOL_ARRAY:
+      return "a list of booleans (true or false)";
+    case ParameterType::INTEGER_ARRAY:
+      return "a list of integers" + rangeText(declared, type);
+    case ParameterType::DOUBLE_ARRAY:
+      return "a list of numbers" + rangeText(declared, type);
+    case ParameterType::STRING_ARRAY:
+      return choices.empty() ? "a list of strings"
+                             : "a list of strings, each one of " + joinStrings(choices);
+  }
+  return "a value";
+}
+
+// ---------------------------------------------------------------------------------------------
+// Scalar text conversion (YAML 1.2 core schema, strict).
+
+bool isPlainScalar(const YAML::Node& node) { return node.IsScalar() && node.Tag() == "?"; }
+
+std::optional<bool> parseBool(const std::string& text) {
+  if (text == "true" || text == "True" || text == "TRUE") return true;
+  if (text == "false" || text == "False" || text == "FALSE") return false;
+  return std::nullopt;
+}
+
+std::optional<int64_t> parseInteger(const std::string& text) {
+  if (text.empty()) return std::nullopt;
+  const char* begin = text.data();
+  const char* end = text.data() + text.size();
+  bool negative = false;
+  if (*begin == '+' || *begin == '-') {
+    negative = *begin == '-';
+    ++begin;
+  }
+  int base = 10;
+  if (end - begin > 2 && begin[0] == '0' && (begin[1] == 'x' || begin[1] == 'o')) {
+    base = begin[1] == 'x' ? 16 : 8;
+    if (negative || text[0] == '+') return std::nullopt;  // YAML 1.2: unsigned hex and octal
+    begin += 2;
+  }
+  if (begin == end) return std::nullopt;
+  // from_chars accepts a leading '-' only; parse the magnitude as unsigned to reach INT64_MIN.
+  uint64_t magnitude = 0;
+  const auto result = std::from_chars(begin, end, magnitude, base);
+  if (result.ec != std::errc() || result.ptr != end) return std::nullopt;
+  if (negative) {
+    if (magnitude > static_cast<uint64_t>(kInt64Max) + 1) return std::nullopt;
+    return static_cast<int64_t>(0 - magnitude);
+  }
+  if (magnitude > static_cast<uint64_t>(kInt64Max)) return std::nullopt;
+  return static_cast<int64_t>(magnitude);
+}
+
+std::optional<double> parseDouble(const std::string& text) {
+  if (text == ".inf" || text == ".Inf" || text == ".INF" || text == "+.inf" || text == "+.Inf" ||
+      text == "+.INF") {
+    return std::numeric_limits<double>::infinity();
+  }
+  if (text == "-.inf" || text == "-.Inf" || text == "-.INF") {
+    return -std::numeric_limits<double>::infinity();
+  }
+  if (text == ".nan" || text == ".NaN" || text == ".NAN") {
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+  if (const auto integer = parseInteger(text)) return static_cast<double>(*integer);
+  // YAML 1.2 core float: [-+]?(\.[0-9]+|[0-9]+(\.[0-9]*)?)([eE][-+]?[0-9]+)?
+  size_t i = 0;
+  if (i < text.size() && (text[i] == '+' || text[i] == '-')) ++i;
+  size_t digits = 0;
+  while (i < text.size() && std::isdigit(static_cast<unsigned char>(text[i]))) ++i, ++digits;
+  if (i < text.size() && text[i] == '.') {
+    ++i;
+    while (i < text.size() && std::isdigit(static_cast<unsigned char>(text[i]))) ++i, ++digits;
+  }
+  if (digits == 0) return std::nullopt;
+  if (i < text.size() && (text[i] == 'e' || text[i] == 'E')) {
+    ++i;
+    if (i < text.size() && (text[i] == '+' || text[i] == '-')) ++i;
+    size_t exponent_digits = 0;
+    while (i < text.size() && std::isdigit(static_cast<unsigned char>(text[i]))) {
+      ++i;
+      ++exponent_digits;
+    }
+    if (exponent_digits == 0) return std::nullopt;
+  }
+  if (i != text.size()) return std::nullopt;
+  // from_chars rejects a leading '+'; the grammar above already validated the text.
+  const char* begin = text.data() + (text[0] == '+' ? 1 : 0);
+  double value = 0.0;
+  const auto result = std::from_chars(begin, text.data() + text.size(), value);
+  if (result.ec != std::errc() || result.ptr != text.data() + text.size()) return std::nullopt;
+  return value;
+}
+
+// How a YAML node reads in a message: 'abc', "5" (a quoted string), null (empty value), ...
+std::string nodeText(const YAML::Node& node) {
+  switch (node.Type()) {
+    case YAML::NodeType::Null:
+      return "null";
+    case YAML::NodeType::Scalar:
+      return isPlainScalar(node) ? node.Scalar() : "\"" + node.Scalar() + "\"";
+    case YAML::NodeType::Sequence: {
+      std::string text = "[";
+      for (size_t i = 0; i < node.size(); ++i) {
+        if (i > 0) text += ", ";
+        text += nodeText(node[i]);
+      }
+      return text + "]";
+    }
+    case YAML::NodeType::Map:
+      return "{...}";
+    case YAML::NodeType::Undefined:
+      break;
+  }
+  return "?";
+}
+
+std::string nodeDisplay(const YAML::Node& node) {
+  if (node.IsNull()) return "null (empty value)";
+  if (node.IsMap()) return "a map";
+  if (node.IsScalar() && !isPlainScalar(node)) return nodeText(node) + " (a quoted string)";
+  return "'" + nodeText(node) + "'";
+}
+
+// Converts one YAML scalar node to `Stored`; numbers and booleans must be plain (unquoted).
+template <class Stored>
+std::optional<Stored> scalarFromNode(const YAML::Node& node) {
+  if (!node.IsScalar()) return std::nullopt;
+  if constexpr (std::is_same_v<Stored, std::string>) {
+    return node.Scalar();
+  } else {
+    if (!isPlainScalar(node)) return std::nullopt;
+    if constexpr (std::is_same_v<Stored, bool>) {
+      return parseBool(node.Scalar());
+    } else if constexpr (std::is_same_v<Stored, int64_t>) {
+      return parseInteger(node.Scalar());
+    } else {
+      return parseDouble(node.Scalar());
+    }
+  }
+}
+
+// Result of converting a YAML node: the value, or the violation.
+struct Conversion {
+  std::optional<ParameterValue> value;
+  Violation violation;
+};
+
+template <class Stored>
+Conversion convertNode(const YAML::Node& node, bool array) {
+  Conversion conversion;
+  if (!array) {
+    if (auto scalar = scalarFromNode<Stored>(node)) conversion.value = ParameterValue(*scalar);
+    return conversion;
+  }
+  if (!node.IsSequence()) return conversion;
+  std::vector<Stored> values;
+  for (size_t i = 0; i < node.size(); ++i) {
+    auto scalar = scalarFromNode<Stored>(node[i]);
+    if (!scalar) {
+      conversion.violation = {i, nodeText(node[i])};
+      return conversion;
+    }
+    values.push_back(*scalar);
+  }
+  conversion.value = ParameterValue(std::move(values));
+  return conversion;
+}
+
+Conversion convertNode(const YAML::Node& node, ParameterType type) {
+  switch (type) {
+    case ParameterType::BOOL:
+      return convertNode<bool>(node, false);
+    case ParameterType::INTEGER:
+      return convertNode<int64_t>(node, false);
+    case ParameterType::DOUBLE:
+      return convertNode<double>(node, false);
+    case ParameterType::STRING:
+      return convertNode<std::string>(node, false);
+    case ParameterType::BOOL_ARRAY:
+      return convertNode<bool>(node, true);
+    case ParameterType::INTEGER_ARRAY:
+      return convertNode<int64_t>(node, true);
+    case ParameterType::DOUBLE_ARRAY:
+      return convertNode<double>(node, true);
+    case ParameterType::STRING_ARRAY:
+      return convertNode<std::string>(node, true);
+  }
+  return {};
+}
+
+// ---------------------------------------------------------------------------------------------
+// Constraint checks (value already has the declared type).
+
+bool elementOk(const Declared& declared, int64_t value) {
+  const auto [low, high] = integerBounds(declared);
+  return value >= low && value <= high;
+}
+
+bool elementOk(const Declared& declared, double value) {
+  const auto& d = declared.descriptor;
+  if (d.min && !(value >= *d.min)) return false;  // NaN fails any bound
+  if (d.max && !(value <= *d.max)) return false;
+  return true;
+}
+
+bool elementOk(const Declared& declared, const std::string& value) {
+  const auto& choices = declared.descriptor.choices;
+  return choices.empty() || std::find(choices.begin(), choices.end(), value) != choices.end();
+}
+
+bool elementOk(const Declared& /*declared*/, bool /*value*/) { return true; }
+
+std::optional<Violation> checkConstraints(const Declared& declared, const ParameterValue& value) {
+  return std::visit(
+      [&](const auto& v) -> std::optional<Violation> {
+        using V = std::decay_t<decltype(v)>;
+        if constexpr (std::is_same_v<V, std::vector<bool>> ||
+                      std::is_same_v<V, std::vector<int64_t>> ||
+                      std::is_same_v<V, std::vector<double>> ||
+                      std::is_same_v<V, std::vector<std::string>>) {
+          using E = typename V::value_type;
+          for (size_t i = 0; i < v.size(); ++i) {
+            const E element = v[i];
+            if (!elementOk(declared, element)) return Violation{i, formatScalar<E>(element)};
+          }
+          return std::nullopt;
+        } else {
+          if (!elementOk(declared, v)) return Violation{};
+          return std::nullopt;
+        }
+      },
+      value);
+}
+
+// "expected <expectation>, got <display> (element i: x)".
+std::string expectedGot(const Declared& declared, const std::string& got,
+                        const Violation& violation) {
+  std::string text = "expected " + expectation(declared) + ", got " + got;
+  if (violation.element) {
+    text +=
+        " (element " + std::to_string(*violation.element) + ": '" + violation.element_text + "')";
+  }
+  return text;
+}
+
+// Converts int64_t (arrays) to double (arrays) for double parameters; other values unchanged.
+ParameterValue coerce(const ParameterValue& value, ParameterType type) {
+  if (type == ParameterType::DOUBLE && std::holds_alternative<int64_t>(value)) {
+    return static_cast<double>(std::get<int64_t>(value));
+  }
+  if (type == ParameterType::DOUBLE_ARRAY && std::holds_alternative<std::vector<int64_t>>(value)) {
+    const auto& integers = std::get<std::vector<int64_t>>(value);
+    return std::vector<double>(integers.begin(), integers.end());
+  }
+  return value;
+}
+
+// Throws if a descriptor cannot apply to a parameter of `type`.
+void checkDescriptor(const std::string& name, const Declared& declared) {
+  const ParameterType type = typeOf(declared.value);
+  const auto& d = declared.descriptor;
+  const std::string prefix = "parameter '" + name + "': invalid declaration: ";
+  if ((d.min && std::isnan(*d.min)) || (d.max && std::isnan(*d.max))) {
+    throw ParameterError(prefix + "min/max must not be NaN");
+  }
+  if ((d.min || d.max) && !isNumeric(type)) {
+    throw ParameterError(prefix + "min/max apply to numbers, but the type is " + toString(type));
+  }
+  if (d.min && d.max && *d.min > *d.max) {
+    throw ParameterError(prefix + "min " + formatDouble(*d.min) + " > max " + formatDouble(*d.max));
+  }
+  if (isInteger(type)) {
+    const auto [low, high] = integerBounds(declared);
+    if (low > high) {
+      throw ParameterError(prefix + "no integer lies in the allowed range" +
+                           rangeText(declared, type));
+    }
+  }
+  if (!d.choices.empty() && !isString(type)) {
+    throw ParameterError(prefix + "choices apply to strings, but the type is " + toString(type));
+  }
+}
+
+// Optimal string alignment distance (Levenshtein plus adjacent transpositions).
+size_t editDistance(const std::string& a, const std::string& b) {
+  std::vector<std::vector<size_t>> d(a.size() + 1, std::vector<size_t>(b.size() + 1));
+  for (size_t i = 0; i <= a.size(); ++i) d[i][0] = i;
+  for (size_t j = 0; j <= b.size(); ++j) d[0][j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const size_t cost = a[i - 1] == b[j - 1] ? 0 : 1;
+      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + cost});
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) {
+        d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+      }
+    }
+  }
+  return d[a.size()][b.size()];
+}
+
+std::string lastComponent(const std::string& name) {
+  const size_t dot = name.rfind('.');
+  return dot == std::string::npos ? name : name.substr(dot + 1);
+}
+
+// Closest declared name to `name`, if any is close enough to be a likely typo.
+std::optional<std::string> closestName(const std::string& name,
+                                       const std::vector<std::string>& declared) {
+  const size_t threshold = std::max<size_t>(2, name.size() / 3);
+  std::optional<std::string> best;
+  size_t best_distance = threshold + 1;
+  for (const auto& candidate : declared) {
+    const size_t distance = editDistance(name, candidate);
+    if (distance < best_distance) {
+      best_distance = distance;
+      best = candidate;
+    }
+  }
+  if (best) return best;
+  // Same leaf name under another prefix (e.g. "range" vs "planner.range").
+  for (const auto& candidate : declared) {
+    if (lastComponent(candidate) == lastComponent(name)) return candidate;
+  }
+  return std::nullopt;
+}
+
+std::string stripLeadingSlash(const std::string& name) {
+  return !name.empty() && name[0] == '/' ? name.substr(1) : name;
+}
+
+std::string trim(const std::string& text) {
+  const size_t begin = text.find_first_not_of(" \t");
+  if (begin == std::string::npos) return "";
+  const size_t end = text.find_last_not_of(" \t");
+  return text.substr(begin, end - begin + 1);
+}
+
+std::string markText(const YAML::Mark& mark) {
+  if (mark.is_null()) return "";
+  return ":" + std::to_string(mark.line + 1) + ":" + std::to_string(mark.column + 1);
+}
+
+std::string nodeKindText(const YAML::Node& node) {
+  switch (node.Type()) {
+    case YAML::NodeType::Scalar:
+      return "a scalar";
+    case YAML::NodeType::Sequence:
+      return "a list";
+    case YAML::NodeType::Map:
+      return "a map";
+    default:
+      return "null";
+  }
+}
+
+// Appends the leaves of map `node` as overrides, with nested keys joined by '.'.
+void flatten(const YAML::Node& node, const std::string& prefix, const std::string& source,
+             Rank rank, std::vector<Override>* out) {
+  for (const auto& entry : node) {
+    const YAML::Node& key = entry.first;
+    if (!key.IsScalar() || key.Scalar().empty()) {
+      throw ParameterError(source + markText(key.Mark()) +
+                           ": parameter names must be non-empty scalars");
+    }
+    const std::string name = prefix.empty() ? key.Scalar() : prefix + "." + key.Scalar();
+    const YAML::Node& value = entry.second;
+    if (value.IsMap()) {
+      flatten(value, name, source, rank, out);
+    } else {
+      for (const auto& previous : *out) {
+        if (previous.name == name && previous.rank == rank) {
+          throw ParameterError(source + markText(key.Mark()) + ": parameter '" + name +
+                               "' is set twice for the same node (first at line " +
+                               std::to_string(previous.mark.line + 1) + ")");
+        }
+      }
+      out->push_back(Override{name, value, source, rank, 0, key.Mark()});
+    }
+  }
+}
+
+void emitValue(YAML::Emitter& out, const ParameterValue& value) {
+  std::visit(
+      [&](const auto& v) {
+        using V = std::decay_t<decltype(v)>;
+        if constexpr (std::is_same_v<V, bool>) {
+          out << v;
+        } else if constexpr (std::is_same_v<V, int64_t>) {
+          out << static_cast<long long>(v);
+        } else if constexpr (std::is_same_v<V, double>) {
+          out << formatDouble(v);
+        } else if constexpr (std::is_same_v<V, std::string>) {
+          out << YAML::DoubleQuoted << v;
+        } else {
+          out << YAML::Flow << YAML::BeginSeq;
+          for (size_t i = 0; i < v.size(); ++i) {
+            emitValue(out, ParameterValue(typename V::value_type(v[i])));
+          }
+          out << YAML::EndSeq;
+        }
+      },
+      value);
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+
+std::string toString(ParameterType type) {
+  switch (type) {
+    case ParameterType::BOOL:
+      return "bool";
+    case ParameterType::INTEGER:
+      return "integer";
+    case ParameterType::DOUBLE:
+      return "double";
+    case ParameterType::STRING:
+      return "string";
+    case ParameterType::BOOL_ARRAY:
+      return "bool_array";
+    case ParameterType::INTEGER_ARRAY:
+      return "integer_array";
+    case ParameterType::DOUBLE_ARRAY:
+      return "double_array";
+    case ParameterType::STRING_ARRAY:
+      return "string_array";
+  }
+  return "unknown";
+}
+
+std::string toString(const ParameterValue& value) {
+  return std::visit(
+      [](const auto& v) -> std::string {
+        using V = std::decay_t<decltype(v)>;
+        if constexpr (std::is_same_v<V, std::vector<bool>> ||
+                      std::is_same_v<V, std::vector<int64_t>> ||
+                      std::is_same_v<V, std::vector<double>> ||
+                      std::is_same_v<V, std::vector<std::string>>) {
+          return formatList(v);
+        } else {
+          return formatScalar<V>(v);
+        }
+      },
+      value);
+}
+
+namespace detail {
+
+void throwDoesNotFit(const std::string& name, const std::string& value, int64_t min, int64_t max) {
+  throw ParameterError("parameter '" + name + "': value " + value +
+                       " does not fit in the requested type [" + std::to_string(min) + ", " +
+                       std::to_string(max) + "]");
+}
+
+void throwWrongType(const std::string& name, ParameterType declared, ParameterType requested) {
+  throw ParameterError("parameter '" + name + "' is declared as " + toString(declared) +
+                       ", requested as " + toString(requested));
+}
+
+}  // namespace detail
+
+struct Parameters::Impl {
+  std::string node_name;     // selects file sections
+  mutable std::mutex mutex;  // guards everything below
+  std::mutex set_mutex;      // serializes set() across its unlocked callback phase
+  std::map<std::string, Declared> declared;
+  std::vector<std::string> order;   // declaration order
+  std::vector<Override> overrides;  // in load order
+  std::vector<Callback> callbacks;  // onSet hooks
+  uint64_t next_sequence = 0;
+
+  // Throws if an override arrives for an already declared parameter (it could not apply).
+  void checkNotDeclared(const std::vector<Override>& incoming) const {
+    for (const auto& o : incoming) {
+      if (declared.count(o.name) > 0) {
+        throw ParameterError("parameter '" + o.name + "' in " + o.source +
+                             ": already declared; load parameter files and overrides before "
+                             "declaring parameters (use set() to change values at runtime)");
+      }
+    }
+  }
+
+  void append(std::vector<Override> incoming) {
+    for (auto& o : incoming) {
+      o.sequence = next_sequence++;
+      overrides.push_back(std::move(o));
+    }
+  }
+
+  // Highest-precedence override for `name`, or nullptr.
+  const Override* bestOverride(const std::string& name) const {
+    const Override* best = nullptr;
+    for (const auto& o : overrides) {
+      if (o.name != name) continue;
+      if (best == nullptr ||
+          std::make_pair(o.rank, o.sequence) > std::make_pair(best->rank, best->sequence)) {
+        best = &o;
+      }
+    }
+    return best;
+  }
+
+  const Declared& find(const std::string& name) const {
+    const auto it = declared.find(name);
+    if (it == declared.end()) {
+      throw ParameterError("parameter '" + name + "' of node '" + node_name + "' is not declared");
+    }
+    return it->second;
+  }
+};
+
+Parameters::Parameters(std::string node_name) : impl_(std::make_unique<Impl>()) {
+  impl_->node_name = std::move(node_name);
+}
+
+Parameters::~Parameters() = default;
+
+void Parameters::loadFile(const std::string& path) {
+  std::error_code error;
+  if (std::filesystem::is_directory(path, error)) {
+    throw ParameterError(path + ": cannot read parameter file: is a directory");
+  }
+  std::ifstream file(path, std::ios::binary);
+  if (!file) {
+    throw ParameterError(path + ": cannot read parameter file: " + std::strerror(errno));
+  }
+  std::ostringstream text;
+  text << file.rdbuf();
+  if (file.bad()) {
+    throw ParameterError(path + ": cannot read parameter file: " + std::strerror(errno));
+  }
+  loadYaml(text.str(), path);
+}
+
+void Parameters::loadYaml(const std::string& text, const std::string& source_name) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw ParameterError(source_name + markText(e.mark) + ": malformed YAML: " + e.msg);
+  }
+  if (root.IsNull()) return;  // empty file
+  if (!root.IsMap()) {
+    throw ParameterError(source_name + markText(root.Mark()) +
+                         ": expected a map of node names at the top level, got " +
+                         nodeKindText(root));
+  }
+  const std::string own_name = stripLeadingSlash(impl_->node_name);
+  std::vector<Override> incoming;
+  for (const auto& section : root) {
+    const YAML::Node& key = section.first;
+    if (!key.IsScalar()) {
+      throw ParameterError(source_name + markText(key.Mark()) +
+                           ": node names at the top level must be scalars");
+    }
+    Rank rank;
+    if (key.Scalar() == "/**" || key.Scalar() == "*") {
+      rank = Rank::WILDCARD;
+    } else if (stripLeadingSlash(key.Scalar()) == own_name) {
+      rank = Rank::NODE;
+    } else {
+      continue;  // another node's section
+    }
+    const YAML::Node& section_value = section.second;
+    if (section_value.IsNull()) continue;
+    if (!section_value.IsMap()) {
+      throw ParameterError(source_name + markText(section_value.Mark()) + ": section '" +
+                           key.Scalar() + "' must be a map of parameters, got " +
+                           nodeKindText(section_value));
+    }
+    // Accept ROS 2 files: "node: {ros__parameters: {...}}".
+    const YAML::Node ros_parameters =
+        section_value.size() == 1 ? section_value["ros__parameters"] : YAML::Node();
+    const bool ros_file = ros_parameters && ros_parameters.IsMap();
+    const YAML::Node parameters = ros_file ? ros_parameters : section_value;
+    flatten(parameters, "", source_name, rank, &incoming);
+  }
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  impl_->checkNotDeclared(incoming);
+  impl_->append(std::move(incoming));
+}
+
+void Parameters::setOverride(const std::string& assignment, const std::string& source_name) {
+  const size_t separator = assignment.find(":=");
+  const std::string name =
+      separator == std::string::npos ? "" : trim(assignment.substr(0, separator));
+  if (name.empty()) {
+    throw ParameterError(source_name + ": expected 'name:=value', got '" + assignment + "'");
+  }
+  YAML::Node value;
+  try {
+    value = YAML::Load(assignment.substr(separator + 2));
+  } catch (const YAML::Exception& e) {
+    throw ParameterError(source_name + ": malformed value for parameter '" + name + "': " + e.msg);
+  }
+  if (value.IsMap()) {
+    throw ParameterError(source_name + ": value for parameter '" + name +
+                         "' must be a scalar or a list, got a map");
+  }
+  std::vector<Override> incoming{
+      Override{name, value, source_name, Rank::COMMAND_LINE, 0, YAML::Mark::null_mark()}};
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  impl_->checkNotDeclared(incoming);
+  impl_->append(std::move(incoming));
+}
+
+std::string Parameters::declare(const std::string& name, const char* default_value,
+                                const ParameterDescriptor& descriptor) {
+  return declare<std::string>(name, std::string(default_value), descriptor);
+}
+
+ParameterValue Parameters::declareValue(const std::string& name, ParameterValue default_value,
+                                        const ParameterDescriptor& descriptor, int64_t int_min,
+                                        int64_t int_max) {
+  if (name.empty() || name.front() == '.' || name.back() == '.' ||
+      name.find("..") != std::string::npos) {
+    throw ParameterError("invalid parameter name '" + name + "'");
+  }
+  const ParameterType type = typeOf(default_value);
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  if (const auto it = impl_->declared.find(name); it != impl_->declared.end()) {
+    const ParameterType existing = typeOf(it->second.value);
+    if (existing != type) {
+      throw ParameterError("parameter '" + name + "' is already declared as " + toString(existing) +
+                           ", cannot redeclare it as " + toString(type));
+    }
+    return it->second.value;
+  }
+  Declared declared{std::move(default_value), descriptor, int_min, int_max, "default"};
+  checkDescriptor(name, declared);
+  if (const auto violation = checkConstraints(declared, declared.value)) {
+    throw ParameterError("parameter '" + name + "': invalid default: " +
+                         expectedGot(declared, "'" + toString(declared.value) + "'", *violation));
+  }
+  if (const Override* o = impl_->bestOverride(name)) {
+    const Conversion conversion = convertNode(o->value, type);
+    std::optional<Violation> violation;
+    if (!conversion.value) {
+      violation = conversion.violation;
+    } else {
+      violation = checkConstraints(declared, *conversion.value);
+    }
+    if (violation) {
+      throw ParameterError("parameter '" + name + "' in " + o->source + ": " +
+                           expectedGot(declared, nodeDisplay(o->value), *violation));
+    }
+    declared.value = *conversion.value;
+    declared.source = o->source;
+  }
+  ParameterValue value = declared.value;
+  impl_->declared.emplace(name, std::move(declared));
+  impl_->order.push_back(name);
+  return value;
+}
+
+ParameterValue Parameters::getValue(const std::string& name) const {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  return impl_->find(name).value;
+}
+
+ParameterType Parameters::type(const std::string& name) const {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  return typeOf(impl_->find(name).value);
+}
+
+bool Parameters::has(const std::string& name) const {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  return impl_->declared.count(name) > 0;
+}
+
+std::vector<std::string> Parameters::names() const {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  return impl_->order;
+}
+
+Parameters::SetResult Parameters::set(const std::string& name, const ParameterValue& value) {
+  std::lock_guard<std::mutex> set_lock(impl_->set_mutex);
+  Declared declared;
+  std::vector<Callback> callbacks;
+  {
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    const auto it = impl_->declared.find(name);
+    if (it == impl_->declared.end()) {
+      return {false, "parameter '" + name + "' of node '" + impl_->node_name +
+                         "' is not declared; cannot set it to '" + toString(value) + "'"};
+    }
+    declared = it->second;
+    callbacks = impl_->callbacks;
+  }
+  const ParameterType type = typeOf(declared.value);
+  if (declared.descriptor.read_only) {
+    return {false,
+            "parameter '" + name + "' is read-only; cannot set it to '" + toString(value) + "'"};
+  }
+  const ParameterValue normalized = coerce(value, type);
+  if (typeOf(normalized) != type) {
+    return {false, "parameter '" + name + "': " +
+                       expectedGot(declared, toString(typeOf(value)) + " '" + toString(value) + "'",
+                                   Violation{})};
+  }
+  if (const auto violation = checkConstraints(declared, normalized)) {
+    return {false, "parameter '" + name +
+                       "': " + expectedGot(declared, "'" + toString(normalized) + "'", *violation)};
+  }
+  for (const auto& callback : callbacks) {
+    SetResult result;
+    try {
+      result = callback(name, normalized);
+    } catch (const std::exception& e) {
+      result = {false, std::string("callback threw: ") + e.what()};
+    }
+    if (!result.ok) {
+      return {false, "parameter '" + name + "' = '" + toString(normalized) +
+                         "' rejected: " + result.reason};
+    }
+  }
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  Declared& stored = impl_->declared.at(name);
+  stored.value = normalized;
+  stored.source = "set()";
+  return {true, ""};
+}
+
+Parameters::SetResult Parameters::set(const std::string& name, const char* value) {
+  return set(name, ParameterValue(std::string(value)));
+}
+
+Parameters::SetResult Parameters::setFromYaml(const std::string& name,
+                                              const std::string& yaml_value) {
+  Declared declared;
+  {
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    const auto it = impl_->declared.find(name);
+    if (it == impl_->declared.end()) {
+      return {false, "parameter '" + name + "' of node '" + impl_->node_name +
+                         "' is not declared; cannot set it to '" + yaml_value + "'"};
+    }
+    declared = it->second;
+  }
+  YAML::Node node;
+  try {
+    node = YAML::Load(yaml_value);
+  } catch (const YAML::Exception& e) {
+    return {false, "parameter '" + name + "': malformed value '" + yaml_value + "': " + e.msg};
+  }
+  const Conversion conversion = convertNode(node, typeOf(declared.value));
+  if (!conversion.value) {
+    return {false, "parameter '" + name +
+                       "': " + expectedGot(declared, nodeDisplay(node), conversion.violation)};
+  }
+  return set(name, *conversion.value);
+}
+
+void Parameters::onSet(Callback callback) {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  impl_->callbacks.push_back(std::move(callback));
+}
+
+std::vector<std::string> Parameters::unusedOverrides() const {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  std::vector<std::string> unused;
+  for (const auto& o : impl_->overrides) {
+    if (o.rank == Rank::WILDCARD || impl_->declared.count(o.name) > 0) continue;
+    std::string text = "'" + o.name + "' from " + o.source;
+    if (const auto suggestion = closestName(o.name, impl_->order)) {
+      text += " (did you mean '" + *suggestion + "'?)";
+    }
+    if (std::find(unused.begin(), unused.end(), text) == unused.end()) unused.push_back(text);
+  }
+  return unused;
+}
+
+std::string Parameters::describe() const {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  YAML::Emitter out;
+  out << YAML::BeginMap;
+  for (const auto& name : impl_->order) {
+    const Declared& declared = impl_->declared.at(name);
+    const ParameterType type = typeOf(declared.value);
+    const auto& d = declared.descriptor;
+    out << YAML::Key << name << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "type" << YAML::Value << toString(type);
+    out << YAML::Key << "value" << YAML::Value;
+    emitValue(out, declared.value);
+    if (!d.unit.empty()) out << YAML::Key << "unit" << YAML::Value << d.unit;
+    if (isInteger(type)) {
+      const auto [low, high] = integerBounds(declared);
+      if (low != kInt64Min) out << YAML::Key << "min" << YAML::Value << static_cast<long long>(low);
+      if (high != kInt64Max) {
+        out << YAML::Key << "max" << YAML::Value << static_cast<long long>(high);
+      }
+    } else {
+      if (d.min) out << YAML::Key << "min" << YAML::Value << formatDouble(*d.min);
+      if (d.max) out << YAML::Key << "max" << YAML::Value << formatDouble(*d.max);
+    }
+    if (!d.choices.empty()) {
+      out << YAML::Key << "choices" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+      for (const auto& choice : d.choices) out << choice;
+      out << YAML::EndSeq;
+    }
+    if (d.read_only) out << YAML::Key << "read_only" << YAML::Value << true;
+    if (!d.description.empty()) {
+      out << YAML::Key << "description" << YAML::Value << d.description;
+    }
+    out << YAML::Key << "source" << YAML::Value << declared.source;
+    out << YAML::EndMap;
+  }
+  out << YAML::EndMap;
+  return std::string(out.c_str()) + "\n";
+}
+
+std::string Parameters::node_name() const { return impl_->node_name; }
+
+}  // namespace auv::interfaces

@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# Installs every Debian 12 package the workspace needs. Idempotent; uses only apt.
+set -euo pipefail
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+
+PACKAGES=(
+  # build tools
+  build-essential cmake ccache python3 git iproute2
+  colcon python3-colcon-cmake python3-colcon-recursive-crawl python3-colcon-parallel-executor
+  python3-colcon-output python3-colcon-package-selection python3-colcon-bash
+  python3-colcon-defaults python3-colcon-metadata python3-colcon-package-information
+  python3-colcon-test-result python3-colcon-library-path
+  # DDS vendors (both always built) and their generators/tools
+  libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools cyclonedds-dev cyclonedds-tools
+  # common libraries and tests
+  libyaml-cpp-dev libgtest-dev libgmock-dev libbenchmark-dev
+)
+
+echo "install-deps: apt-get update"
+$SUDO apt-get update -qq
+missing=()
+for p in "${PACKAGES[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${#PACKAGES[@]} packages already installed"
+else
+  echo "install-deps: installing ${missing[*]}"
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y --no-install-recommends "${missing[@]}"
+fi
