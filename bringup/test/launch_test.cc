@@ -209,9 +209,8 @@ const InvalidCase kInvalidCases[] = {
      "unknown key; did you mean 'processes'?"},
     {"UnknownProcessKeyWithSuggestion", "processes:\n  - {name: a, command: [x], restat: always}\n",
      "processes[0].restat", "did you mean 'restart'?"},
-    {"TransposedLettersSuggestion",
-     "processes:\n  - {name: a, command: [x], restart_dealy: 1}\n", "processes[0].restart_dealy",
-     "did you mean 'restart_delay'?"},
+    {"TransposedLettersSuggestion", "processes:\n  - {name: a, command: [x], restart_dealy: 1}\n",
+     "processes[0].restart_dealy", "did you mean 'restart_delay'?"},
     {"AliasSuggestion", "processes:\n  - {name: a, command: [x], env: {A: b}}\n",
      "processes[0].env", "did you mean 'environment'?"},
     {"UnknownKeyWithoutSuggestion", "processes:\n  - {name: a, command: [x], zzzzzz: 1}\n",
@@ -235,8 +234,8 @@ const InvalidCase kInvalidCases[] = {
      "processes[1].name", "duplicate process name 'a' (first used by processes[0])"},
     {"NoKind", "processes:\n  - {name: a}\n", "processes[0]",
      "expected exactly one of 'component', 'components' or 'command', got none"},
-    {"TwoKinds", "processes:\n  - {name: a, component: c, command: [x]}\n",
-     "processes[0].command", "got both 'component' and 'command'"},
+    {"TwoKinds", "processes:\n  - {name: a, component: c, command: [x]}\n", "processes[0].command",
+     "got both 'component' and 'command'"},
     {"CommandAsString", "processes:\n  - {name: a, command: 'echo hi'}\n", "processes[0].command",
      "expected a list of arguments"},
     {"EmptyCommand", "processes:\n  - {name: a, command: []}\n", "processes[0].command",
@@ -255,12 +254,15 @@ const InvalidCase kInvalidCases[] = {
      "processes[0].max_restarts", "expected a non-negative integer, got '1.5'"},
     {"NegativeRestartDelay", "processes:\n  - {name: a, command: [x], restart_delay: -2}\n",
      "processes[0].restart_delay", "expected a duration in seconds >= 0, got '-2'"},
-    {"ShutdownTimeoutNotANumber", "shutdown_timeout: soon\nprocesses:\n  - {name: a, command: [x]}\n",
-     "shutdown_timeout", "expected a duration in seconds >= 0, got 'soon'"},
+    {"ShutdownTimeoutNotANumber",
+     "shutdown_timeout: soon\nprocesses:\n  - {name: a, command: [x]}\n", "shutdown_timeout",
+     "expected a duration in seconds >= 0, got 'soon'"},
     {"InfiniteShutdownTimeout", "shutdown_timeout: .inf\nprocesses:\n  - {name: a, command: [x]}\n",
      "shutdown_timeout", "got '.inf'"},
     {"RequiredNotBool", "processes:\n  - {name: a, command: [x], required: maybe}\n",
      "processes[0].required", "expected true or false, got 'maybe'"},
+    {"RequiredYesIsNotABool", "processes:\n  - {name: a, command: [x], required: yes}\n",
+     "processes[0].required", "expected true or false, got 'yes'"},
     {"EnvironmentNotAMapping", "environment: [A]\nprocesses:\n  - {name: a, command: [x]}\n",
      "environment", "expected a mapping of NAME: value, got a list"},
     {"EnvironmentValueNotScalar",
@@ -275,10 +277,11 @@ const InvalidCase kInvalidCases[] = {
      "processes[0].parameters", "give parameters per entry"},
     {"ParametersNotAMapping", "processes:\n  - {name: a, component: c, parameters: [1]}\n",
      "processes[0].parameters", "expected a mapping of parameter: value, got a list"},
-    {"ParameterWithoutValue", "processes:\n  - name: a\n    component: c\n    parameters:\n      rate:\n",
+    {"ParameterWithoutValue",
+     "processes:\n  - name: a\n    component: c\n    parameters:\n      rate:\n",
      "processes[0].parameters.rate", "missing value"},
-    {"EmptyComposition", "processes:\n  - {name: v, components: []}\n",
-     "processes[0].components", "expected at least one component"},
+    {"EmptyComposition", "processes:\n  - {name: v, components: []}\n", "processes[0].components",
+     "expected at least one component"},
     {"CompositionEntryWithoutComponent", "processes:\n  - {name: v, components: [{name: n}]}\n",
      "processes[0].components[0].component", "missing required key"},
     {"DuplicateNodeNameInComposition",
@@ -377,8 +380,7 @@ TEST(ProcessCommandTest, BuildsAuvRunCommandsAndEnvironment) {
 
   const ProcessCommand probe =
       buildProcessCommand(launch, launch.processes[2], "/opt/auv/bin/auv", "/tmp/p");
-  EXPECT_THAT(probe.argv,
-              ElementsAre("/opt/auv/bin/auv", "topic", "echo", "/chatter", "--once"));
+  EXPECT_THAT(probe.argv, ElementsAre("/opt/auv/bin/auv", "topic", "echo", "/chatter", "--once"));
   EXPECT_TRUE(probe.inline_params_path.empty());
   EXPECT_EQ(probe.environment.at("AUV_DDS"), "cyclonedds");
 
@@ -590,8 +592,8 @@ processes:
 }
 
 TEST_F(SupervisorTest, ProgramNotFoundFailsWithoutRestart) {
-  const Result r = runLaunch(
-      "processes:\n  - {name: a, command: [no-such-program-xyz], restart: always}\n");
+  const Result r =
+      runLaunch("processes:\n  - {name: a, command: [no-such-program-xyz], restart: always}\n");
   const ProcessReport& a = r.report.processes[0];
   EXPECT_EQ(a.outcome, ProcessOutcome::START_FAILED);
   EXPECT_THAT(a.start_error, HasSubstr("not found"));
@@ -789,13 +791,14 @@ processes:
 )");
   EXPECT_EQ(r.report.exit_code, 0);
   const std::string tmp = dir_.file("tmp");
-  EXPECT_THAT(r.out, HasSubstr("[talker] argv: run demo_talker:talker --params " +
-                               dir_.file("params/base.yaml") + " --params " + tmp +
-                               "/auv-launch-"));
+  EXPECT_THAT(r.out,
+              HasSubstr("[talker] argv: run demo_talker:talker --params " +
+                        dir_.file("params/base.yaml") + " --params " + tmp + "/auv-launch-"));
   EXPECT_THAT(r.out, HasSubstr("[talker] dds: cyclonedds\n"));
   EXPECT_THAT(r.out, HasSubstr("[talker]   rate_hz: 10.0\n"));
   EXPECT_THAT(r.out, HasSubstr("[vehicle] argv: run demo_talker:talker2 demo_listener:listener2 "
-                               "--params " + tmp + "/auv-launch-"));
+                               "--params " +
+                               tmp + "/auv-launch-"));
   EXPECT_THAT(r.out, HasSubstr("[vehicle] dds: unset\n"));
   EXPECT_THAT(r.out, HasSubstr("[vehicle] talker2:\n[vehicle]   rate_hz: 2.0\n"));
   EXPECT_TRUE(fs::is_empty(tmp)) << "generated params files were not removed";
@@ -825,6 +828,16 @@ processes:
   for (const std::string& line : out) {
     EXPECT_TRUE(line.rfind("[p] ", 0) == 0 || line.rfind("[longer_name] ", 0) == 0) << line;
   }
+}
+
+TEST_F(SupervisorTest, LargeOutputIsCopiedCompletely) {
+  // More than a pipe buffer, written by a process that exits right away.
+  const Result r = runLaunch("processes:\n  - {name: n, command: [seq, '1', '30000']}\n");
+  const std::vector<std::string> out = lines(r.out);
+  ASSERT_EQ(out.size(), 30000u);
+  EXPECT_EQ(out.front(), "[n] 1");
+  EXPECT_EQ(out[12344], "[n] 12345");
+  EXPECT_EQ(out.back(), "[n] 30000");
 }
 
 TEST_F(SupervisorTest, LeftoversOfAProcessGroupAreKilledAndReaped) {
@@ -878,7 +891,8 @@ TEST(LaunchMainTest, DryRunPrintsCommandsAndEnvironment) {
   const std::string out = ::testing::internal::GetCapturedStdout();
   EXPECT_EQ(code, 0);
   EXPECT_THAT(out, HasSubstr("talker:\n  command: /opt/auv/bin/auv run demo_talker:talker "
-                             "--params " + dir.file("params/talker.yaml") + " --params "));
+                             "--params " +
+                             dir.file("params/talker.yaml") + " --params "));
   EXPECT_THAT(out, HasSubstr("  environment: AUV_DDS=fastdds AUV_DOMAIN_ID=7 FOO=bar\n"));
   EXPECT_THAT(out, HasSubstr("probe:\n  command: /opt/auv/bin/auv topic echo /chatter --once\n"));
   EXPECT_THAT(out, HasSubstr("  inline parameters ("));

@@ -107,8 +107,8 @@ TEST(GraphHelpers, ParticipantInfoFromOurUserData) {
   EXPECT_EQ(info.vendor, "fastdds");  // USER_DATA wins over the GUID's vendor id
 
   // What participantUserData() produces parses back.
-  const ParticipantInfo own = detail::makeParticipantInfo(
-      guid, participantUserData(Vendor::CYCLONEDDS, "mapper"), "");
+  const ParticipantInfo own =
+      detail::makeParticipantInfo(guid, participantUserData(Vendor::CYCLONEDDS, "mapper"), "");
   EXPECT_TRUE(own.is_auv);
   EXPECT_EQ(own.node_name, "mapper");
   EXPECT_EQ(own.host, hostName());
@@ -206,8 +206,7 @@ TEST_P(GraphPairTest, SeesNodeTopicAndQos) {
   // The node, as USER_DATA announces it.
   ASSERT_EQ(snap.participants.size(), 1u) << "only the talker is on this domain";
   const ParticipantInfo* node = snap.participant(pguid);
-  ASSERT_NE(node, nullptr) << "talker not discovered within " << kDiscoveryTimeout.count()
-                           << " ms";
+  ASSERT_NE(node, nullptr) << "talker not discovered within " << kDiscoveryTimeout.count() << " ms";
   EXPECT_TRUE(node->is_auv);
   EXPECT_EQ(node->node_name, "talker");
   EXPECT_EQ(node->vendor, toString(talkerVendor()));
@@ -311,9 +310,9 @@ TEST_P(GraphPairTest, DeletedEndpointsAndParticipantsDisappear) {
   if (!lease_only) {
     // The writer goes alone; the reader and the node stay.
     talker->writer.reset();
-    snap = inspector.waitFor(
-        [&](const GraphSnapshot& s) { return findEndpoint(s, wguid) == nullptr; },
-        kDiscoveryTimeout);
+    snap =
+        inspector.waitFor([&](const GraphSnapshot& s) { return findEndpoint(s, wguid) == nullptr; },
+                          kDiscoveryTimeout);
     EXPECT_EQ(findEndpoint(snap, wguid), nullptr) << "deleted writer still listed";
     EXPECT_EQ(snap.endpoints.size(), 1u);
     EXPECT_NE(snap.participant(pguid), nullptr);
@@ -324,10 +323,10 @@ TEST_P(GraphPairTest, DeletedEndpointsAndParticipantsDisappear) {
   snap = inspector.waitFor(
       [&](const GraphSnapshot& s) { return s.participants.empty() && s.endpoints.empty(); },
       kDiscoveryTimeout);
-  const auto took = std::chrono::duration_cast<milliseconds>(std::chrono::steady_clock::now() -
-                                                             start);
-  EXPECT_TRUE(snap.participants.empty()) << "deleted participant still listed after "
-                                         << took.count() << " ms";
+  const auto took =
+      std::chrono::duration_cast<milliseconds>(std::chrono::steady_clock::now() - start);
+  EXPECT_TRUE(snap.participants.empty())
+      << "deleted participant still listed after " << took.count() << " ms";
   EXPECT_TRUE(snap.endpoints.empty()) << "endpoints of a deleted participant still listed";
   if (!lease_only) EXPECT_LT(took.count(), 2000) << "removal should be announced, not timed out";
 }
@@ -338,13 +337,13 @@ std::string pairName(const ::testing::TestParamInfo<GraphPairTest::ParamType>& i
 }
 
 // (talker, inspector, index): each test uses domain base + index (100-103, 110-113, 120-123).
-INSTANTIATE_TEST_SUITE_P(
-    Pairs, GraphPairTest,
-    ::testing::Values(std::make_tuple(Vendor::CYCLONEDDS, Vendor::CYCLONEDDS, 0),
-                      std::make_tuple(Vendor::CYCLONEDDS, Vendor::FASTDDS, 1),
-                      std::make_tuple(Vendor::FASTDDS, Vendor::CYCLONEDDS, 2),
-                      std::make_tuple(Vendor::FASTDDS, Vendor::FASTDDS, 3)),
-    pairName);
+INSTANTIATE_TEST_SUITE_P(Pairs, GraphPairTest,
+                         ::testing::Values(std::make_tuple(Vendor::CYCLONEDDS, Vendor::CYCLONEDDS,
+                                                           0),
+                                           std::make_tuple(Vendor::CYCLONEDDS, Vendor::FASTDDS, 1),
+                                           std::make_tuple(Vendor::FASTDDS, Vendor::CYCLONEDDS, 2),
+                                           std::make_tuple(Vendor::FASTDDS, Vendor::FASTDDS, 3)),
+                         pairName);
 
 }  // namespace
 }  // namespace auv::interfaces

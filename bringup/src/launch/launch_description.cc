@@ -16,20 +16,32 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr const char* kTopLevelKeys[] = {"environment", "shutdown_timeout", "processes"};
-constexpr const char* kProcessKeys[] = {
-    "name",        "component",   "components", "command",      "vendor",        "parameters",
-    "params_file", "environment", "restart",    "max_restarts", "restart_delay", "required"};
+constexpr const char* kProcessKeys[] = {"name",    "component",    "components",    "command",
+                                        "vendor",  "parameters",   "params_file",   "environment",
+                                        "restart", "max_restarts", "restart_delay", "required"};
 constexpr const char* kComponentEntryKeys[] = {"component", "name", "parameters"};
 
 // Frequent spellings from other launch systems, suggested when the key is unknown.
 const std::map<std::string, std::string>& keyAliases() {
   static const std::map<std::string, std::string> aliases = {
-      {"env", "environment"},       {"params", "parameters"},         {"param", "parameters"},
-      {"cmd", "command"},           {"args", "command"},              {"argv", "command"},
-      {"executable", "command"},    {"respawn", "restart"},           {"respawn_delay", "restart_delay"},
-      {"dds", "vendor"},            {"rmw", "vendor"},                {"node_name", "name"},
-      {"node", "component"},        {"nodes", "components"},          {"parameters_file", "params_file"},
-      {"param_file", "params_file"}, {"timeout", "shutdown_timeout"}, {"sigterm_timeout", "shutdown_timeout"},
+      {"env", "environment"},
+      {"params", "parameters"},
+      {"param", "parameters"},
+      {"cmd", "command"},
+      {"args", "command"},
+      {"argv", "command"},
+      {"executable", "command"},
+      {"respawn", "restart"},
+      {"respawn_delay", "restart_delay"},
+      {"dds", "vendor"},
+      {"rmw", "vendor"},
+      {"node_name", "name"},
+      {"node", "component"},
+      {"nodes", "components"},
+      {"parameters_file", "params_file"},
+      {"param_file", "params_file"},
+      {"timeout", "shutdown_timeout"},
+      {"sigterm_timeout", "shutdown_timeout"},
       {"on_exit", "required"},
   };
   return aliases;
@@ -181,8 +193,7 @@ class Parser {
     std::set<std::string> seen;
     for (const auto& entry : map) {
       if (!entry.first.IsScalar()) {
-        failAt(path.empty() ? "<top level>" : path, "keys must be plain names",
-               entry.first.Mark());
+        failAt(path.empty() ? "<top level>" : path, "keys must be plain names", entry.first.Mark());
       }
       const std::string& key = entry.first.Scalar();
       const std::string field = join(path, key);
@@ -231,12 +242,12 @@ class Parser {
     return value;
   }
 
+  // Strict YAML 1.2 core booleans, like the parameter files: yes/no/on/off/1/0 are errors.
   bool parseBool(const YAML::Node& node, const std::string& field) const {
-    if (node.IsScalar()) {
-      try {
-        return node.as<bool>();
-      } catch (const YAML::Exception&) {
-      }
+    if (node.IsScalar() && node.Tag() == "?") {
+      const std::string& text = node.Scalar();
+      if (text == "true" || text == "True" || text == "TRUE") return true;
+      if (text == "false" || text == "False" || text == "FALSE") return false;
     }
     fail(field, "expected true or false, got " + describe(node), node);
   }
@@ -254,7 +265,8 @@ class Parser {
     }
     const std::string hint = suggest(node.Scalar(), names);
     fail(field,
-         expected + ", got " + describe(node) + (hint.empty() ? "" : "; did you mean '" + hint + "'?"),
+         expected + ", got " + describe(node) +
+             (hint.empty() ? "" : "; did you mean '" + hint + "'?"),
          node);
   }
 
@@ -270,8 +282,7 @@ class Parser {
       const std::string name = parseString(entry.first, field, "a variable name");
       const std::string entry_field = join(field, name);
       if (!isIdentifier(name)) {
-        failAt(entry_field, "invalid environment variable name '" + name + "'",
-               entry.first.Mark());
+        failAt(entry_field, "invalid environment variable name '" + name + "'", entry.first.Mark());
       }
       if (!seen.insert(name).second) failAt(entry_field, "duplicate key", entry.first.Mark());
       if (!entry.second.IsScalar()) {
@@ -315,7 +326,9 @@ class Parser {
                describe(node),
            node);
     }
-    if (!node.IsSequence()) fail(field, "expected a list of arguments, got " + describe(node), node);
+    if (!node.IsSequence()) {
+      fail(field, "expected a list of arguments, got " + describe(node), node);
+    }
     if (node.size() == 0) fail(field, "expected at least the program name", node);
     std::vector<std::string> argv;
     for (size_t i = 0; i < node.size(); ++i) {
@@ -339,8 +352,8 @@ class Parser {
 
   ComponentDescription parseComponentEntry(const YAML::Node& node, const std::string& path) {
     if (!node.IsMap()) {
-      fail(path, "expected a mapping {component: ..., name: ..., parameters: ...}, got " +
-                     describe(node),
+      fail(path,
+           "expected a mapping {component: ..., name: ..., parameters: ...}, got " + describe(node),
            node);
     }
     checkKeys(node, path, kComponentEntryKeys);
@@ -371,7 +384,9 @@ class Parser {
   }
 
   ProcessDescription parseProcess(const YAML::Node& node, const std::string& path) {
-    if (!node.IsMap()) fail(path, "expected a mapping describing a process, got " + describe(node), node);
+    if (!node.IsMap()) {
+      fail(path, "expected a mapping describing a process, got " + describe(node), node);
+    }
     checkKeys(node, path, kProcessKeys);
     ProcessDescription process;
 
@@ -380,8 +395,7 @@ class Parser {
     process.name = parseString(name, join(path, "name"), "a process name");
     if (!isIdentifier(process.name)) {
       fail(join(path, "name"),
-           "invalid process name '" + process.name + "' (must match [A-Za-z_][A-Za-z0-9_]*)",
-           name);
+           "invalid process name '" + process.name + "' (must match [A-Za-z_][A-Za-z0-9_]*)", name);
     }
 
     // Exactly one of component / components / command.
@@ -390,13 +404,12 @@ class Parser {
       if (node[key]) kinds.emplace_back(key);
     }
     if (kinds.empty()) {
-      fail(path, "expected exactly one of 'component', 'components' or 'command', got none",
-           node);
+      fail(path, "expected exactly one of 'component', 'components' or 'command', got none", node);
     }
     if (kinds.size() > 1) {
       fail(join(path, kinds[1]),
-           "expected exactly one of 'component', 'components' or 'command', got both '" +
-               kinds[0] + "' and '" + kinds[1] + "'",
+           "expected exactly one of 'component', 'components' or 'command', got both '" + kinds[0] +
+               "' and '" + kinds[1] + "'",
            node[kinds[1]]);
     }
 
@@ -432,8 +445,7 @@ class Parser {
       }
       if (const YAML::Node parameters = node["parameters"]) {
         fail(join(path, "parameters"),
-             "not allowed on a composition; give parameters per entry in 'components'",
-             parameters);
+             "not allowed on a composition; give parameters per entry in 'components'", parameters);
       }
     } else {
       process.kind = ProcessKind::COMMAND;
@@ -532,8 +544,8 @@ const char* toString(DdsVendor vendor) {
   return "";
 }
 
-LaunchFileError::LaunchFileError(std::string file, std::string field, std::string problem,
-                                 int line, int column)
+LaunchFileError::LaunchFileError(std::string file, std::string field, std::string problem, int line,
+                                 int column)
     : std::runtime_error(formatError(file, field, problem, line, column)),
       file_(std::move(file)),
       field_(std::move(field)),
@@ -565,8 +577,8 @@ void LaunchDescription::check() const {
     const ProcessDescription& process = processes[i];
     const std::string path = processPath(i);
     if (!isIdentifier(process.name)) {
-      fail(join(path, "name"), "invalid process name '" + process.name +
-                                   "' (must match [A-Za-z_][A-Za-z0-9_]*)");
+      fail(join(path, "name"),
+           "invalid process name '" + process.name + "' (must match [A-Za-z_][A-Za-z0-9_]*)");
     }
     if (!names.insert(process.name).second) {
       fail(join(path, "name"), "duplicate process name '" + process.name + "'");
@@ -597,8 +609,7 @@ void LaunchDescription::check() const {
           const std::string entry_path =
               single ? path : join(path, "components[" + std::to_string(j) + "]");
           if (!isValidComponentName(entry.component)) {
-            fail(join(entry_path, "component"),
-                 "invalid component name '" + entry.component + "'");
+            fail(join(entry_path, "component"), "invalid component name '" + entry.component + "'");
           }
           if (!isIdentifier(entry.node_name)) {
             fail(join(entry_path, "name"), "invalid node name '" + entry.node_name + "'");

@@ -41,8 +41,7 @@ void printDryRun(const LaunchDescription& launch, const std::string& auv_executa
   out << "# " << launch.source << ": " << launch.processes.size()
       << " process(es), shutdown_timeout: " << launch.shutdown_timeout << " s\n";
   for (const ProcessDescription& process : launch.processes) {
-    const ProcessCommand command =
-        buildProcessCommand(launch, process, auv_executable, params_dir);
+    const ProcessCommand command = buildProcessCommand(launch, process, auv_executable, params_dir);
     out << process.name << ":\n";
     out << "  command: " << formatCommand(command.argv) << "\n";
     std::string path_variable;

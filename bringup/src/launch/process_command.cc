@@ -92,7 +92,9 @@ ProcessCommand buildProcessCommand(const LaunchDescription& launch,
   }
   command.environment = launch.environment;
   for (const auto& [name, value] : process.environment) command.environment[name] = value;
-  if (process.vendor != DdsVendor::DEFAULT) command.environment["AUV_DDS"] = toString(process.vendor);
+  if (process.vendor != DdsVendor::DEFAULT) {
+    command.environment["AUV_DDS"] = toString(process.vendor);
+  }
   return command;
 }
 
@@ -121,8 +123,7 @@ std::string findExecutable(const std::string& program, const std::string& path_v
     const std::string dir = end > begin ? path.substr(begin, end - begin) : ".";
     const std::string candidate = dir + "/" + program;
     std::error_code error;
-    if (access(candidate.c_str(), X_OK) == 0 &&
-        !std::filesystem::is_directory(candidate, error)) {
+    if (access(candidate.c_str(), X_OK) == 0 && !std::filesystem::is_directory(candidate, error)) {
       return candidate;
     }
     begin = end + 1;
@@ -132,7 +133,7 @@ std::string findExecutable(const std::string& program, const std::string& path_v
 
 std::string shellQuote(const std::string& arg) {
   const bool plain = !arg.empty() && std::all_of(arg.begin(), arg.end(), [](unsigned char c) {
-    return std::isalnum(c) || std::strchr("@%_+=:,./-", c) != nullptr;
+    return std::isalnum(c) || (c != '\0' && std::strchr("@%_+=:,./-", c) != nullptr);
   });
   if (plain) return arg;
   std::string quoted = "'";

@@ -19,7 +19,6 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <memory>
 #include <sstream>
 #include <stdexcept>
 
@@ -31,10 +30,11 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
-constexpr size_t kReadChunk = 64 * 1024;     // bytes read from a child pipe per poll round
+constexpr size_t kReadChunk = 64 * 1024;      // bytes read from a child pipe per poll round
 constexpr size_t kMaxLineLength = 64 * 1024;  // longer partial lines are flushed as they are
 constexpr int kStartFailedExitCode = 127;     // like a shell's "command not found"
 constexpr unsigned char kRequestByte = 0;     // wake byte of requestShutdown()
+constexpr int kLostStatusExitCode = 255;      // a child reaped by someone else
 
 // Signal handlers only see globals: the write end of the running Supervisor's self-pipe.
 std::atomic<int> g_wake_fd{-1};
@@ -51,25 +51,19 @@ void onSignal(int signal_number) {
 }
 
 std::string signalName(int signal_number) {
-  switch (signal_number) {
-    case SIGHUP: return "SIGHUP";
-    case SIGINT: return "SIGINT";
-    case SIGQUIT: return "SIGQUIT";
-    case SIGILL: return "SIGILL";
-    case SIGTRAP: return "SIGTRAP";
-    case SIGABRT: return "SIGABRT";
-    case SIGBUS: return "SIGBUS";
-    case SIGFPE: return "SIGFPE";
-    case SIGKILL: return "SIGKILL";
-    case SIGUSR1: return "SIGUSR1";
-    case SIGSEGV: return "SIGSEGV";
-    case SIGUSR2: return "SIGUSR2";
-    case SIGPIPE: return "SIGPIPE";
-    case SIGALRM: return "SIGALRM";
-    case SIGTERM: return "SIGTERM";
-    case SIGCHLD: return "SIGCHLD";
-    default: return "signal " + std::to_string(signal_number);
+  static constexpr std::pair<int, const char*> kNames[] = {
+      {SIGHUP, "SIGHUP"},   {SIGINT, "SIGINT"},   {SIGQUIT, "SIGQUIT"}, {SIGILL, "SIGILL"},
+      {SIGTRAP, "SIGTRAP"}, {SIGABRT, "SIGABRT"}, {SIGBUS, "SIGBUS"},   {SIGFPE, "SIGFPE"},
+      {SIGKILL, "SIGKILL"}, {SIGUSR1, "SIGUSR1"}, {SIGSEGV, "SIGSEGV"}, {SIGUSR2, "SIGUSR2"},
+      {SIGPIPE, "SIGPIPE"}, {SIGALRM, "SIGALRM"}, {SIGTERM, "SIGTERM"}, {SIGCHLD, "SIGCHLD"}};
+  for (const auto& [number, name] : kNames) {
+    if (number == signal_number) return name;
   }
+  return "signal " + std::to_string(signal_number);
+}
+
+Clock::duration toDuration(double seconds) {
+  return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
 }
 
 std::string formatSeconds(double seconds) {
@@ -307,7 +301,9 @@ class Run {
     return tmpdir != nullptr && *tmpdir != '\0' ? tmpdir : "/tmp";
   }
 
-  void log(const std::string& message) const { writeAll(options_.log_fd, "[launch] " + message + "\n"); }
+  void log(const std::string& message) const {
+    writeAll(options_.log_fd, "[launch] " + message + "\n");
+  }
 
   // Spawns the child in its own process group with stdin=/dev/null and piped stdout/stderr.
   void start(Child& child) {
@@ -336,8 +332,8 @@ class Run {
 #endif
     posix_spawnattr_t attributes;
     posix_spawnattr_init(&attributes);
-    posix_spawnattr_setflags(&attributes,
-                             POSIX_SPAWN_SETPGROUP | POSIX_SPAWN_SETSIGDEF | POSIX_SPAWN_SETSIGMASK);
+    posix_spawnattr_setflags(
+        &attributes, POSIX_SPAWN_SETPGROUP | POSIX_SPAWN_SETSIGDEF | POSIX_SPAWN_SETSIGMASK);
     posix_spawnattr_setpgroup(&attributes, 0);
     sigset_t all_signals;
     sigset_t no_signals;
@@ -432,13 +428,13 @@ class Run {
 
   // Sleeps in poll() until output, a signal, a child exit or the next deadline.
   void waitForEvents() {
-    Clock::time_point deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                                    std::chrono::duration<double>(options_.poll_interval));
+    Clock::time_point deadline = Clock::now() + toDuration(options_.poll_interval);
     if (shutting_down_ && stage_ < 3) deadline = std::min(deadline, stage_deadline_);
     for (const Child& child : children_) {
       if (child.state == State::WAITING_RESTART) deadline = std::min(deadline, child.restart_at);
     }
-    const auto remaining = std::chrono::duration_cast<std::chrono::microseconds>(deadline - Clock::now());
+    const auto remaining =
+        std::chrono::duration_cast<std::chrono::microseconds>(deadline - Clock::now());
     const int timeout_ms =
         remaining.count() <= 0 ? 0 : static_cast<int>((remaining.count() + 999) / 1000);
 
@@ -457,7 +453,9 @@ class Run {
     if (ready <= 0) return;  // timeout or EINTR: the loop re-checks everything
     if (fds[0].revents & POLLIN) handleWakeBytes();
     for (size_t i = 1; i < fds.size(); ++i) {
-      if (fds[i].revents & (POLLIN | POLLHUP | POLLERR)) readStream(*streams[i], prefixOf(*streams[i]));
+      if (fds[i].revents & (POLLIN | POLLHUP | POLLERR)) {
+        readStream(*streams[i], prefixOf(*streams[i]));
+      }
     }
   }
 
@@ -485,16 +483,15 @@ class Run {
     while ((n = read(wake_fd_, bytes, sizeof(bytes))) > 0) {
       for (ssize_t i = 0; i < n; ++i) {
         if (bytes[i] == SIGCHLD) continue;  // exits are collected by reapChildren()
-        const std::string what = bytes[i] == kRequestByte ? std::string("shutdown request")
-                                                           : signalName(bytes[i]);
+        const std::string what =
+            bytes[i] == kRequestByte ? std::string("shutdown request") : signalName(bytes[i]);
         if (!shutting_down_) {
           log("received " + what + "; stopping " + std::to_string(runningCount()) +
               " process(es): SIGINT, SIGTERM after " + formatSeconds(launch_.shutdown_timeout) +
               ", then SIGKILL");
           beginShutdown(LaunchEnd::SIGNAL);
         } else if (stage_ < 3) {
-          log("received " + what + " again; sending " + signalName(kStageSignals[stage_]) +
-              " now");
+          log("received " + what + " again; sending " + signalName(kStageSignals[stage_]) + " now");
           escalate();
         }
       }
@@ -555,7 +552,14 @@ class Run {
       do {
         result = waitpid(child.pid, &status, WNOHANG);
       } while (result < 0 && errno == EINTR);
-      if (result == child.pid) onExit(child, status);
+      if (result == child.pid) {
+        onExit(child, status);
+      } else if (result < 0 && errno == ECHILD) {
+        // Someone else in this process reaped it (e.g. a waitpid(-1) elsewhere).
+        log(child.process->name + " (pid " + std::to_string(child.pid) +
+            ") was reaped outside the launcher; its exit status is lost");
+        onExit(child, W_EXITCODE(kLostStatusExitCode, 0));
+      }
     }
   }
 
@@ -585,17 +589,15 @@ class Run {
     std::string message = process.name + " (pid " + std::to_string(pid) + ") " + report.describe();
 
     const bool failed = report.outcome != ProcessOutcome::EXITED || report.exit_code != 0;
-    const bool policy_restarts =
-        process.restart == RestartPolicy::ALWAYS ||
-        (process.restart == RestartPolicy::ON_FAILURE && failed);
+    const bool policy_restarts = process.restart == RestartPolicy::ALWAYS ||
+                                 (process.restart == RestartPolicy::ON_FAILURE && failed);
     const bool budget_left = !process.max_restarts || report.restarts < *process.max_restarts;
     if (shutting_down_) {
       log(message);
       finish(child);
     } else if (policy_restarts && budget_left) {
       child.state = State::WAITING_RESTART;
-      child.restart_at = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                            std::chrono::duration<double>(process.restart_delay));
+      child.restart_at = Clock::now() + toDuration(process.restart_delay);
       const std::string budget =
           process.max_restarts ? " of " + std::to_string(*process.max_restarts) : "";
       log(message + "; restarting in " + formatSeconds(process.restart_delay) + " (restart " +
@@ -642,8 +644,7 @@ class Run {
       child.stop_sent = true;
       child.report.strongest_stop_signal = signal_number;
     }
-    stage_deadline_ = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                         std::chrono::duration<double>(launch_.shutdown_timeout));
+    stage_deadline_ = Clock::now() + toDuration(launch_.shutdown_timeout);
   }
 
   static void signalGroup(pid_t pid, int signal_number) {

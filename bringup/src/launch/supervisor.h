@@ -13,15 +13,15 @@ namespace auv::bringup {
 
 /// Settings of a Supervisor that do not come from the launch file.
 struct SupervisorOptions {
-  std::string auv_executable;       // program run for components and for "auv" in commands
-  int stdout_fd = STDOUT_FILENO;    // receives the children's stdout lines, "[name] " prefixed
-  int stderr_fd = STDERR_FILENO;    // receives the children's stderr lines, "[name] " prefixed
-  int log_fd = STDERR_FILENO;       // receives the supervisor's "[launch] ..." lines and summary
-  bool handle_signals = true;       // SIGINT/SIGTERM/SIGHUP to this process start the shutdown
-  bool reap_orphans = true;         // become child subreaper (Linux) so that leftovers of a
-                                    // process group are reaped here even if they daemonized
-  std::string temp_dir;             // parent of the inline params folder; "" = $TMPDIR or /tmp
-  double poll_interval = 0.1;       // [s] longest sleep of the event loop (safety net)
+  std::string auv_executable;     // program run for components and for "auv" in commands
+  int stdout_fd = STDOUT_FILENO;  // receives the children's stdout lines, "[name] " prefixed
+  int stderr_fd = STDERR_FILENO;  // receives the children's stderr lines, "[name] " prefixed
+  int log_fd = STDERR_FILENO;     // receives the supervisor's "[launch] ..." lines and summary
+  bool handle_signals = true;     // SIGINT/SIGTERM/SIGHUP to this process start the shutdown
+  bool reap_orphans = true;       // become child subreaper (Linux) so that leftovers of a
+                                  // process group are reaped here even if they daemonized
+  std::string temp_dir;           // parent of the inline params folder; "" = $TMPDIR or /tmp
+  double poll_interval = 0.1;     // [s] longest sleep of the event loop (safety net)
 
   /// Throws std::invalid_argument naming the bad field and value.
   void check() const;
@@ -46,18 +46,18 @@ struct ProcessReport {
   std::string name;
   bool required = false;
   ProcessOutcome outcome = ProcessOutcome::START_FAILED;
-  int exit_code = 0;               // EXITED: the exit status
-  int signal = 0;                  // SIGNALED: the terminating signal
-  std::string start_error;         // START_FAILED: why
-  int restarts = 0;                // times it was started again after exiting
-  bool stopped = false;            // its last run was ended by the launcher's shutdown
-  int strongest_stop_signal = 0;   // last signal the shutdown sent it (SIGINT/SIGTERM/SIGKILL)
-  std::vector<pid_t> pids;         // every pid it ran as, in order (all reaped by the end)
+  int exit_code = 0;              // EXITED: the exit status
+  int signal = 0;                 // SIGNALED: the terminating signal
+  std::string start_error;        // START_FAILED: why
+  int restarts = 0;               // times it was started again after exiting
+  bool stopped = false;           // its last run was ended by the launcher's shutdown
+  int strongest_stop_signal = 0;  // last signal the shutdown sent it (SIGINT/SIGTERM/SIGKILL)
+  std::vector<pid_t> pids;        // every pid it ran as, in order (all reaped by the end)
 
   /// True when the last run exited 0 or was stopped by the launcher.
   bool succeeded() const;
   /// "exited with code 3", "killed by SIGKILL", "failed to start: ...", prefixed with
-  /// "stopped, " when the launcher stopped it.
+  /// "stopped with SIGTERM, " when the launcher stopped it ("not started" if it never ran).
   std::string describe() const;
 };
 

@@ -52,12 +52,15 @@ void applyCommon(const QosProfile& p, EndpointQos& q) {
                             ? dds::AUTOMATIC_LIVELINESS_QOS
                             : dds::MANUAL_BY_TOPIC_LIVELINESS_QOS;
   q.liveliness().lease_duration = toDuration(p.liveliness_lease_s);
-  // Fast DDS defaults (10 instances, 5000 samples) would silently cap keyed topics.
-  q.resource_limits().max_samples = p.max_samples > 0 ? p.max_samples : dds::LENGTH_UNLIMITED;
+  if (p.liveliness_lease_s > 0)  // Fast DDS requires announcement period < lease duration
+    q.liveliness().announcement_period = toDuration(p.liveliness_lease_s * 0.5);
+  // Fast DDS defaults (10 instances, 5000 samples) would silently cap keyed topics. In
+  // Fast DDS 2.9 "unlimited" is 0 here: LENGTH_UNLIMITED (-1) makes keyed writes fail.
+  q.resource_limits().max_samples = p.max_samples > 0 ? p.max_samples : 0;
   q.resource_limits().max_instances =
-      p.max_instances > 0 ? p.max_instances : dds::LENGTH_UNLIMITED;
+      p.max_instances > 0 ? p.max_instances : 0;
   q.resource_limits().max_samples_per_instance =
-      p.max_samples_per_instance > 0 ? p.max_samples_per_instance : dds::LENGTH_UNLIMITED;
+      p.max_samples_per_instance > 0 ? p.max_samples_per_instance : 0;
   // Messages have unbounded sequences: payloads are sized per sample.
   q.endpoint().history_memory_policy =
       eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;

@@ -7,7 +7,7 @@
 // vendor; it has no Cyclone dependency and can move to a graph.cc of its own.
 #include "auv/interfaces/graph.h"
 
-#include <dds/dds.h>
+#include "../cyclonedds/cyclone_config.h"
 
 #include <algorithm>
 #include <condition_variable>
@@ -16,8 +16,9 @@
 #include <map>
 #include <mutex>
 #include <stdexcept>
+#include <tuple>
 
-#include "../cyclonedds/cyclone_config.h"
+#include <dds/dds.h>
 
 namespace auv::interfaces {
 
@@ -37,11 +38,16 @@ std::string graphTopicName(const std::string& topic) {
 std::string vendorNameFromGuid(const Guid& guid) {
   const unsigned id = (static_cast<unsigned>(guid[0]) << 8) | guid[1];
   switch (id) {
-    case 0x010f: return "fastdds";
-    case 0x0110: return "cyclonedds";
-    case 0x0101: return "connext";
-    case 0x0103: return "opendds";
-    default: break;
+    case 0x010f:
+      return "fastdds";
+    case 0x0110:
+      return "cyclonedds";
+    case 0x0101:
+      return "connext";
+    case 0x0103:
+      return "opendds";
+    default:
+      break;
   }
   char hex[32];
   std::snprintf(hex, sizeof(hex), "vendor 0x%04x", id);
@@ -98,8 +104,7 @@ const ParticipantInfo* GraphSnapshot::participant(const Guid& guid) const {
   return nullptr;
 }
 
-std::vector<EndpointInfo> GraphSnapshot::endpointsOn(const std::string& topic,
-                                                     bool writers) const {
+std::vector<EndpointInfo> GraphSnapshot::endpointsOn(const std::string& topic, bool writers) const {
   const std::string name = graphTopicName(topic);
   std::vector<EndpointInfo> result;
   for (const EndpointInfo& e : endpoints)
@@ -252,7 +257,9 @@ Guid toGuid(const dds_guid_t& g) {
 }
 
 // Seconds as QosProfile counts them: infinite -> 0.
-double toSeconds(dds_duration_t d) { return d == DDS_INFINITY ? 0.0 : static_cast<double>(d) / 1e9; }
+double toSeconds(dds_duration_t d) {
+  return d == DDS_INFINITY ? 0.0 : static_cast<double>(d) / 1e9;
+}
 
 // What a Cyclone endpoint QoS announces, as a QosProfile. Cyclone fills absent policies with
 // the DDS defaults for the endpoint kind before handing the sample out.
@@ -263,8 +270,8 @@ QosProfile toProfile(const dds_qos_t* q, bool is_writer) {
   dds_duration_t blocking;
   p.reliability = is_writer ? Reliability::RELIABLE : Reliability::BEST_EFFORT;
   if (dds_qget_reliability(q, &reliability, &blocking)) {
-    p.reliability = reliability == DDS_RELIABILITY_RELIABLE ? Reliability::RELIABLE
-                                                            : Reliability::BEST_EFFORT;
+    p.reliability =
+        reliability == DDS_RELIABILITY_RELIABLE ? Reliability::RELIABLE : Reliability::BEST_EFFORT;
     p.max_blocking_time_s = toSeconds(blocking);
   }
   dds_durability_kind_t durability;
@@ -316,7 +323,9 @@ class CycloneGraphSource : public GraphSource {
     dds_delete_qos(q);
     check(participant_, "create participant on domain " + std::to_string(domain_id));
     dds_guid_t g;
-    check(dds_get_guid(participant_, &g), "get participant guid");
+    const dds_return_t guid_rc = dds_get_guid(participant_, &g);
+    if (guid_rc < 0) dds_delete(participant_);
+    check(guid_rc, "get participant guid");
     guid_ = toGuid(g);
     // Readers first, listener after: a callback never sees a half-built source.
     const dds_entity_t topics[3] = {DDS_BUILTIN_TOPIC_DCPSPARTICIPANT,
@@ -392,8 +401,7 @@ class CycloneGraphSource : public GraphSource {
         user_data.assign(static_cast<const char*>(value), size);
       dds_free(value);
       char* entity_name = nullptr;
-      if (dds_qget_entity_name(p->qos, &entity_name) && entity_name != nullptr)
-        name = entity_name;
+      if (dds_qget_entity_name(p->qos, &entity_name) && entity_name != nullptr) name = entity_name;
       dds_free(entity_name);
       const Guid guid = toGuid(p->key);
       guids[info.instance_handle] = guid;
@@ -419,8 +427,8 @@ class CycloneGraphSource : public GraphSource {
   dds_entity_t participant_ = 0;
   dds_entity_t readers_[3] = {0, 0, 0};
   Guid guid_{};
-  std::mutex mutex_;                                  // serialises drains
-  std::map<dds_instance_handle_t, Guid> guids_[3];    // instance -> key, per reader
+  std::mutex mutex_;                                // serialises drains
+  std::map<dds_instance_handle_t, Guid> guids_[3];  // instance -> key, per reader
 };
 
 }  // namespace

@@ -1,21 +1,22 @@
 // GraphInspector's Fast DDS source: a participant without endpoints whose
 // DomainParticipantListener receives every remote participant, writer and reader found by
 // the simple discovery protocols (SPDP/SEDP), of any vendor, and their removal.
-#include <fastdds/dds/domain/DomainParticipant.hpp>
-#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
-#include <fastdds/dds/domain/DomainParticipantListener.hpp>
+#include "auv/interfaces/graph.h"
+
+#include "../fastdds/fastdds_config.h"
+
+#include <cstring>
+#include <stdexcept>
+
 #include <fastdds/rtps/builtin/data/ParticipantProxyData.h>
 #include <fastdds/rtps/builtin/data/ReaderProxyData.h>
 #include <fastdds/rtps/builtin/data/WriterProxyData.h>
 #include <fastdds/rtps/participant/ParticipantDiscoveryInfo.h>
 #include <fastdds/rtps/reader/ReaderDiscoveryInfo.h>
 #include <fastdds/rtps/writer/WriterDiscoveryInfo.h>
-
-#include <cstring>
-#include <stdexcept>
-
-#include "../fastdds/fastdds_config.h"
-#include "auv/interfaces/graph.h"
+#include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/dds/domain/DomainParticipantListener.hpp>
 
 namespace auv::interfaces::detail {
 namespace {
@@ -47,18 +48,16 @@ template <class DiscoveredQos>
 QosProfile toProfile(const DiscoveredQos& q) {
   QosProfile p;
   p.name.clear();
-  p.reliability = q.m_reliability.kind == dds::RELIABLE_RELIABILITY_QOS
-                      ? Reliability::RELIABLE
-                      : Reliability::BEST_EFFORT;
+  p.reliability = q.m_reliability.kind == dds::RELIABLE_RELIABILITY_QOS ? Reliability::RELIABLE
+                                                                        : Reliability::BEST_EFFORT;
   p.max_blocking_time_s = toSeconds(q.m_reliability.max_blocking_time);
   p.durability = q.m_durability.kind == dds::VOLATILE_DURABILITY_QOS ? Durability::VOLATILE
-                                                                      : Durability::TRANSIENT_LOCAL;
+                                                                     : Durability::TRANSIENT_LOCAL;
   p.history = History::KEEP_LAST;  // the DDS default, shown as unknown (history_known)
   p.depth = 1;
   p.deadline_s = toSeconds(q.m_deadline.period);
-  p.liveliness = q.m_liveliness.kind == dds::AUTOMATIC_LIVELINESS_QOS
-                     ? Liveliness::AUTOMATIC
-                     : Liveliness::MANUAL_BY_TOPIC;
+  p.liveliness = q.m_liveliness.kind == dds::AUTOMATIC_LIVELINESS_QOS ? Liveliness::AUTOMATIC
+                                                                      : Liveliness::MANUAL_BY_TOPIC;
   p.liveliness_lease_s = toSeconds(q.m_liveliness.lease_duration);
   p.max_samples = -1;
   p.max_instances = -1;
@@ -121,8 +120,7 @@ class FastddsGraphSource : public GraphSource, public dds::DomainParticipantList
     }
   }
 
-  void on_subscriber_discovery(dds::DomainParticipant*,
-                               rtps::ReaderDiscoveryInfo&& info) override {
+  void on_subscriber_discovery(dds::DomainParticipant*, rtps::ReaderDiscoveryInfo&& info) override {
     if (info.status == rtps::ReaderDiscoveryInfo::REMOVED_READER) {
       sink_.endpointGone(toGuid(info.info.guid()));
     } else {
@@ -130,8 +128,7 @@ class FastddsGraphSource : public GraphSource, public dds::DomainParticipantList
     }
   }
 
-  void on_publisher_discovery(dds::DomainParticipant*,
-                              rtps::WriterDiscoveryInfo&& info) override {
+  void on_publisher_discovery(dds::DomainParticipant*, rtps::WriterDiscoveryInfo&& info) override {
     if (info.status == rtps::WriterDiscoveryInfo::REMOVED_WRITER) {
       sink_.endpointGone(toGuid(info.info.guid()));
     } else {

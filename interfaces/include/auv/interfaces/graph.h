@@ -21,20 +21,21 @@ namespace auv::interfaces {
 
 /// One data writer or data reader seen through discovery (any vendor, any process).
 struct EndpointInfo {
-  std::string topic;     ///< ROS-style, with the leading '/': "/nav/odometry".
-  std::string type;      ///< DDS type name as announced, e.g. "auv::msg::Odometry".
+  std::string topic;       ///< ROS-style, with the leading '/': "/nav/odometry".
+  std::string type;        ///< DDS type name as announced, e.g. "auv::msg::Odometry".
   bool is_writer = false;  ///< True for a publisher (data writer), false for a subscription.
-  Guid guid{};           ///< The endpoint's GUID.
-  Guid participant{};    ///< GUID of the participant that owns it (see GraphSnapshot::participant).
+  Guid guid{};             ///< The endpoint's GUID.
+  Guid participant{};      ///< GUID of the owning participant (GraphSnapshot::participant).
   /// QoS as announced in discovery; `name` is empty. Kinds outside QosProfile's enums are
   /// folded into the nearest one (transient/persistent durability -> TRANSIENT_LOCAL,
   /// manual-by-participant liveliness -> MANUAL_BY_TOPIC). Infinite durations are 0.
-  /// History kind/depth and resource limits are NOT part of the standard discovery data:
-  /// see `history_known`.
+  /// History kind/depth and resource limits are not part of the standard discovery data
+  /// (DCPSPublication/DCPSSubscription): see `history_known`.
   QosProfile qos;
-  /// True when qos.history/depth/max_* were really announced by the endpoint. When false
-  /// they hold the DDS defaults (keep_last(1), unlimited) and must be shown as unknown.
-  /// Cyclone announces them (non-standard PIDs); Fast DDS 2.9 does not.
+  /// True when qos.history/depth/max_samples* were really announced. When false they hold
+  /// the DDS defaults (keep_last(1), unlimited) and the CLI must show them as unknown.
+  /// Cyclone 0.10 endpoints announce them and a Cyclone inspector reads them; Fast DDS 2.9
+  /// endpoints do not announce them, and a Fast DDS inspector drops them for every endpoint.
   bool history_known = false;
 };
 
@@ -70,6 +71,15 @@ struct GraphSnapshot {
 
 /// A hidden participant that watches discovery and reports the graph of a domain.
 /// Thread-safe: snapshot() and waitFor() may be called from any thread.
+///
+/// Both vendors see participants and endpoints of both vendors. Measured on loopback, a new
+/// inspector usually knows an existing node within a few ms, but 0.7-1 s (Cyclone inspector,
+/// Fast DDS endpoints) and up to 3 s (Fast DDS's announcement period) also occur, so callers
+/// should wait up to ~3 s for what they expect. Departures: a Cyclone inspector sees deleted
+/// endpoints and participants of either vendor go within ~0.5 s. A Fast DDS 2.9 inspector sees
+/// Fast DDS departures at once but ignores Cyclone 0.10's dispose messages: a deleted Cyclone
+/// endpoint stays listed until its participant goes, and a deleted Cyclone participant stays
+/// until its lease expires (10 s by default). Prefer the Cyclone inspector (AUV_DDS default).
 class GraphInspector {
  public:
   /// DDS participant name (and USER_DATA node name) of every inspector; participants with
@@ -98,9 +108,8 @@ class GraphInspector {
   GraphSnapshot waitFor(const std::function<bool(const GraphSnapshot&)>& pred,
                         std::chrono::milliseconds timeout) const;
 
-  class Impl;
-
  private:
+  class Impl;  // the discovery cache; defined with the front end in cyclone_graph.cc
   std::unique_ptr<Impl> impl_;
 };
 

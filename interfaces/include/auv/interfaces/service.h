@@ -52,6 +52,12 @@ class Service : public Waitable {
     Req request;
     SampleInfo info;
     while (requests_->take(&request, &info)) {
+      // Clients resend until answered: answer a repeat from the cache, never run it twice.
+      auto& last = last_reply_[request.header().client_guid()];
+      if (request.header().sequence_number() <= last.first) {
+        if (request.header().sequence_number() == last.first) replies_->write(&last.second);
+        continue;
+      }
       Rep reply;
       reply.header(request.header());
       reply.status().code(msg::REPLY_CODE_OK);
@@ -67,8 +73,9 @@ class Service : public Waitable {
         reply.status().code(msg::REPLY_CODE_INTERNAL_ERROR);
         reply.status().error_text(e.what());
       }
+      last = {request.header().sequence_number(), reply};
+      ++served_;  // before the reply leaves, so a client that got it sees the count
       replies_->write(&reply);
-      ++served_;
     }
     return true;
   }
@@ -81,18 +88,23 @@ class Service : public Waitable {
   std::unique_ptr<DataReader> requests_;
   std::unique_ptr<DataWriter> replies_;
   std::atomic<bool> ready_{true};
-  uint64_t served_ = 0;
+  std::atomic<uint64_t> served_{0};
+  std::map<std::array<uint8_t, 16>, std::pair<uint64_t, Rep>> last_reply_;  // per client
 };
 
 /// Outcome of a Client call that got no reply.
 enum class CallStatus { OK, TIMEOUT, NO_SERVICE };
 
 /// Calls a service. Replies are matched in the middleware thread, so a call may block even
-/// inside a callback of the same executor without deadlock.
+/// inside a callback of the same executor without deadlock. Discovery is asymmetric (the
+/// client may see the service before the service sees the client), so call() resends an
+/// unanswered request every `kResendPeriod`; the service answers repeats from its cache.
 template <class Req, class Rep>
 class Client {
  public:
   explicit Client(std::string name) : name_(std::move(name)) {}
+  static constexpr auto kResendPeriod = std::chrono::milliseconds(500);
+
   void attach(std::unique_ptr<DataWriter> requests, std::unique_ptr<DataReader> replies) {
     requests_ = std::move(requests);
     replies_ = std::move(replies);
@@ -127,11 +139,19 @@ class Client {
     auto remaining = timeout - std::chrono::duration_cast<std::chrono::milliseconds>(
                                    std::chrono::steady_clock::now() - start);
     uint64_t sequence = 0;
-    std::future<Rep> future = send(request, &sequence);
-    if (future.wait_for(remaining) != std::future_status::ready) {
-      std::lock_guard<std::mutex> lock(mutex_);
-      pending_.erase(sequence);
-      return CallStatus::TIMEOUT;
+    Req sent = request;
+    std::future<Rep> future = send(sent, &sequence);
+    const auto deadline = std::chrono::steady_clock::now() + remaining;
+    while (future.wait_until(std::min(deadline, std::chrono::steady_clock::now() + kResendPeriod)) !=
+           std::future_status::ready) {
+      if (std::chrono::steady_clock::now() >= deadline) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        pending_.erase(sequence);
+        return CallStatus::TIMEOUT;
+      }
+      sent.header().client_guid(client_id_);
+      sent.header().sequence_number(sequence);
+      requests_->write(&sent);
     }
     *reply = future.get();
     return CallStatus::OK;
