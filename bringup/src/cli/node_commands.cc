@@ -1,0 +1,77 @@
+// `auv node list`, `auv interface list|show`, `auv run`.
+#include <iostream>
+
+#include "auv/interfaces/component.h"
+#include "auv/interfaces/graph.h"
+#include "cli/cli_common.h"
+
+namespace auv::bringup {
+
+int nodeMain(const std::vector<std::string>& argv) {
+  const Args args(argv, {"-a", "-v"}, {"--wait"});
+  if (args.positional().empty() || args.positional()[0] != "list")
+    throw CliError("usage: auv node list [-a] [-v] [--wait s]");
+  interfaces::GraphInspector inspector(interfaces::vendorFromEnvironment(),
+                                       interfaces::domainFromEnvironment());
+  const auto snapshot = inspector.waitFor(
+      [](const interfaces::GraphSnapshot&) { return false; },
+      std::chrono::milliseconds(static_cast<int64_t>(args.number("--wait", 2.0) * 1000)));
+  for (const auto& p : snapshot.participants) {
+    if (!p.is_auv && !args.flag("-a")) continue;  // -a: also participants of other programs
+    std::cout << "/" << (p.node_name.empty() ? "_unnamed" : p.node_name);
+    if (args.flag("-v"))
+      std::cout << "  vendor=" << p.vendor << " host=" << p.host << " pid=" << p.pid
+                << " guid=" << interfaces::toString(p.guid);
+    std::cout << "\n";
+  }
+  return 0;
+}
+
+int interfaceMain(const std::vector<std::string>& argv) {
+  const Args args(argv, {}, {});
+  const std::string command = args.positional().empty() ? "" : args.positional()[0];
+  if (command == "list") {
+    for (const auto& ts : msg::allTypes()) std::cout << ts.name << (ts.keyed ? "  (keyed)" : "") << "\n";
+    return 0;
+  }
+  if (command == "show") {
+    const std::string name = args.at(1, "message type");
+    const msg::TypeSupport* ts = msg::findType(name);
+    if (ts == nullptr) throw CliError("unknown message type '" + name + "' (see `auv interface list`)");
+    auto sample = ts->create_sample();
+    YAML::Emitter out;
+    out << ts->to_yaml(sample.get());
+    std::cout << "# " << ts->name << " with default values (usable with `auv topic pub`)\n"
+              << out.c_str() << "\n";
+    return 0;
+  }
+  throw CliError("usage: auv interface list | auv interface show <type>");
+}
+
+int runMain(const std::vector<std::string>& argv) {
+  const Args args(argv, {"--list"}, {"--params", "-p"});
+  // Options may repeat: collect them in order from the raw arguments.
+  interfaces::NodeOptions options;
+  for (size_t i = 0; i + 1 < argv.size(); ++i) {
+    if (argv[i] == "--params") options.params_files.push_back(argv[i + 1]);
+    if (argv[i] == "-p") options.overrides.push_back(argv[i + 1]);
+  }
+  auto& registry = interfaces::ComponentRegistry::instance();
+  registry.loadPlugins();
+  if (args.flag("--list") || args.positional().empty()) {
+    for (const auto& info : registry.list())
+      std::cout << info.name << "  " << info.description << "\n";
+    if (args.positional().empty() && !args.flag("--list"))
+      std::cerr << "usage: auv run <component>[:<node_name>] ... [--params f.yaml]... "
+                   "[-p name:=value]...\n";
+    return args.flag("--list") ? 0 : 2;
+  }
+  std::vector<interfaces::ComponentSpec> specs;
+  for (const std::string& item : args.positional()) {
+    const auto colon = item.find(':');
+    specs.push_back({item.substr(0, colon), colon == std::string::npos ? "" : item.substr(colon + 1)});
+  }
+  return interfaces::runComponents(specs, options);
+}
+
+}  // namespace auv::bringup
