@@ -22,17 +22,16 @@ using namespace std::chrono_literals;
 struct VendorPair {
   Vendor writer;
   Vendor reader;
+  int index;  // selects the domain id, so concurrently running tests never share one
 };
 
 std::string pairName(const testing::TestParamInfo<VendorPair>& info) {
   return toString(info.param.writer) + "_to_" + toString(info.param.reader);
 }
 
-// Domain ids 10..99 are this binary's: a fresh one per test instance.
-int nextDomain() {
-  static std::atomic<int> next{10 + (static_cast<int>(::getpid()) % 8) * 10};
-  return next++ % 90 + 10;
-}
+// Domain ids 10..59 are this binary's: one per test and vendor pair (ctest runs tests in
+// parallel processes).
+int domainFor(int test, const VendorPair& pair) { return 10 + test * 10 + pair.index; }
 
 NodeOptions optionsFor(Vendor vendor, int domain) {
   NodeOptions options;
@@ -57,7 +56,7 @@ bool publishUntil(Executor& executor, Publisher<T>& publisher, const T& message,
 }
 
 TEST_P(InteropTest, EveryProfileDeliversStringsAcrossVendors) {
-  const int domain = nextDomain();
+  const int domain = domainFor(0, GetParam());
   Node pub_node("talker", optionsFor(GetParam().writer, domain));
   Node sub_node("listener", optionsFor(GetParam().reader, domain));
   Executor executor;
@@ -80,7 +79,7 @@ TEST_P(InteropTest, EveryProfileDeliversStringsAcrossVendors) {
 }
 
 TEST_P(InteropTest, LateJoinerGetsLastTransientLocalSamplePerInstance) {
-  const int domain = nextDomain();
+  const int domain = domainFor(1, GetParam());
   Node pub_node("mission", optionsFor(GetParam().writer, domain));
   auto pub = pub_node.createPublisher<msg::MissionStatus>("/interop/mission_status",
                                                           latchedStateQos());
@@ -109,7 +108,7 @@ TEST_P(InteropTest, LateJoinerGetsLastTransientLocalSamplePerInstance) {
 }
 
 TEST_P(InteropTest, LargeMessagesArriveIntact) {
-  const int domain = nextDomain();
+  const int domain = domainFor(2, GetParam());
   Node pub_node("mapper", optionsFor(GetParam().writer, domain));
   Node sub_node("planner", optionsFor(GetParam().reader, domain));
   Executor executor;
@@ -130,7 +129,7 @@ TEST_P(InteropTest, LargeMessagesArriveIntact) {
 }
 
 TEST_P(InteropTest, RequestReplyRoundTripAcrossVendors) {
-  const int domain = nextDomain();
+  const int domain = domainFor(3, GetParam());
   // GetParam().writer hosts the client, .reader the service.
   Node client_node("client", optionsFor(GetParam().writer, domain));
   Node server_node("server", optionsFor(GetParam().reader, domain));
@@ -169,14 +168,14 @@ TEST_P(InteropTest, RequestReplyRoundTripAcrossVendors) {
 }
 
 INSTANTIATE_TEST_SUITE_P(AllPairs, InteropTest,
-                         testing::Values(VendorPair{Vendor::CYCLONEDDS, Vendor::CYCLONEDDS},
-                                         VendorPair{Vendor::FASTDDS, Vendor::FASTDDS},
-                                         VendorPair{Vendor::FASTDDS, Vendor::CYCLONEDDS},
-                                         VendorPair{Vendor::CYCLONEDDS, Vendor::FASTDDS}),
+                         testing::Values(VendorPair{Vendor::CYCLONEDDS, Vendor::CYCLONEDDS, 0},
+                                         VendorPair{Vendor::FASTDDS, Vendor::FASTDDS, 1},
+                                         VendorPair{Vendor::FASTDDS, Vendor::CYCLONEDDS, 2},
+                                         VendorPair{Vendor::CYCLONEDDS, Vendor::FASTDDS, 3}),
                          pairName);
 
 TEST(ClientTest, CallWithoutServiceReportsNoService) {
-  Node node("lonely", optionsFor(Vendor::CYCLONEDDS, nextDomain()));
+  Node node("lonely", optionsFor(Vendor::CYCLONEDDS, 50));
   auto client = node.createClient<msg::TriggerRequest, msg::TriggerReply>("/nobody/home");
   msg::TriggerReply reply;
   EXPECT_EQ(client->call(msg::TriggerRequest(), &reply, 300ms), CallStatus::NO_SERVICE);

@@ -275,9 +275,13 @@ int topicEcho(const Args& args) {
     YAML::Node node = type.to_yaml(sample.get());
     if (field) node = selectField(node, *field);
     if (!args.flag("--full")) node = truncate(node, 64);
-    YAML::Emitter out;
-    out << node;
-    std::cout << out.c_str() << "\n---" << std::endl;
+    if (node.IsScalar()) {  // a single field: print it as is, handy in scripts
+      std::cout << node.Scalar() << std::endl;
+    } else {
+      YAML::Emitter out;
+      out << node;
+      std::cout << out.c_str() << "\n---" << std::endl;
+    }
     if (args.flag("--once")) return 0;
   }
 }

@@ -1,0 +1,16 @@
+#!/usr/bin/env bash
+# Installs, builds, and runs every test (colcon test + test-result); exits non-zero on failure.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+start=$(date +%s)
+./scripts/install-deps.sh
+./scripts/build.sh
+set +u; source install/setup.bash; set -u
+guard=()
+[ -x ../shared/tools/no-external-traffic ] && guard=(../shared/tools/no-external-traffic)
+status=0
+"${guard[@]}" colcon test --merge-install --event-handlers console_direct- console_cohesion+ \
+  --return-code-on-test-failure --ctest-args --output-on-failure -j2 || status=$?
+colcon test-result --verbose || status=1
+echo "run-tests: finished in $(( $(date +%s) - start )) s with status $status"
+exit $status

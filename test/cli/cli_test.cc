@@ -1,0 +1,189 @@
+// The `auv` CLI as a user runs it, across vendors: Fast DDS publisher -> Cyclone echo and the
+// reverse, discovery of both vendors' nodes, a transient-local late joiner, launch with
+// composition, and one clear line + non-zero exit for bad input. Domains 170..189.
+#include <gtest/gtest.h>
+
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <array>
+#include <chrono>
+#include <cstdio>
+#include <string>
+#include <thread>
+
+namespace {
+
+using namespace std::chrono_literals;
+
+struct Result {
+  int exit_code = -1;
+  std::string out;  // stdout and stderr together
+};
+
+// Runs a shell command line with `auv` resolved to the executable under test.
+Result run(const std::string& env, const std::string& args) {
+  const std::string command = env + " " + AUV_EXECUTABLE + " " + args + " 2>&1";
+  Result r;
+  FILE* pipe = popen(command.c_str(), "r");
+  std::array<char, 4096> buffer;
+  size_t n;
+  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) r.out.append(buffer.data(), n);
+  const int status = pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  return r;
+}
+
+// A background `auv` process, stopped with SIGINT at scope exit.
+class Background {
+ public:
+  Background(const std::string& env, const std::string& args) {
+    pid_ = fork();
+    if (pid_ == 0) {
+      setpgid(0, 0);
+      execl("/bin/sh", "sh", "-c",
+            ("exec env " + env + " " + AUV_EXECUTABLE + " " + args + " >/dev/null 2>&1").c_str(),
+            nullptr);
+      _exit(127);
+    }
+  }
+  ~Background() { stop(); }
+  int stop() {
+    if (pid_ <= 0) return status_;
+    kill(pid_, SIGINT);
+    int status = 0;
+    for (int i = 0; i < 100 && waitpid(pid_, &status, WNOHANG) == 0; ++i)
+      std::this_thread::sleep_for(100ms);
+    if (waitpid(pid_, &status, WNOHANG) == 0) {
+      kill(-pid_, SIGKILL);
+      waitpid(pid_, &status, 0);
+    }
+    pid_ = -1;
+    status_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    return status_;
+  }
+
+ private:
+  pid_t pid_ = -1;
+  int status_ = -1;
+};
+
+std::string env(const char* vendor, int domain) {
+  return std::string("AUV_DDS=") + vendor + " AUV_DOMAIN_ID=" + std::to_string(domain);
+}
+
+struct Pair {
+  const char* pub;
+  const char* sub;
+  int domain;
+};
+
+class CliPubEchoTest : public testing::TestWithParam<Pair> {};
+
+TEST_P(CliPubEchoTest, EchoShowsWhatPubSendsAcrossVendors) {
+  const Pair p = GetParam();
+  Background pub(env(p.pub, p.domain),
+                 "topic pub /chatter auv::msg::String '{data: from " + std::string(p.pub) +
+                     "}' --rate 10");
+  const Result echo = run(env(p.sub, p.domain), "topic echo /chatter --once --timeout 20");
+  EXPECT_EQ(echo.exit_code, 0) << echo.out;
+  EXPECT_NE(echo.out.find("data: from " + std::string(p.pub)), std::string::npos) << echo.out;
+  const Result field = run(env(p.sub, p.domain), "topic echo /chatter --once --field data");
+  EXPECT_EQ(field.out.rfind("from " + std::string(p.pub), 0), 0u) << field.out;
+}
+
+INSTANTIATE_TEST_SUITE_P(Vendors, CliPubEchoTest,
+                         testing::Values(Pair{"fastdds", "cyclonedds", 170},
+                                         Pair{"cyclonedds", "fastdds", 171},
+                                         Pair{"fastdds", "fastdds", 172},
+                                         Pair{"cyclonedds", "cyclonedds", 173}));
+
+TEST(CliTest, ListAndInfoShowNodesOfBothVendors) {
+  Background talker(env("fastdds", 175), "run demo_talker:fast_talker");
+  Background listener(env("cyclonedds", 175), "run demo_listener:cyc_listener");
+  for (const char* vendor : {"cyclonedds", "fastdds"}) {
+    SCOPED_TRACE(vendor);
+    const Result list = run(env(vendor, 175), "topic list -t --wait 4");
+    EXPECT_NE(list.out.find("/chatter [auv::msg::String]"), std::string::npos) << list.out;
+    EXPECT_NE(list.out.find("/demo/status [auv::msg::MissionStatus]"), std::string::npos)
+        << list.out;
+    const Result info = run(env(vendor, 175), "topic info /chatter -v --wait 10");
+    EXPECT_EQ(info.exit_code, 0) << info.out;
+    EXPECT_NE(info.out.find("Publisher count: 1"), std::string::npos) << info.out;
+    EXPECT_NE(info.out.find("Subscription count: 1"), std::string::npos) << info.out;
+    EXPECT_NE(info.out.find("Node name: fast_talker"), std::string::npos) << info.out;
+    EXPECT_NE(info.out.find("Node name: cyc_listener"), std::string::npos) << info.out;
+    EXPECT_NE(info.out.find("Vendor: fastdds"), std::string::npos) << info.out;
+    EXPECT_NE(info.out.find("Vendor: cyclonedds"), std::string::npos) << info.out;
+    const Result nodes = run(env(vendor, 175), "node list --wait 4");
+    EXPECT_NE(nodes.out.find("/fast_talker"), std::string::npos) << nodes.out;
+    EXPECT_NE(nodes.out.find("/cyc_listener"), std::string::npos) << nodes.out;
+  }
+}
+
+TEST(CliTest, LateJoinerOfOtherVendorGetsLatchedStatus) {
+  // The listener (Cyclone) publishes its count on /demo/status, transient local; the talker
+  // stops after a few messages, then a Fast DDS echo joins late and must still get it.
+  Background listener(env("cyclonedds", 176), "run demo_listener:latched");
+  const Result pub = run(env("fastdds", 176),
+                         "topic pub /chatter String '{data: ping}' --times 3 --rate 5 --wait-matching 20");
+  ASSERT_EQ(pub.exit_code, 0) << pub.out;
+  std::this_thread::sleep_for(500ms);
+  const Result echo = run(env("fastdds", 176), "topic echo /demo/status --once --field message --timeout 10");
+  EXPECT_EQ(echo.exit_code, 0) << echo.out;
+  EXPECT_NE(echo.out.find("last: ping"), std::string::npos) << echo.out;
+}
+
+TEST(CliTest, LaunchComposesAndStopsCleanly) {
+  const std::string launch = testing::TempDir() + "cli_test_launch.yaml";
+  FILE* f = fopen(launch.c_str(), "w");
+  fputs(
+      "environment: {AUV_DOMAIN_ID: \"177\"}\n"
+      "processes:\n"
+      "  - name: pair\n"
+      "    vendor: fastdds\n"
+      "    components:\n"
+      "      - {component: demo_talker, name: t, parameters: {rate_hz: 20.0, text: composed}}\n"
+      "      - {component: demo_listener, name: l}\n"
+      "  - name: probe\n"
+      "    vendor: cyclonedds\n"
+      "    command: [auv, topic, echo, /demo/status, --once, --field, message, --timeout, '20']\n"
+      "    required: true\n",
+      f);
+  fclose(f);
+  const Result r = run("", "launch " + launch);
+  EXPECT_EQ(r.exit_code, 0) << r.out;
+  EXPECT_NE(r.out.find("[probe] heard"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("composed #"), std::string::npos) << r.out;
+}
+
+TEST(CliTest, BadInputGivesOneClearLineAndNonZeroExit) {
+  struct Case {
+    std::string args;
+    std::string expected;
+    int code;
+  };
+  const std::vector<Case> cases = {
+      {"topic pub /chatter NoSuchType '{}'", "unknown message type 'NoSuchType'", 2},
+      {"topic pub /chatter String '{data: [unclosed'", "malformed YAML", 2},
+      {"topic pub /chatter String '{dta: x}'", "unknown field 'dta'", 2},
+      {"topic pub /chatter Time '{sec: abc}'", "field 'sec': expected an integer, got 'abc'", 2},
+      {"topic pub 'bad topic' String '{}'", "invalid topic name", 2},
+      {"topic echo /nobody --timeout 1", "no publisher on /nobody within 1 s", 1},
+      {"topic frobnicate", "unknown command 'topic frobnicate'", 2},
+      {"run no_such_component", "unknown component 'no_such_component'", 1},
+      {"run demo_talker -p rate_hz:=fast", "rate_hz", 1},
+      {"launch /nonexistent/launch.yaml", "/nonexistent/launch.yaml", 2},
+  };
+  for (const Case& c : cases) {
+    const Result r = run(env("cyclonedds", 178), c.args);
+    EXPECT_EQ(r.exit_code, c.code) << c.args << "\n" << r.out;
+    EXPECT_NE(r.out.find(c.expected), std::string::npos) << c.args << "\n" << r.out;
+  }
+  const Result r = run("AUV_DDS=bogus", "topic list");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.out.find("unknown DDS vendor 'bogus'"), std::string::npos) << r.out;
+}
+
+}  // namespace
