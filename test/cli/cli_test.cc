@@ -102,6 +102,14 @@ INSTANTIATE_TEST_SUITE_P(Vendors, CliPubEchoTest,
 TEST(CliTest, ListAndInfoShowNodesOfBothVendors) {
   Background talker(env("fastdds", 175), "run demo_talker:fast_talker");
   Background listener(env("cyclonedds", 175), "run demo_listener:cyc_listener");
+  // Both processes must be up before a snapshot can show them (startup is slow under load).
+  Result nodes;
+  for (int i = 0; i < 20; ++i) {
+    nodes = run(env("cyclonedds", 175), "node list --wait 1");
+    if (nodes.out.find("/fast_talker") != std::string::npos &&
+        nodes.out.find("/cyc_listener") != std::string::npos)
+      break;
+  }
   for (const char* vendor : {"cyclonedds", "fastdds"}) {
     SCOPED_TRACE(vendor);
     const Result list = run(env(vendor, 175), "topic list -t --wait 4");
@@ -116,7 +124,7 @@ TEST(CliTest, ListAndInfoShowNodesOfBothVendors) {
     EXPECT_NE(info.out.find("Node name: cyc_listener"), std::string::npos) << info.out;
     EXPECT_NE(info.out.find("Vendor: fastdds"), std::string::npos) << info.out;
     EXPECT_NE(info.out.find("Vendor: cyclonedds"), std::string::npos) << info.out;
-    const Result nodes = run(env(vendor, 175), "node list --wait 4");
+    nodes = run(env(vendor, 175), "node list --wait 4");
     EXPECT_NE(nodes.out.find("/fast_talker"), std::string::npos) << nodes.out;
     EXPECT_NE(nodes.out.find("/cyc_listener"), std::string::npos) << nodes.out;
   }
