@@ -4,6 +4,8 @@
 
 #include <dds/dds.h>
 
+#include <cstring>
+
 #include "auv/msg/all.h"
 #include "idlc_headers.h"
 
@@ -57,6 +59,36 @@ TEST(TypeSupportTest, EveryTypeRoundTripsThroughYamlAndCdr) {
     ASSERT_TRUE(tdt->deserialize(&payload, decoded.get())) << ts.name;
     EXPECT_EQ(YAML::Dump(ts.to_yaml(decoded.get())), YAML::Dump(yaml)) << ts.name;
   }
+}
+
+TEST(TypeSupportTest, TruncatedOrCorruptPayloadsAreRejectedNotFatal) {
+  for (const TypeSupport& ts : allTypes()) {
+    std::unique_ptr<eprosima::fastdds::dds::TopicDataType> tdt(ts.make_topic_data_type());
+    auto sample = ts.create_sample();
+    eprosima::fastrtps::rtps::SerializedPayload_t payload(
+        tdt->getSerializedSizeProvider(sample.get())());
+    ASSERT_TRUE(tdt->serialize(sample.get(), &payload)) << ts.name;
+    // Every truncation of a valid payload: never a crash; when bytes of the body are missing
+    // the result is a failure, not a silently half-filled sample passed on as valid.
+    for (uint32_t length = 0; length + 1 < payload.length; ++length) {
+      eprosima::fastrtps::rtps::SerializedPayload_t cut(payload.length);
+      std::memcpy(cut.data, payload.data, length);
+      cut.length = length;
+      auto out = ts.create_sample();
+      const bool ok = tdt->deserialize(&cut, out.get());
+      if (length < 4) EXPECT_FALSE(ok) << ts.name << " accepted " << length << " bytes";
+    }
+  }
+  // A string length field that points far beyond the payload.
+  std::unique_ptr<eprosima::fastdds::dds::TopicDataType> tdt(findType("String")->make_topic_data_type());
+  String text;
+  text.data("hello");
+  eprosima::fastrtps::rtps::SerializedPayload_t payload(tdt->getSerializedSizeProvider(&text)());
+  ASSERT_TRUE(tdt->serialize(&text, &payload));
+  const uint32_t huge = 0x7fffff00;
+  std::memcpy(payload.data + 4, &huge, 4);  // after the 4-byte encapsulation header
+  String out;
+  EXPECT_FALSE(tdt->deserialize(&payload, &out));
 }
 
 TEST(TypeSupportTest, YamlFillsNestedFieldsEnumsAndSequences) {

@@ -130,6 +130,21 @@ TEST(CliTest, ListAndInfoShowNodesOfBothVendors) {
   }
 }
 
+TEST(CliTest, HzAndBwMeasureAPublisherOfTheOtherVendor) {
+  Background pub(env("fastdds", 179), "topic pub /beat String '{data: 0123456789}' --rate 20");
+  const Result hz = run(env("cyclonedds", 179), "topic hz /beat --duration 4 --timeout 20");
+  EXPECT_EQ(hz.exit_code, 0) << hz.out;
+  const auto at = hz.out.rfind("average rate: ");
+  ASSERT_NE(at, std::string::npos) << hz.out;
+  const double rate = std::stod(hz.out.substr(at + 14));
+  EXPECT_GT(rate, 10.0) << hz.out;  // published at 20 Hz; generous for a loaded CI machine
+  EXPECT_LT(rate, 30.0) << hz.out;
+  const Result bw = run(env("cyclonedds", 179), "topic bw /beat --duration 3 --timeout 20");
+  EXPECT_EQ(bw.exit_code, 0) << bw.out;
+  // 4-byte encapsulation + 4-byte length + 10 characters + NUL = 19 bytes per message.
+  EXPECT_NE(bw.out.find("mean: 0.02 KiB"), std::string::npos) << bw.out;
+}
+
 TEST(CliTest, LateJoinerOfOtherVendorGetsLatchedStatus) {
   // The listener (Cyclone) publishes its count on /demo/status, transient local; the talker
   // stops after a few messages, then a Fast DDS echo joins late and must still get it.

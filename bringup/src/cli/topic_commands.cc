@@ -218,17 +218,30 @@ int topicInfo(const Args& args) {
   const std::string topic = args.at(1, "topic name");
   interfaces::toDdsTopicName(topic);  // validates
   auto inspector = makeInspector();
-  const auto wait = std::chrono::milliseconds(static_cast<int64_t>(args.number("--wait", 3.0) * 1000));
+  const auto wait = std::chrono::milliseconds(static_cast<int64_t>(args.number("--wait", 5.0) * 1000));
   GraphSnapshot snapshot =
       inspector->waitFor([&](const GraphSnapshot& s) { return s.hasTopic(topic); }, wait);
   if (!snapshot.hasTopic(topic))
     throw CliError("unknown topic " + displayTopic(topic) + " (no endpoint seen within " +
                        std::to_string(wait.count() / 1000.0).substr(0, 3) + " s)",
                    1);
-  // Endpoints of other participants keep arriving for a moment.
-  snapshot = inspector->waitFor([](const GraphSnapshot&) { return false; }, 500ms);
+  // Endpoints of other participants keep arriving for a moment (a Fast DDS endpoint can
+  // take ~1 s to reach a Cyclone inspector): wait until the count is stable for 1.5 s.
+  const auto deadline = Clock::now() + wait;
+  size_t count = 0;
+  auto stable_since = Clock::now();
+  while (Clock::now() < deadline && Clock::now() - stable_since < 1500ms) {
+    snapshot = inspector->waitFor([](const GraphSnapshot&) { return false; }, 100ms);
+    const size_t now = snapshot.endpointsOn(topic, true).size() + snapshot.endpointsOn(topic, false).size();
+    if (now != count) {
+      count = now;
+      stable_since = Clock::now();
+    }
+  }
   const auto writers = snapshot.endpointsOn(topic, true);
   const auto readers = snapshot.endpointsOn(topic, false);
+  if (writers.empty() && readers.empty())
+    throw CliError("topic " + displayTopic(topic) + " disappeared (its endpoints were deleted)", 1);
   std::set<std::string> types;
   for (const auto& e : writers) types.insert(e.type);
   for (const auto& e : readers) types.insert(e.type);

@@ -192,6 +192,9 @@ class FastddsParticipant : public Participant {
     dds::Topic* t = createTopic(topic, type);
     dds::DataWriterQos wqos = publisher_->get_default_datawriter_qos();
     applyCommon(qos, wqos);
+    // Fast DDS heartbeats every 3 s by default, so a late joiner (transient local) or a
+    // lost fragment waited up to 3 s; 0.25 s keeps repair prompt at little cost.
+    wqos.reliable_writer_qos().times.heartbeatPeriod = eprosima::fastrtps::Duration_t(0.25);
     dds::DataWriter* w = publisher_->create_datawriter(t, wqos);
     check(w != nullptr, "create writer on '" + topic + "'");
     return std::make_unique<FastddsWriter>(publisher_, w);

@@ -41,6 +41,21 @@ const std::vector<TypeSupport>& allTypes();
 /// The type called `name` ("auv::msg::X", "auv/msg/X" or just "X"), or nullptr.
 const TypeSupport* findType(const std::string& name);
 
+/// A generated TopicDataType that turns any exception of a malformed payload (fastddsgen's
+/// code only catches NotEnoughMemoryException) into a failed deserialize, so bad data from
+/// the wire is dropped by both vendors instead of taking the process down.
+template <class Inner>
+class GuardedPubSubType : public Inner {
+ public:
+  bool deserialize(eprosima::fastrtps::rtps::SerializedPayload_t* payload, void* data) override {
+    try {
+      return Inner::deserialize(payload, data);
+    } catch (...) {
+      return false;
+    }
+  }
+};
+
 /// Builds the TypeSupport of a generated message type.
 template <class T>
 TypeSupport makeTypeSupport() {
@@ -48,7 +63,7 @@ TypeSupport makeTypeSupport() {
   TypeSupport ts;
   ts.name = Traits::kTypeName;
   ts.keyed = Traits::kKeyed;
-  ts.make_topic_data_type = [] { return new typename Traits::PubSubType(); };
+  ts.make_topic_data_type = [] { return new GuardedPubSubType<typename Traits::PubSubType>(); };
   ts.create_sample = [] { return std::shared_ptr<void>(std::make_shared<T>()); };
   ts.to_yaml = [](const void* sample) { return toYaml(*static_cast<const T*>(sample)); };
   ts.from_yaml = [](const YAML::Node& node, void* sample) {
