@@ -78,18 +78,21 @@ Node::Node(const std::string& name, const NodeOptions& options)
     clock_reader_ = participant_->createReader("clock", clock_type, clockQos(), [this] {
       msg::Clock sample;
       bool advanced = false;
-      while (clock_reader_ && clock_reader_->take(&sample, nullptr)) {
+      while (clock_ready_ && clock_reader_->take(&sample, nullptr)) {
         clock_->setSimulationTime(static_cast<int64_t>(sample.sim_time().sec()) * 1000000000LL +
                                   sample.sim_time().nanosec());
         advanced = true;
       }
       if (advanced) waker_->notify();
     });
+    clock_ready_ = true;  // the listener may fire before clock_reader_ is assigned
+    waker_->notify();
   }
 }
 
 Node::~Node() {
   logger_.setSink(nullptr);
+  clock_ready_ = false;
   clock_reader_.reset();
   log_writer_.reset();
 }

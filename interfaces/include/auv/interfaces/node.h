@@ -3,6 +3,7 @@
 // it), its parameters, logger and clock, and the publishers, subscriptions, timers and
 // services it creates. Like an rclcpp node, its callbacks run when an Executor spins it.
 
+#include <atomic>
 #include <functional>
 #include <memory>
 #include <mutex>
@@ -98,6 +99,7 @@ class Node {
   mutable std::mutex mutex_;
   std::vector<std::weak_ptr<Waitable>> waitables_;
   std::unique_ptr<DataReader> clock_reader_;   // simulation time, taken in the DDS thread
+  std::atomic<bool> clock_ready_{false};       // clock_reader_ is assigned
   std::unique_ptr<DataWriter> log_writer_;     // LogEntry on `log`
 };
 

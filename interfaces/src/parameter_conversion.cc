@@ -1,0 +1,378 @@
+// Strict YAML 1.2 conversion of parameter values and constraint checking (see
+// parameter_conversion.h).
+
+#include "parameter_conversion.h"
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <string>
+#include <system_error>
+#include <type_traits>
+#include <utility>
+#include <variant>
+#include <vector>
+
+#include <yaml-cpp/yaml.h>
+
+namespace auv::interfaces::detail {
+namespace {
+
+bool isNumeric(ParameterType type) {
+  return type == ParameterType::INTEGER || type == ParameterType::DOUBLE ||
+         type == ParameterType::INTEGER_ARRAY || type == ParameterType::DOUBLE_ARRAY;
+}
+
+bool isString(ParameterType type) {
+  return type == ParameterType::STRING || type == ParameterType::STRING_ARRAY;
+}
+
+std::string joinStrings(const std::vector<std::string>& values) { return formatList(values); }
+
+// Clamps a double to int64_t (NaN is handled by the callers' descriptor check).
+int64_t clampToInt64(double value) {
+  if (!(value > -9.223372036854775808e18)) return kInt64Min;
+  if (value >= 9.223372036854775808e18) return kInt64Max;
+  return static_cast<int64_t>(value);
+}
+
+// " in [a, b]", " >= a", " <= b" or "" for the numeric range of a declaration.
+std::string rangeText(const Declared& declared, ParameterType type) {
+  std::optional<std::string> low;
+  std::optional<std::string> high;
+  if (isInteger(type)) {
+    const auto [int_low, int_high] = integerBounds(declared);
+    if (int_low != kInt64Min) low = std::to_string(int_low);
+    if (int_high != kInt64Max) high = std::to_string(int_high);
+  } else {
+    if (declared.descriptor.min) low = formatDouble(*declared.descriptor.min);
+    if (declared.descriptor.max) high = formatDouble(*declared.descriptor.max);
+  }
+  if (low && high) return " in [" + *low + ", " + *high + "]";
+  if (low) return " >= " + *low;
+  if (high) return " <= " + *high;
+  return "";
+}
+
+// What a value of this declaration must look like: "a number in [0.1, 50]".
+std::string expectation(const Declared& declared) {
+  const ParameterType type = typeOf(declared.value);
+  const auto& choices = declared.descriptor.choices;
+  switch (type) {
+    case ParameterType::BOOL:
+      return "a boolean (true or false)";
+    case ParameterType::INTEGER:
+      return "an integer" + rangeText(declared, type);
+    case ParameterType::DOUBLE:
+      return "a number" + rangeText(declared, type);
+    case ParameterType::STRING:
+      return choices.empty() ? "a string" : "one of " + joinStrings(choices);
+    case ParameterType::BOOL_ARRAY:
+      return "a list of booleans (true or false)";
+    case ParameterType::INTEGER_ARRAY:
+      return "a list of integers" + rangeText(declared, type);
+    case ParameterType::DOUBLE_ARRAY:
+      return "a list of numbers" + rangeText(declared, type);
+    case ParameterType::STRING_ARRAY:
+      return choices.empty() ? "a list of strings"
+                             : "a list of strings, each one of " + joinStrings(choices);
+  }
+  return "a value";
+}
+
+}  // namespace
+
+bool isInteger(ParameterType type) {
+  return type == ParameterType::INTEGER || type == ParameterType::INTEGER_ARRAY;
+}
+
+std::string formatDouble(double value) {
+  if (std::isnan(value)) return ".nan";
+  if (std::isinf(value)) return value > 0 ? ".inf" : "-.inf";
+  char buffer[64];
+  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
+  return std::string(buffer, result.ptr);
+}
+
+std::pair<int64_t, int64_t> integerBounds(const Declared& declared) {
+  int64_t low = declared.int_min;
+  int64_t high = declared.int_max;
+  const auto& d = declared.descriptor;
+  if (d.min) low = std::max(low, clampToInt64(std::ceil(*d.min)));
+  if (d.max) high = std::min(high, clampToInt64(std::floor(*d.max)));
+  return {low, high};
+}
+
+// ---------------------------------------------------------------------------------------------
+// Scalar text conversion (YAML 1.2 core schema, strict).
+
+namespace {
+
+bool isPlainScalar(const YAML::Node& node) { return node.IsScalar() && node.Tag() == "?"; }
+
+std::optional<bool> parseBool(const std::string& text) {
+  if (text == "true" || text == "True" || text == "TRUE") return true;
+  if (text == "false" || text == "False" || text == "FALSE") return false;
+  return std::nullopt;
+}
+
+std::optional<int64_t> parseInteger(const std::string& text) {
+  if (text.empty()) return std::nullopt;
+  const char* begin = text.data();
+  const char* end = text.data() + text.size();
+  bool negative = false;
+  if (*begin == '+' || *begin == '-') {
+    negative = *begin == '-';
+    ++begin;
+  }
+  int base = 10;
+  if (end - begin > 2 && begin[0] == '0' && (begin[1] == 'x' || begin[1] == 'o')) {
+    base = begin[1] == 'x' ? 16 : 8;
+    if (negative || text[0] == '+') return std::nullopt;  // YAML 1.2: unsigned hex and octal
+    begin += 2;
+  }
+  if (begin == end) return std::nullopt;
+  // from_chars accepts a leading '-' only; parse the magnitude as unsigned to reach INT64_MIN.
+  uint64_t magnitude = 0;
+  const auto result = std::from_chars(begin, end, magnitude, base);
+  if (result.ec != std::errc() || result.ptr != end) return std::nullopt;
+  if (negative) {
+    if (magnitude > static_cast<uint64_t>(kInt64Max) + 1) return std::nullopt;
+    return static_cast<int64_t>(0 - magnitude);
+  }
+  if (magnitude > static_cast<uint64_t>(kInt64Max)) return std::nullopt;
+  return static_cast<int64_t>(magnitude);
+}
+
+std::optional<double> parseDouble(const std::string& text) {
+  if (text == ".inf" || text == ".Inf" || text == ".INF" || text == "+.inf" || text == "+.Inf" ||
+      text == "+.INF") {
+    return std::numeric_limits<double>::infinity();
+  }
+  if (text == "-.inf" || text == "-.Inf" || text == "-.INF") {
+    return -std::numeric_limits<double>::infinity();
+  }
+  if (text == ".nan" || text == ".NaN" || text == ".NAN") {
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+  if (const auto integer = parseInteger(text)) return static_cast<double>(*integer);
+  // YAML 1.2 core float: [-+]?(\.[0-9]+|[0-9]+(\.[0-9]*)?)([eE][-+]?[0-9]+)?
+  size_t i = 0;
+  if (i < text.size() && (text[i] == '+' || text[i] == '-')) ++i;
+  size_t digits = 0;
+  while (i < text.size() && std::isdigit(static_cast<unsigned char>(text[i]))) ++i, ++digits;
+  if (i < text.size() && text[i] == '.') {
+    ++i;
+    while (i < text.size() && std::isdigit(static_cast<unsigned char>(text[i]))) ++i, ++digits;
+  }
+  if (digits == 0) return std::nullopt;
+  if (i < text.size() && (text[i] == 'e' || text[i] == 'E')) {
+    ++i;
+    if (i < text.size() && (text[i] == '+' || text[i] == '-')) ++i;
+    size_t exponent_digits = 0;
+    while (i < text.size() && std::isdigit(static_cast<unsigned char>(text[i]))) {
+      ++i;
+      ++exponent_digits;
+    }
+    if (exponent_digits == 0) return std::nullopt;
+  }
+  if (i != text.size()) return std::nullopt;
+  // from_chars rejects a leading '+'; the grammar above already validated the text.
+  const char* begin = text.data() + (text[0] == '+' ? 1 : 0);
+  double value = 0.0;
+  const auto result = std::from_chars(begin, text.data() + text.size(), value);
+  if (result.ec != std::errc() || result.ptr != text.data() + text.size()) return std::nullopt;
+  return value;
+}
+
+// How a YAML node reads in a message: 'abc', "5" (a quoted string), null (empty value), ...
+std::string nodeText(const YAML::Node& node) {
+  switch (node.Type()) {
+    case YAML::NodeType::Null:
+      return "null";
+    case YAML::NodeType::Scalar:
+      return isPlainScalar(node) ? node.Scalar() : "\"" + node.Scalar() + "\"";
+    case YAML::NodeType::Sequence: {
+      std::string text = "[";
+      for (size_t i = 0; i < node.size(); ++i) {
+        if (i > 0) text += ", ";
+        text += nodeText(node[i]);
+      }
+      return text + "]";
+    }
+    case YAML::NodeType::Map:
+      return "{...}";
+    case YAML::NodeType::Undefined:
+      break;
+  }
+  return "?";
+}
+
+// Converts one YAML scalar node to `Stored`; numbers and booleans must be plain (unquoted).
+template <class Stored>
+std::optional<Stored> scalarFromNode(const YAML::Node& node) {
+  if (!node.IsScalar()) return std::nullopt;
+  if constexpr (std::is_same_v<Stored, std::string>) {
+    return node.Scalar();
+  } else {
+    if (!isPlainScalar(node)) return std::nullopt;
+    if constexpr (std::is_same_v<Stored, bool>) {
+      return parseBool(node.Scalar());
+    } else if constexpr (std::is_same_v<Stored, int64_t>) {
+      return parseInteger(node.Scalar());
+    } else {
+      return parseDouble(node.Scalar());
+    }
+  }
+}
+
+template <class Stored>
+Conversion convertNode(const YAML::Node& node, bool array) {
+  Conversion conversion;
+  if (!array) {
+    if (auto scalar = scalarFromNode<Stored>(node)) conversion.value = ParameterValue(*scalar);
+    return conversion;
+  }
+  if (!node.IsSequence()) return conversion;
+  std::vector<Stored> values;
+  for (size_t i = 0; i < node.size(); ++i) {
+    auto scalar = scalarFromNode<Stored>(node[i]);
+    if (!scalar) {
+      conversion.violation = {i, nodeText(node[i])};
+      return conversion;
+    }
+    values.push_back(*scalar);
+  }
+  conversion.value = ParameterValue(std::move(values));
+  return conversion;
+}
+
+}  // namespace
+
+std::string nodeDisplay(const YAML::Node& node) {
+  if (node.IsNull()) return "null (empty value)";
+  if (node.IsMap()) return "a map";
+  if (node.IsScalar() && !isPlainScalar(node)) return nodeText(node) + " (a quoted string)";
+  return "'" + nodeText(node) + "'";
+}
+
+Conversion convertNode(const YAML::Node& node, ParameterType type) {
+  switch (type) {
+    case ParameterType::BOOL:
+      return convertNode<bool>(node, false);
+    case ParameterType::INTEGER:
+      return convertNode<int64_t>(node, false);
+    case ParameterType::DOUBLE:
+      return convertNode<double>(node, false);
+    case ParameterType::STRING:
+      return convertNode<std::string>(node, false);
+    case ParameterType::BOOL_ARRAY:
+      return convertNode<bool>(node, true);
+    case ParameterType::INTEGER_ARRAY:
+      return convertNode<int64_t>(node, true);
+    case ParameterType::DOUBLE_ARRAY:
+      return convertNode<double>(node, true);
+    case ParameterType::STRING_ARRAY:
+      return convertNode<std::string>(node, true);
+  }
+  return {};
+}
+
+// ---------------------------------------------------------------------------------------------
+// Constraint checks (value already has the declared type).
+
+namespace {
+
+bool elementOk(const Declared& declared, int64_t value) {
+  const auto [low, high] = integerBounds(declared);
+  return value >= low && value <= high;
+}
+
+bool elementOk(const Declared& declared, double value) {
+  const auto& d = declared.descriptor;
+  if (d.min && !(value >= *d.min)) return false;  // NaN fails any bound
+  if (d.max && !(value <= *d.max)) return false;
+  return true;
+}
+
+bool elementOk(const Declared& declared, const std::string& value) {
+  const auto& choices = declared.descriptor.choices;
+  return choices.empty() || std::find(choices.begin(), choices.end(), value) != choices.end();
+}
+
+bool elementOk(const Declared& /*declared*/, bool /*value*/) { return true; }
+
+}  // namespace
+
+std::optional<Violation> checkConstraints(const Declared& declared, const ParameterValue& value) {
+  return std::visit(
+      [&](const auto& v) -> std::optional<Violation> {
+        using V = std::decay_t<decltype(v)>;
+        if constexpr (std::is_same_v<V, std::vector<bool>> ||
+                      std::is_same_v<V, std::vector<int64_t>> ||
+                      std::is_same_v<V, std::vector<double>> ||
+                      std::is_same_v<V, std::vector<std::string>>) {
+          using E = typename V::value_type;
+          for (size_t i = 0; i < v.size(); ++i) {
+            const E element = v[i];
+            if (!elementOk(declared, element)) return Violation{i, formatScalar<E>(element)};
+          }
+          return std::nullopt;
+        } else {
+          if (!elementOk(declared, v)) return Violation{};
+          return std::nullopt;
+        }
+      },
+      value);
+
+// "expected <expectation>, got <display> (element i: x)".
+std::string expectedGot(const Declared& declared, const std::string& got,
+                        const Violation& violation) {
+  std::string text = "expected " + expectation(declared) + ", got " + got;
+  if (violation.element) {
+    text +=
+        " (element " + std::to_string(*violation.element) + ": '" + violation.element_text + "')";
+  }
+  return text;
+
+// Converts int64_t (arrays) to double (arrays) for double parameters; other values unchanged.
+ParameterValue coerce(const ParameterValue& value, ParameterType type) {
+  if (type == ParameterType::DOUBLE && std::holds_alternative<int64_t>(value)) {
+    return static_cast<double>(std::get<int64_t>(value));
+  }
+  if (type == ParameterType::DOUBLE_ARRAY && std::holds_alternative<std::vector<int64_t>>(value)) {
+    const auto& integers = std::get<std::vector<int64_t>>(value);
+    return std::vector<double>(integers.begin(), integers.end());
+  }
+  return value;
+
+// Throws if a descriptor cannot apply to a parameter of `type`.
+void checkDescriptor(const std::string& name, const Declared& declared) {
+  const ParameterType type = typeOf(declared.value);
+  const auto& d = declared.descriptor;
+  const std::string prefix = "parameter '" + name + "': invalid declaration: ";
+  if ((d.min && std::isnan(*d.min)) || (d.max && std::isnan(*d.max))) {
+    throw ParameterError(prefix + "min/max must not be NaN");
+  }
+  if ((d.min || d.max) && !isNumeric(type)) {
+    throw ParameterError(prefix + "min/max apply to numbers, but the type is " + toString(type));
+  }
+  if (d.min && d.max && *d.min > *d.max) {
+    throw ParameterError(prefix + "min " + formatDouble(*d.min) + " > max " + formatDouble(*d.max));
+  }
+  if (isInteger(type)) {
+    const auto [low, high] = integerBounds(declared);
+    if (low > high) {
+      throw ParameterError(prefix + "no integer lies in the allowed range" +
+                           rangeText(declared, type));
+    }
+  }
+  if (!d.choices.empty() && !isString(type)) {
+    throw ParameterError(prefix + "choices apply to strings, but the type is " + toString(type));
+  }
+}
+
+}  // namespace auv::interfaces::detail
