@@ -327,8 +327,8 @@ std::optional<Violation> checkConstraints(const Declared& declared, const Parame
         }
       },
       value);
+}
 
-// "expected <expectation>, got <display> (element i: x)".
 std::string expectedGot(const Declared& declared, const std::string& got,
                         const Violation& violation) {
   std::string text = "expected " + expectation(declared) + ", got " + got;
@@ -337,8 +337,8 @@ std::string expectedGot(const Declared& declared, const std::string& got,
         " (element " + std::to_string(*violation.element) + ": '" + violation.element_text + "')";
   }
   return text;
+}
 
-// Converts int64_t (arrays) to double (arrays) for double parameters; other values unchanged.
 ParameterValue coerce(const ParameterValue& value, ParameterType type) {
   if (type == ParameterType::DOUBLE && std::holds_alternative<int64_t>(value)) {
     return static_cast<double>(std::get<int64_t>(value));
@@ -348,8 +348,8 @@ ParameterValue coerce(const ParameterValue& value, ParameterType type) {
     return std::vector<double>(integers.begin(), integers.end());
   }
   return value;
+}
 
-// Throws if a descriptor cannot apply to a parameter of `type`.
 void checkDescriptor(const std::string& name, const Declared& declared) {
   const ParameterType type = typeOf(declared.value);
   const auto& d = declared.descriptor;

@@ -31,6 +31,24 @@ static_assert(
         std::is_same_v<AlternativeOf<ParameterType::STRING_ARRAY>, std::vector<std::string>>,
     "ParameterType must follow the order of the ParameterValue alternatives");
 
+// Value conversion and constraint checks (parameter_conversion.h).
+using detail::checkConstraints;
+using detail::checkDescriptor;
+using detail::coerce;
+using detail::Conversion;
+using detail::convertNode;
+using detail::Declared;
+using detail::expectedGot;
+using detail::formatDouble;
+using detail::formatList;
+using detail::formatScalar;
+using detail::integerBounds;
+using detail::isInteger;
+using detail::kInt64Max;
+using detail::kInt64Min;
+using detail::nodeDisplay;
+using detail::Violation;
+
 namespace {
 
 // Precedence levels of an override; higher wins, then later sequence number wins.
@@ -46,15 +64,7 @@ struct Override {
   YAML::Mark mark;     // position of the key in the source (null for the command line)
 };
 
-// A declared parameter.
-struct Declared {
-  ParameterValue value;            // current value; its index is the declared type
-  ParameterDescriptor descriptor;  // as declared
-  int64_t int_min;                 // range of the C++ integer type (integers only)
-  int64_t int_max;
-  std::string source;  // where the current value came from: "default", a file, "set()"
-};
-
+// Optimal string alignment distance (Levenshtein plus adjacent transpositions).
 size_t editDistance(const std::string& a, const std::string& b) {
   std::vector<std::vector<size_t>> d(a.size() + 1, std::vector<size_t>(b.size() + 1));
   for (size_t i = 0; i <= a.size(); ++i) d[i][0] = i;
