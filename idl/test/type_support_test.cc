@@ -53,7 +53,8 @@ TEST(TypeSupportTest, EveryTypeRoundTripsThroughYamlAndCdr) {
     EXPECT_EQ(YAML::Dump(ts.to_yaml(back.get())), YAML::Dump(yaml)) << ts.name;
 
     std::unique_ptr<eprosima::fastdds::dds::TopicDataType> tdt(ts.make_topic_data_type());
-    eprosima::fastrtps::rtps::SerializedPayload_t payload(tdt->getSerializedSizeProvider(back.get())());
+    eprosima::fastrtps::rtps::SerializedPayload_t payload(
+        tdt->getSerializedSizeProvider(back.get())());
     ASSERT_TRUE(tdt->serialize(back.get(), &payload)) << ts.name;
     auto decoded = ts.create_sample();
     ASSERT_TRUE(tdt->deserialize(&payload, decoded.get())) << ts.name;
@@ -80,7 +81,8 @@ TEST(TypeSupportTest, TruncatedOrCorruptPayloadsAreRejectedNotFatal) {
     }
   }
   // A string length field that points far beyond the payload.
-  std::unique_ptr<eprosima::fastdds::dds::TopicDataType> tdt(findType("String")->make_topic_data_type());
+  std::unique_ptr<eprosima::fastdds::dds::TopicDataType> tdt(
+      findType("String")->make_topic_data_type());
   String text;
   text.data("hello");
   eprosima::fastrtps::rtps::SerializedPayload_t payload(tdt->getSerializedSizeProvider(&text)());

@@ -68,8 +68,8 @@ int runPing(ai::Node& node, const BenchOptions& options) {
   ai::Executor executor;
   executor.add(node);
   auv::bench::PingSession session(options);
-  auto pub = node.createPublisher<FileChunkReply>(auv::bench::pingTopic(options),
-                                                  profileOf(options));
+  auto pub =
+      node.createPublisher<FileChunkReply>(auv::bench::pingTopic(options), profileOf(options));
   auto sub = node.createSubscription<FileChunkReply>(
       auv::bench::pongTopic(options), profileOf(options), [&session](const FileChunkReply& pong) {
         session.onPong(pong.header().sequence_number(), pong.data().size());
@@ -101,8 +101,8 @@ int runPing(ai::Node& node, const BenchOptions& options) {
 int runPong(ai::Node& node, const BenchOptions& options) {
   ai::Executor executor;
   executor.add(node);
-  auto pub = node.createPublisher<FileChunkReply>(auv::bench::pongTopic(options),
-                                                  profileOf(options));
+  auto pub =
+      node.createPublisher<FileChunkReply>(auv::bench::pongTopic(options), profileOf(options));
   bool stopped = false;
   uint64_t echoed = 0;
   auto sub = node.createSubscription<FileChunkReply>(
@@ -116,15 +116,15 @@ int runPong(ai::Node& node, const BenchOptions& options) {
       });
   executor.spinUntil([&stopped] { return stopped; }, seconds(options.timeout_s));
   auto fields = auv::bench::commonFields(kTool, options.vendor, options);
-  fields.insert(fields.end(), {{"status", stopped ? "ok" : "timeout"},
-                               {"echoed", std::to_string(echoed)}});
+  fields.insert(fields.end(),
+                {{"status", stopped ? "ok" : "timeout"}, {"echoed", std::to_string(echoed)}});
   auv::bench::printResult(fields);
   return stopped ? 0 : 1;
 }
 
 int runPub(ai::Node& node, const BenchOptions& options) {
-  auto pub = node.createPublisher<FileChunkReply>(auv::bench::dataTopic(options),
-                                                  profileOf(options));
+  auto pub =
+      node.createPublisher<FileChunkReply>(auv::bench::dataTopic(options), profileOf(options));
   const int64_t match_deadline = nowNs() + static_cast<int64_t>(options.timeout_s * 1e9);
   while (pub->matchedSubscriptions() == 0 && nowNs() < match_deadline)
     std::this_thread::sleep_for(kPollPeriod);
@@ -186,10 +186,14 @@ int main(int argc, char** argv) {
     node_options.domain_id = options.domain;
     ai::Node node("bench_" + auv::bench::toString(options.role), node_options);
     switch (options.role) {
-      case auv::bench::Role::PING: return runPing(node, options);
-      case auv::bench::Role::PONG: return runPong(node, options);
-      case auv::bench::Role::PUB: return runPub(node, options);
-      case auv::bench::Role::SUB: return runSub(node, options);
+      case auv::bench::Role::PING:
+        return runPing(node, options);
+      case auv::bench::Role::PONG:
+        return runPong(node, options);
+      case auv::bench::Role::PUB:
+        return runPub(node, options);
+      case auv::bench::Role::SUB:
+        return runSub(node, options);
     }
   } catch (const std::exception& e) {
     std::cerr << "auv_dds_bench: " << e.what() << "\n";

@@ -28,10 +28,14 @@ uint64_t parseSize(const std::string& flag, const std::string& text) {
   }
   const std::string suffix = text.substr(pos);
   uint64_t scale = 1;
-  if (suffix.empty() || suffix == "B") scale = 1;
-  else if (suffix == "k" || suffix == "K" || suffix == "KiB") scale = 1024;
-  else if (suffix == "M" || suffix == "MiB") scale = 1024 * 1024;
-  else bad(flag, text, "has an unknown unit (use k/KiB or M/MiB)");
+  if (suffix.empty() || suffix == "B")
+    scale = 1;
+  else if (suffix == "k" || suffix == "K" || suffix == "KiB")
+    scale = 1024;
+  else if (suffix == "M" || suffix == "MiB")
+    scale = 1024 * 1024;
+  else
+    bad(flag, text, "has an unknown unit (use k/KiB or M/MiB)");
   return value * scale;
 }
 
@@ -61,8 +65,7 @@ double percentile(const std::vector<int64_t>& sorted, double p) {
 void BenchOptions::check() const {
   if (vendor != "cyclonedds" && vendor != "fastdds")
     bad("--vendor", vendor, "must be cyclonedds or fastdds");
-  if (qos != "command" && qos != "sensor_data")
-    bad("--qos", qos, "must be command or sensor_data");
+  if (qos != "command" && qos != "sensor_data") bad("--qos", qos, "must be command or sensor_data");
   if (size > 64u * 1024 * 1024) bad("--size", std::to_string(size), "must be <= 64 MiB");
   if (count < 1) bad("--count", std::to_string(count), "must be >= 1");
   if (warmup < 0) bad("--warmup", std::to_string(warmup), "must be >= 0");
@@ -77,10 +80,14 @@ void BenchOptions::check() const {
 
 std::string toString(Role role) {
   switch (role) {
-    case Role::PING: return "ping";
-    case Role::PONG: return "pong";
-    case Role::PUB: return "pub";
-    case Role::SUB: return "sub";
+    case Role::PING:
+      return "ping";
+    case Role::PONG:
+      return "pong";
+    case Role::PUB:
+      return "pub";
+    case Role::SUB:
+      return "sub";
   }
   return "?";
 }
@@ -125,17 +132,25 @@ BenchOptions parseOptions(int argc, char** argv, const std::string& program, boo
     if (i + 1 >= argc) bad(flag, "", "needs a value (see --help)");
     const std::string value = argv[++i];
     if (flag == "--role") {
-      if (value == "ping") o.role = Role::PING;
-      else if (value == "pong") o.role = Role::PONG;
-      else if (value == "pub") o.role = Role::PUB;
-      else if (value == "sub") o.role = Role::SUB;
-      else bad(flag, value, "must be ping, pong, pub or sub");
+      if (value == "ping")
+        o.role = Role::PING;
+      else if (value == "pong")
+        o.role = Role::PONG;
+      else if (value == "pub")
+        o.role = Role::PUB;
+      else if (value == "sub")
+        o.role = Role::SUB;
+      else
+        bad(flag, value, "must be ping, pong, pub or sub");
     } else if (flag == "--vendor" && has_vendor) {
       o.vendor = value;
     } else if (flag == "--dispatch" && has_dispatch) {
-      if (value == "listener") o.dispatch = Dispatch::LISTENER;
-      else if (value == "thread") o.dispatch = Dispatch::THREAD;
-      else bad(flag, value, "must be listener or thread");
+      if (value == "listener")
+        o.dispatch = Dispatch::LISTENER;
+      else if (value == "thread")
+        o.dispatch = Dispatch::THREAD;
+      else
+        bad(flag, value, "must be listener or thread");
     } else if (flag == "--qos") {
       o.qos = value;
     } else if (flag == "--size") {
@@ -268,21 +283,20 @@ void PingSession::report(std::vector<std::pair<std::string, std::string>> fields
   const LatencySummary s = summarize(rtt_ns_);
   const double span_s =
       measure_end_ns_ > measure_start_ns_ ? (measure_end_ns_ - measure_start_ns_) / 1e9 : 0;
-  fields.insert(fields.end(),
-                {{"status", s.count > 0 ? "ok" : "no_data"},
-                 {"count", std::to_string(s.count)},
-                 {"lost", std::to_string(lost_)},
-                 {"stale", std::to_string(stale_)},
-                 {"bad_size", std::to_string(bad_size_)},
-                 {"rtt_min_us", fmt(s.min_us)},
-                 {"rtt_mean_us", fmt(s.mean_us)},
-                 {"rtt_median_us", fmt(s.median_us)},
-                 {"rtt_p90_us", fmt(s.p90_us)},
-                 {"rtt_p99_us", fmt(s.p99_us)},
-                 {"rtt_max_us", fmt(s.max_us)},
-                 {"oneway_median_us", fmt(s.median_us / 2)},
-                 {"oneway_p90_us", fmt(s.p90_us / 2)},
-                 {"roundtrips_per_s", fmt(span_s > 0 ? s.count / span_s : 0, 1)}});
+  fields.insert(fields.end(), {{"status", s.count > 0 ? "ok" : "no_data"},
+                               {"count", std::to_string(s.count)},
+                               {"lost", std::to_string(lost_)},
+                               {"stale", std::to_string(stale_)},
+                               {"bad_size", std::to_string(bad_size_)},
+                               {"rtt_min_us", fmt(s.min_us)},
+                               {"rtt_mean_us", fmt(s.mean_us)},
+                               {"rtt_median_us", fmt(s.median_us)},
+                               {"rtt_p90_us", fmt(s.p90_us)},
+                               {"rtt_p99_us", fmt(s.p99_us)},
+                               {"rtt_max_us", fmt(s.max_us)},
+                               {"oneway_median_us", fmt(s.median_us / 2)},
+                               {"oneway_p90_us", fmt(s.p90_us / 2)},
+                               {"roundtrips_per_s", fmt(span_s > 0 ? s.count / span_s : 0, 1)}});
   printResult(fields);
 }
 
@@ -325,7 +339,8 @@ bool ThroughputSink::finished(int64_t start_ns) const {
 void ThroughputSink::report(std::vector<std::pair<std::string, std::string>> fields) const {
   const double window_s = last_ns_ > window_start_ns_ ? (last_ns_ - window_start_ns_) / 1e9 : 0;
   // Samples that should have arrived in the window: sequence numbers after the opening one.
-  const uint64_t expected = max_seq_ > first_seq_ && window_start_ns_ != 0 ? max_seq_ - first_seq_ : 0;
+  const uint64_t expected =
+      max_seq_ > first_seq_ && window_start_ns_ != 0 ? max_seq_ - first_seq_ : 0;
   const uint64_t lost = expected > counted_ ? expected - counted_ : 0;
   const double rate = window_s > 0 ? counted_ / window_s : 0;
   fields.insert(fields.end(),
@@ -349,9 +364,7 @@ PublishSession::PublishSession(const BenchOptions& options) : options_(options) 
 
 void PublishSession::start() { start_ns_ = nowNs(); }
 
-bool PublishSession::running() const {
-  return nowNs() - start_ns_ < options_.duration_s * 1e9;
-}
+bool PublishSession::running() const { return nowNs() - start_ns_ < options_.duration_s * 1e9; }
 
 void PublishSession::report(std::vector<std::pair<std::string, std::string>> fields) const {
   const double elapsed_s = (nowNs() - start_ns_) / 1e9;

@@ -34,19 +34,19 @@ constexpr uint64_t kStopSequence = UINT64_MAX;
 /// Command-line options common to all three programs. Defaults are the short run.
 struct BenchOptions {
   Role role = Role::PING;
-  std::string vendor = "cyclonedds";  ///< auv_dds_bench only: cyclonedds | fastdds.
-  std::string qos = "command";        ///< command (reliable) | sensor_data (best effort).
+  std::string vendor = "cyclonedds";       ///< auv_dds_bench only: cyclonedds | fastdds.
+  std::string qos = "command";             ///< command (reliable) | sensor_data (best effort).
   Dispatch dispatch = Dispatch::LISTENER;  ///< Raw programs only.
-  uint32_t size = 1024;               ///< Bytes in the message's `data` sequence.
-  int count = 1000;                   ///< Ping: measured round trips.
-  int warmup = 100;                   ///< Ping: unmeasured round trips before measuring.
-  double duration_s = 3.0;            ///< Pub: seconds of publishing; ping: cap on measuring.
-  double sub_warmup_s = 0.5;          ///< Sub: seconds after the first sample not counted.
-  double timeout_s = 30.0;            ///< Matching deadline, and pong/sub overall deadline, s.
-  double ping_timeout_s = 2.0;        ///< Ping: a round trip slower than this is lost, s.
-  double idle_timeout_s = 2.0;        ///< Sub: ends this long after the last sample, s.
-  int domain = 200;                   ///< DDS domain id, 0..232.
-  std::string topic = "bench";        ///< Topic prefix: <topic>/ping, <topic>/pong, <topic>/data.
+  uint32_t size = 1024;                    ///< Bytes in the message's `data` sequence.
+  int count = 1000;                        ///< Ping: measured round trips.
+  int warmup = 100;                        ///< Ping: unmeasured round trips before measuring.
+  double duration_s = 3.0;                 ///< Pub: seconds of publishing; ping: cap on measuring.
+  double sub_warmup_s = 0.5;               ///< Sub: seconds after the first sample not counted.
+  double timeout_s = 30.0;                 ///< Matching deadline, and pong/sub overall deadline, s.
+  double ping_timeout_s = 2.0;             ///< Ping: a round trip slower than this is lost, s.
+  double idle_timeout_s = 2.0;             ///< Sub: ends this long after the last sample, s.
+  int domain = 200;                        ///< DDS domain id, 0..232.
+  std::string topic = "bench";  ///< Topic prefix: <topic>/ping, <topic>/pong, <topic>/data.
 
   /// Throws std::invalid_argument naming the field and value when an option is out of range.
   void check() const;
@@ -115,8 +115,8 @@ class PingSession {
   int64_t measure_end_ns_ = 0;
   uint64_t replies_ = 0;
   uint64_t lost_ = 0;
-  uint64_t stale_ = 0;      // echoes of abandoned pings
-  uint64_t bad_size_ = 0;   // echoes whose payload had the wrong length
+  uint64_t stale_ = 0;     // echoes of abandoned pings
+  uint64_t bad_size_ = 0;  // echoes whose payload had the wrong length
   std::vector<int64_t> rtt_ns_;
 };
 
@@ -144,7 +144,7 @@ class ThroughputSink {
   uint64_t total_ = 0;           // data samples received, warm-up included
   uint64_t counted_ = 0;         // data samples in the window (after the first one)
   uint64_t counted_bytes_ = 0;
-  uint64_t first_seq_ = 0;       // sequence number opening the window
+  uint64_t first_seq_ = 0;  // sequence number opening the window
   uint64_t max_seq_ = 0;
   uint64_t bad_size_ = 0;
 };

@@ -50,8 +50,7 @@ constexpr const char* kLoopbackConfig =
 char kEmpty[] = "";
 
 dds_entity_t check(dds_entity_t rc, const std::string& what) {
-  if (rc < 0)
-    throw std::runtime_error("raw_cyclonedds_bench: " + what + ": " + dds_strretcode(rc));
+  if (rc < 0) throw std::runtime_error("raw_cyclonedds_bench: " + what + ": " + dds_strretcode(rc));
   return rc;
 }
 
@@ -94,11 +93,12 @@ class RawParticipant {
   explicit RawParticipant(const BenchOptions& options) : options_(options) {
     const char* uri = std::getenv("CYCLONEDDS_URI");
     if (uri == nullptr || *uri == '\0')
-      domain_ = check(dds_create_domain(static_cast<dds_domainid_t>(options.domain), kLoopbackConfig),
-                      "create domain " + std::to_string(options.domain));
-    participant_ = check(dds_create_participant(static_cast<dds_domainid_t>(options.domain),
-                                                nullptr, nullptr),
-                         "create participant");
+      domain_ =
+          check(dds_create_domain(static_cast<dds_domainid_t>(options.domain), kLoopbackConfig),
+                "create domain " + std::to_string(options.domain));
+    participant_ =
+        check(dds_create_participant(static_cast<dds_domainid_t>(options.domain), nullptr, nullptr),
+              "create participant");
   }
   ~RawParticipant() {
     dds_delete(participant_);
@@ -122,8 +122,8 @@ class RawParticipant {
 
  private:
   dds_entity_t createTopic(const std::string& name) {
-    return check(dds_create_topic(participant_, &auv_msg_FileChunkReply_desc, name.c_str(),
-                                  nullptr, nullptr),
+    return check(dds_create_topic(participant_, &auv_msg_FileChunkReply_desc, name.c_str(), nullptr,
+                                  nullptr),
                  "create topic " + name);
   }
 
@@ -134,7 +134,8 @@ class RawParticipant {
 
 int matchedReaders(dds_entity_t writer) {
   dds_publication_matched_status_t s;
-  return dds_get_publication_matched_status(writer, &s) == 0 ? static_cast<int>(s.current_count) : 0;
+  return dds_get_publication_matched_status(writer, &s) == 0 ? static_cast<int>(s.current_count)
+                                                             : 0;
 }
 
 int matchedWriters(dds_entity_t reader) {
@@ -289,11 +290,12 @@ int runPong(RawParticipant& participant, const BenchOptions& options) {
   const int64_t deadline = nowNs() + static_cast<int64_t>(options.timeout_s * 1e9);
   {
     std::unique_lock<std::mutex> lock(receiver.mutex());
-    while (!stopped && nowNs() < deadline) receiver.waitAndDrain(lock, std::chrono::milliseconds(50));
+    while (!stopped && nowNs() < deadline)
+      receiver.waitAndDrain(lock, std::chrono::milliseconds(50));
   }
   auto fields = fieldsOf(options);
-  fields.insert(fields.end(), {{"status", stopped ? "ok" : "timeout"},
-                               {"echoed", std::to_string(echoed)}});
+  fields.insert(fields.end(),
+                {{"status", stopped ? "ok" : "timeout"}, {"echoed", std::to_string(echoed)}});
   auv::bench::printResult(fields);
   return stopped ? 0 : 1;
 }
@@ -354,10 +356,14 @@ int main(int argc, char** argv) {
   try {
     RawParticipant participant(options);
     switch (options.role) {
-      case auv::bench::Role::PING: return runPing(participant, options);
-      case auv::bench::Role::PONG: return runPong(participant, options);
-      case auv::bench::Role::PUB: return runPub(participant, options);
-      case auv::bench::Role::SUB: return runSub(participant, options);
+      case auv::bench::Role::PING:
+        return runPing(participant, options);
+      case auv::bench::Role::PONG:
+        return runPong(participant, options);
+      case auv::bench::Role::PUB:
+        return runPub(participant, options);
+      case auv::bench::Role::SUB:
+        return runSub(participant, options);
     }
   } catch (const std::exception& e) {
     std::cerr << "raw_cyclonedds_bench: " << e.what() << "\n";

@@ -12,6 +12,7 @@
 // --dispatch thread: the listener only wakes the main thread, which takes and answers, the
 //   structure of our layer (listener -> Waker -> executor thread).
 
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
@@ -22,7 +23,6 @@
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/dds/topic/Topic.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
-#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 
 #include <chrono>
 #include <condition_variable>
@@ -60,7 +60,8 @@ void check(bool ok, const std::string& what) {
 template <class EndpointQos>
 void applyProfile(const BenchOptions& options, EndpointQos& q) {
   const bool reliable = options.qos == "command";
-  q.reliability().kind = reliable ? dds::RELIABLE_RELIABILITY_QOS : dds::BEST_EFFORT_RELIABILITY_QOS;
+  q.reliability().kind =
+      reliable ? dds::RELIABLE_RELIABILITY_QOS : dds::BEST_EFFORT_RELIABILITY_QOS;
   q.reliability().max_blocking_time = eprosima::fastrtps::Duration_t(0.1);
   q.durability().kind = dds::VOLATILE_DURABILITY_QOS;
   q.history().kind = dds::KEEP_LAST_HISTORY_QOS;
@@ -92,9 +93,10 @@ class RawParticipant {
     qos.transport().user_transports.push_back(udp);
     qos.transport().use_builtin_transports = false;
     qos.name("raw_fastdds_bench");
-    participant_ = dds::DomainParticipantFactory::get_instance()->create_participant(
-        options.domain, qos);
-    check(participant_ != nullptr, "create participant on domain " + std::to_string(options.domain));
+    participant_ =
+        dds::DomainParticipantFactory::get_instance()->create_participant(options.domain, qos);
+    check(participant_ != nullptr,
+          "create participant on domain " + std::to_string(options.domain));
     dds::TypeSupport type(new auv::msg::FileChunkReplyPubSubType());
     type->auto_fill_type_information(false);  // as our layer (Cyclone rejects it)
     type->auto_fill_type_object(false);
@@ -305,15 +307,17 @@ int runPong(RawParticipant& participant, const BenchOptions& options) {
     writer->write(const_cast<FileChunkReply*>(&ping));
     ++echoed;
   });
-  receiver.attach(participant.subscriber(), participant.createReader(auv::bench::pingTopic(options), receiver.listener()));
+  receiver.attach(participant.subscriber(),
+                  participant.createReader(auv::bench::pingTopic(options), receiver.listener()));
   const int64_t deadline = nowNs() + static_cast<int64_t>(options.timeout_s * 1e9);
   {
     std::unique_lock<std::mutex> lock(receiver.mutex());
-    while (!stopped && nowNs() < deadline) receiver.waitAndDrain(lock, std::chrono::milliseconds(50));
+    while (!stopped && nowNs() < deadline)
+      receiver.waitAndDrain(lock, std::chrono::milliseconds(50));
   }
   auto fields = fieldsOf(options);
-  fields.insert(fields.end(), {{"status", stopped ? "ok" : "timeout"},
-                               {"echoed", std::to_string(echoed)}});
+  fields.insert(fields.end(),
+                {{"status", stopped ? "ok" : "timeout"}, {"echoed", std::to_string(echoed)}});
   auv::bench::printResult(fields);
   return stopped ? 0 : 1;
 }
@@ -348,7 +352,8 @@ int runSub(RawParticipant& participant, const BenchOptions& options) {
   Receiver receiver(options, [&sink](const FileChunkReply& m) {
     sink.onSample(m.header().sequence_number(), m.data().size());
   });
-  receiver.attach(participant.subscriber(), participant.createReader(auv::bench::dataTopic(options), receiver.listener()));
+  receiver.attach(participant.subscriber(),
+                  participant.createReader(auv::bench::dataTopic(options), receiver.listener()));
   const int64_t start = nowNs();
   {
     std::unique_lock<std::mutex> lock(receiver.mutex());
@@ -372,10 +377,14 @@ int main(int argc, char** argv) {
   try {
     RawParticipant participant(options);
     switch (options.role) {
-      case auv::bench::Role::PING: return runPing(participant, options);
-      case auv::bench::Role::PONG: return runPong(participant, options);
-      case auv::bench::Role::PUB: return runPub(participant, options);
-      case auv::bench::Role::SUB: return runSub(participant, options);
+      case auv::bench::Role::PING:
+        return runPing(participant, options);
+      case auv::bench::Role::PONG:
+        return runPong(participant, options);
+      case auv::bench::Role::PUB:
+        return runPub(participant, options);
+      case auv::bench::Role::SUB:
+        return runSub(participant, options);
     }
   } catch (const std::exception& e) {
     std::cerr << "raw_fastdds_bench: " << e.what() << "\n";

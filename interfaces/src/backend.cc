@@ -35,8 +35,8 @@ int domainFromEnvironment() {
   char* end = nullptr;
   const long id = std::strtol(value, &end, 10);
   if (*end != '\0' || id < 0 || id > 232)
-    throw std::invalid_argument(std::string("AUV_DOMAIN_ID: expected an integer in [0, 232], got '") +
-                                value + "'");
+    throw std::invalid_argument(
+        std::string("AUV_DOMAIN_ID: expected an integer in [0, 232], got '") + value + "'");
   return static_cast<int>(id);
 }
 

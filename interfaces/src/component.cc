@@ -93,8 +93,8 @@ int runComponents(const std::vector<ComponentSpec>& specs, const NodeOptions& op
         std::string known;
         for (const auto& c : ComponentRegistry::instance().list())
           known += (known.empty() ? "" : ", ") + c.name;
-        throw std::invalid_argument("unknown component '" + spec.component + "' (known: " +
-                                    (known.empty() ? "none found" : known) + ")");
+        throw std::invalid_argument("unknown component '" + spec.component +
+                                    "' (known: " + (known.empty() ? "none found" : known) + ")");
       }
       Instance instance{spec, nullptr, info->create()};
       const std::string node_name = spec.node_name.empty() ? spec.component : spec.node_name;

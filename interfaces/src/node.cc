@@ -8,11 +8,16 @@ namespace {
 
 msg::LogLevel toMsgLevel(LogLevel level) {
   switch (level) {
-    case LogLevel::DEBUG: return msg::LOG_LEVEL_DEBUG;
-    case LogLevel::INFO: return msg::LOG_LEVEL_INFO;
-    case LogLevel::WARN: return msg::LOG_LEVEL_WARN;
-    case LogLevel::ERROR: return msg::LOG_LEVEL_ERROR;
-    case LogLevel::FATAL: return msg::LOG_LEVEL_FATAL;
+    case LogLevel::DEBUG:
+      return msg::LOG_LEVEL_DEBUG;
+    case LogLevel::INFO:
+      return msg::LOG_LEVEL_INFO;
+    case LogLevel::WARN:
+      return msg::LOG_LEVEL_WARN;
+    case LogLevel::ERROR:
+      return msg::LOG_LEVEL_ERROR;
+    case LogLevel::FATAL:
+      return msg::LOG_LEVEL_FATAL;
   }
   return msg::LOG_LEVEL_UNSET;
 }
@@ -43,13 +48,18 @@ Node::Node(const std::string& name, const NodeOptions& options)
     parameters_->setOverride(assignment, kCommandLineSource);
 
   const bool use_sim_time = parameters_->declare<bool>(
-      "use_sim_time", false, {"follow the simulation clock on the `clock` topic", "", {}, {}, {}, true});
-  const std::string level = parameters_->declare<std::string>(
-      "log_level", "info", {"lowest level printed and published on `log`", "", {}, {},
-                            {"debug", "info", "warn", "error", "fatal"}});
+      "use_sim_time", false,
+      {"follow the simulation clock on the `clock` topic", "", {}, {}, {}, true});
+  const std::string level =
+      parameters_->declare<std::string>("log_level", "info",
+                                        {"lowest level printed and published on `log`",
+                                         "",
+                                         {},
+                                         {},
+                                         {"debug", "info", "warn", "error", "fatal"}});
   logger_.setLevel(logLevelFromString(level));
-  clock_ = std::make_unique<Clock>(use_sim_time ? Clock::Source::SIMULATION
-                                                : Clock::Source::SYSTEM);
+  clock_ =
+      std::make_unique<Clock>(use_sim_time ? Clock::Source::SIMULATION : Clock::Source::SYSTEM);
 
   domain_id_ = options.domain_id ? *options.domain_id : domainFromEnvironment();
   const Vendor vendor = options.vendor ? *options.vendor : vendorFromEnvironment();
@@ -112,8 +122,8 @@ QosProfile Node::resolveQos(const std::string& topic, const QosProfile& qos) {
 std::shared_ptr<Timer> Node::createTimer(double period_s, std::function<void()> callback) {
   if (!(period_s > 0))
     throw std::invalid_argument("timer period must be > 0 s, got " + std::to_string(period_s));
-  auto timer = std::make_shared<Timer>(*clock_, static_cast<int64_t>(period_s * 1e9),
-                                       std::move(callback));
+  auto timer =
+      std::make_shared<Timer>(*clock_, static_cast<int64_t>(period_s * 1e9), std::move(callback));
   addWaitable(timer);
   waker_->notify();
   return timer;
@@ -145,7 +155,8 @@ std::optional<int64_t> Node::nanosecondsUntilNextTimer() const {
   std::lock_guard<std::mutex> lock(mutex_);
   for (const auto& weak : waitables_) {
     if (auto w = weak.lock()) {
-      if (auto due = w->nanosecondsUntilDue()) earliest = earliest ? std::min(*earliest, *due) : *due;
+      if (auto due = w->nanosecondsUntilDue())
+        earliest = earliest ? std::min(*earliest, *due) : *due;
     }
   }
   return earliest;

@@ -67,7 +67,8 @@ TEST_P(InteropTest, EveryProfileDeliversStringsAcrossVendors) {
     std::vector<std::string> got;
     auto sub = sub_node.createSubscription<msg::String>(
         topic, qosProfileByName(profile),
-        std::function<void(const msg::String&)>([&](const msg::String& m) { got.push_back(m.data()); }));
+        std::function<void(const msg::String&)>(
+            [&](const msg::String& m) { got.push_back(m.data()); }));
     auto pub = pub_node.createPublisher<msg::String>(topic, qosProfileByName(profile));
     msg::String message;
     message.data("hello " + profile);
@@ -81,8 +82,8 @@ TEST_P(InteropTest, EveryProfileDeliversStringsAcrossVendors) {
 TEST_P(InteropTest, LateJoinerGetsLastTransientLocalSamplePerInstance) {
   const int domain = domainFor(1, GetParam());
   Node pub_node("mission", optionsFor(GetParam().writer, domain));
-  auto pub = pub_node.createPublisher<msg::MissionStatus>("/interop/mission_status",
-                                                          latchedStateQos());
+  auto pub =
+      pub_node.createPublisher<msg::MissionStatus>("/interop/mission_status", latchedStateQos());
   for (int i = 1; i <= 3; ++i) {
     for (const char* id : {"alpha", "bravo"}) {
       msg::MissionStatus status;
@@ -151,7 +152,8 @@ TEST_P(InteropTest, RequestReplyRoundTripAcrossVendors) {
       t.join();
     }
   } join{executor, spinner};
-  auto client = client_node.createClient<msg::TriggerRequest, msg::TriggerReply>("/interop/trigger");
+  auto client =
+      client_node.createClient<msg::TriggerRequest, msg::TriggerReply>("/interop/trigger");
   ASSERT_TRUE(client->waitForService(10s));
   msg::TriggerRequest request;
   msg::TriggerReply reply;

@@ -74,7 +74,8 @@ TEST(NodeTest, SystemTimerFiresAtItsPeriod) {
   executor.add(node);
   const auto start = std::chrono::steady_clock::now();
   executor.spinUntil([&] { return fired >= 10; }, 5s);
-  const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double elapsed =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   EXPECT_EQ(fired, 10);
   EXPECT_GE(elapsed, 10 * 0.02 - 0.005);  // never early: 10 periods must have passed
   timer->cancel();
@@ -105,8 +106,10 @@ TEST(NodeTest, LogLinesArePublishedOnTheLogTopic) {
   Node reader("reader", options(65, Vendor::CYCLONEDDS));
   std::vector<std::string> lines;
   auto sub = reader.createSubscription<msg::LogEntry>(
-      "log", latchedStateQos(), std::function<void(const msg::LogEntry&)>([&](const msg::LogEntry& e) {
-        if (e.node_name() == "chatty" && e.level() == msg::LOG_LEVEL_WARN) lines.push_back(e.message());
+      "log", latchedStateQos(),
+      std::function<void(const msg::LogEntry&)>([&](const msg::LogEntry& e) {
+        if (e.node_name() == "chatty" && e.level() == msg::LOG_LEVEL_WARN)
+          lines.push_back(e.message());
       }));
   Executor executor;
   executor.add(reader);

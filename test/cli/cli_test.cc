@@ -83,9 +83,8 @@ class CliPubEchoTest : public testing::TestWithParam<Pair> {};
 
 TEST_P(CliPubEchoTest, EchoShowsWhatPubSendsAcrossVendors) {
   const Pair p = GetParam();
-  Background pub(env(p.pub, p.domain),
-                 "topic pub /chatter auv::msg::String '{data: from " + std::string(p.pub) +
-                     "}' --rate 10");
+  Background pub(env(p.pub, p.domain), "topic pub /chatter auv::msg::String '{data: from " +
+                                           std::string(p.pub) + "}' --rate 10");
   const Result echo = run(env(p.sub, p.domain), "topic echo /chatter --once --timeout 20");
   EXPECT_EQ(echo.exit_code, 0) << echo.out;
   EXPECT_NE(echo.out.find("data: from " + std::string(p.pub)), std::string::npos) << echo.out;
@@ -149,11 +148,13 @@ TEST(CliTest, LateJoinerOfOtherVendorGetsLatchedStatus) {
   // The listener (Cyclone) publishes its count on /demo/status, transient local; the talker
   // stops after a few messages, then a Fast DDS echo joins late and must still get it.
   Background listener(env("cyclonedds", 176), "run demo_listener:latched");
-  const Result pub = run(env("fastdds", 176),
-                         "topic pub /chatter String '{data: ping}' --times 3 --rate 5 --wait-matching 20");
+  const Result pub =
+      run(env("fastdds", 176),
+          "topic pub /chatter String '{data: ping}' --times 3 --rate 5 --wait-matching 20");
   ASSERT_EQ(pub.exit_code, 0) << pub.out;
   std::this_thread::sleep_for(500ms);
-  const Result echo = run(env("fastdds", 176), "topic echo /demo/status --once --field message --timeout 10");
+  const Result echo =
+      run(env("fastdds", 176), "topic echo /demo/status --once --field message --timeout 10");
   EXPECT_EQ(echo.exit_code, 0) << echo.out;
   EXPECT_NE(echo.out.find("last: ping"), std::string::npos) << echo.out;
 }

@@ -31,13 +31,15 @@ int interfaceMain(const std::vector<std::string>& argv) {
   const Args args(argv, {}, {});
   const std::string command = args.positional().empty() ? "" : args.positional()[0];
   if (command == "list") {
-    for (const auto& ts : msg::allTypes()) std::cout << ts.name << (ts.keyed ? "  (keyed)" : "") << "\n";
+    for (const auto& ts : msg::allTypes())
+      std::cout << ts.name << (ts.keyed ? "  (keyed)" : "") << "\n";
     return 0;
   }
   if (command == "show") {
     const std::string name = args.at(1, "message type");
     const msg::TypeSupport* ts = msg::findType(name);
-    if (ts == nullptr) throw CliError("unknown message type '" + name + "' (see `auv interface list`)");
+    if (ts == nullptr)
+      throw CliError("unknown message type '" + name + "' (see `auv interface list`)");
     auto sample = ts->create_sample();
     YAML::Emitter out;
     out << ts->to_yaml(sample.get());
@@ -69,7 +71,8 @@ int runMain(const std::vector<std::string>& argv) {
   std::vector<interfaces::ComponentSpec> specs;
   for (const std::string& item : args.positional()) {
     const auto colon = item.find(':');
-    specs.push_back({item.substr(0, colon), colon == std::string::npos ? "" : item.substr(colon + 1)});
+    specs.push_back(
+        {item.substr(0, colon), colon == std::string::npos ? "" : item.substr(colon + 1)});
   }
   return interfaces::runComponents(specs, options);
 }

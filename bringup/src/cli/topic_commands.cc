@@ -44,7 +44,9 @@ std::unique_ptr<GraphInspector> makeInspector() {
 // Waits for `topic` to have a publisher and returns its type (one clear error otherwise).
 std::string discoverType(const GraphInspector& inspector, const std::string& topic,
                          double timeout_s, GraphSnapshot* snapshot_out) {
-  const auto has_writer = [&](const GraphSnapshot& s) { return !s.endpointsOn(topic, true).empty(); };
+  const auto has_writer = [&](const GraphSnapshot& s) {
+    return !s.endpointsOn(topic, true).empty();
+  };
   GraphSnapshot snapshot = inspector.waitFor(
       has_writer, std::chrono::milliseconds(static_cast<int64_t>(timeout_s * 1000)));
   if (!has_writer(snapshot)) {
@@ -92,9 +94,9 @@ class GenericReader {
   GenericReader(const msg::TypeSupport& type, const std::string& topic, const QosProfile& qos)
       : type_(type),
         waker_(std::make_shared<interfaces::Waker>()),
-        participant_(interfaces::createParticipant(
-            interfaces::vendorFromEnvironment(),
-            {interfaces::domainFromEnvironment(), "_auv_cli"})),
+        participant_(
+            interfaces::createParticipant(interfaces::vendorFromEnvironment(),
+                                          {interfaces::domainFromEnvironment(), "_auv_cli"})),
         topic_data_type_(type.make_topic_data_type()) {
     std::weak_ptr<interfaces::Waker> waker = waker_;
     reader_ = participant_->createReader(topic, type, qos, [waker] {
@@ -169,9 +171,9 @@ YAML::Node selectField(const YAML::Node& root, const std::string& path) {
 int listTopics(const Args& args) {
   auto inspector = makeInspector();
   const double wait = args.number("--wait", 2.0);
-  const GraphSnapshot snapshot = inspector->waitFor(
-      [](const GraphSnapshot&) { return false; },
-      std::chrono::milliseconds(static_cast<int64_t>(wait * 1000)));
+  const GraphSnapshot snapshot =
+      inspector->waitFor([](const GraphSnapshot&) { return false; },
+                         std::chrono::milliseconds(static_cast<int64_t>(wait * 1000)));
   for (const auto& [topic, types] : snapshot.topicTypes()) {
     std::cout << topic;
     if (args.flag("-t")) {
@@ -218,7 +220,8 @@ int topicInfo(const Args& args) {
   const std::string topic = args.at(1, "topic name");
   interfaces::toDdsTopicName(topic);  // validates
   auto inspector = makeInspector();
-  const auto wait = std::chrono::milliseconds(static_cast<int64_t>(args.number("--wait", 5.0) * 1000));
+  const auto wait =
+      std::chrono::milliseconds(static_cast<int64_t>(args.number("--wait", 5.0) * 1000));
   GraphSnapshot snapshot =
       inspector->waitFor([&](const GraphSnapshot& s) { return s.hasTopic(topic); }, wait);
   if (!snapshot.hasTopic(topic))
@@ -232,7 +235,8 @@ int topicInfo(const Args& args) {
   auto stable_since = Clock::now();
   while (Clock::now() < deadline && Clock::now() - stable_since < 1500ms) {
     snapshot = inspector->waitFor([](const GraphSnapshot&) { return false; }, 100ms);
-    const size_t now = snapshot.endpointsOn(topic, true).size() + snapshot.endpointsOn(topic, false).size();
+    const size_t now =
+        snapshot.endpointsOn(topic, true).size() + snapshot.endpointsOn(topic, false).size();
     if (now != count) {
       count = now;
       stable_since = Clock::now();
@@ -275,9 +279,9 @@ int topicEcho(const Args& args) {
   bool first = true;
   for (;;) {
     std::shared_ptr<void> sample;
-    const auto wait = first ? std::chrono::duration_cast<Clock::duration>(
-                                  std::chrono::duration<double>(timeout))
-                            : Clock::duration(std::chrono::hours(24 * 365));
+    const auto wait =
+        first ? std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(timeout))
+              : Clock::duration(std::chrono::hours(24 * 365));
     if (!reader.next(sample, nullptr, wait)) {
       if (interfaces::Executor::signalled()) return 0;
       throw CliError("no message on " + displayTopic(topic) + " within " +
@@ -333,7 +337,8 @@ int topicRate(const Args& args, bool bandwidth) {
                      1);
     if (Clock::now() < next_report || samples.size() < 2) continue;
     next_report += 1s;
-    const double span = std::chrono::duration<double>(samples.back().first - samples.front().first).count();
+    const double span =
+        std::chrono::duration<double>(samples.back().first - samples.front().first).count();
     std::vector<double> gaps;
     double bytes = 0;
     uint32_t min_size = UINT32_MAX, max_size = 0;
@@ -341,13 +346,15 @@ int topicRate(const Args& args, bool bandwidth) {
       bytes += samples[i].second;
       min_size = std::min(min_size, samples[i].second);
       max_size = std::max(max_size, samples[i].second);
-      if (i > 0) gaps.push_back(std::chrono::duration<double>(samples[i].first - samples[i - 1].first).count());
+      if (i > 0)
+        gaps.push_back(
+            std::chrono::duration<double>(samples[i].first - samples[i - 1].first).count());
     }
     std::cout << std::fixed;
     if (bandwidth) {
       std::cout << std::setprecision(2) << "average: " << bytes / span / 1024.0 << " KiB/s\n"
-                << "\tmean: " << bytes / samples.size() / 1024.0 << " KiB min: "
-                << min_size / 1024.0 << " KiB max: " << max_size / 1024.0
+                << "\tmean: " << bytes / samples.size() / 1024.0
+                << " KiB min: " << min_size / 1024.0 << " KiB max: " << max_size / 1024.0
                 << " KiB window: " << samples.size() << std::endl;
     } else {
       double mean = 0, sq = 0;
@@ -388,14 +395,16 @@ int topicPub(const Args& args) {
   auto writer = participant->createWriter(topic, type, qos);
   interfaces::Executor::installSignalHandlers();
   // Like `ros2 topic pub --once`: give subscribers a moment to match before the first sample.
-  const auto match_deadline = Clock::now() + std::chrono::duration<double>(args.number("--wait-matching", 2.0));
+  const auto match_deadline =
+      Clock::now() + std::chrono::duration<double>(args.number("--wait-matching", 2.0));
   while (writer->matchedReaders() == 0 && Clock::now() < match_deadline &&
          !interfaces::Executor::signalled())
     std::this_thread::sleep_for(20ms);
   YAML::Emitter echo;
   echo << type.to_yaml(sample.get());
   std::cout << "publisher: beginning loop\n";
-  const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / rate));
+  const auto period =
+      std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / rate));
   auto next = Clock::now();
   for (long n = 1; !interfaces::Executor::signalled(); ++n) {
     writer->write(sample.get());
@@ -404,7 +413,8 @@ int topicPub(const Args& args) {
     next += period;
     std::this_thread::sleep_until(next);
   }
-  if (qos.reliability == Reliability::RELIABLE) std::this_thread::sleep_for(300ms);  // let acks flow
+  if (qos.reliability == Reliability::RELIABLE)
+    std::this_thread::sleep_for(300ms);  // let acks flow
   return 0;
 }
 

@@ -9,9 +9,11 @@ void Talker::configure(interfaces::Node& node) {
   auto& p = node.parameters();
   options_.rate_hz = p.declare<double>("rate_hz", options_.rate_hz,
                                        {"publishing rate", "Hz", 1e-3, 1000.0, {}, false});
-  options_.text = p.declare<std::string>("text", options_.text, {"greeting text", "", {}, {}, {}, false});
-  options_.circle_radius = p.declare<double>(
-      "circle_radius", options_.circle_radius, {"radius of the trajectory", "m", 0.1, 1000.0, {}, false});
+  options_.text =
+      p.declare<std::string>("text", options_.text, {"greeting text", "", {}, {}, {}, false});
+  options_.circle_radius =
+      p.declare<double>("circle_radius", options_.circle_radius,
+                        {"radius of the trajectory", "m", 0.1, 1000.0, {}, false});
   options_.speed = p.declare<double>("speed", options_.speed,
                                      {"speed along the trajectory", "m/s", 0.01, 5.0, {}, false});
   chatter_ = node.createPublisher<msg::String>("chatter", interfaces::commandQos());
@@ -25,8 +27,8 @@ void Talker::configure(interfaces::Node& node) {
 
 void Talker::activate() {
   timer_ = node_->createTimer(1.0 / options_.rate_hz, [this] { tick(); });
-  AUV_INFO(node_->logger(), "talking at " << options_.rate_hz << " Hz on "
-                                          << interfaces::toString(node_->vendor()));
+  AUV_INFO(node_->logger(),
+           "talking at " << options_.rate_hz << " Hz on " << interfaces::toString(node_->vendor()));
 }
 
 void Talker::deactivate() {

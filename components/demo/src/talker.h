@@ -11,10 +11,10 @@ namespace auv::demo {
 class Talker : public interfaces::Component {
  public:
   struct Options {
-    double rate_hz = 2.0;          ///< Hz, publishing rate, in (0, 1000].
-    std::string text = "hello";    ///< Greeting put before the count.
-    double circle_radius = 5.0;    ///< m, radius of the published trajectory, > 0.
-    double speed = 0.5;            ///< m/s, speed along the trajectory, > 0.
+    double rate_hz = 2.0;        ///< Hz, publishing rate, in (0, 1000].
+    std::string text = "hello";  ///< Greeting put before the count.
+    double circle_radius = 5.0;  ///< m, radius of the published trajectory, > 0.
+    double speed = 0.5;          ///< m/s, speed along the trajectory, > 0.
   };
 
   void configure(interfaces::Node& node) override;

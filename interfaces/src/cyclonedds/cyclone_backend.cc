@@ -37,8 +37,8 @@ void ensureCycloneDomain(int domain_id) {
   if (uri != nullptr && *uri != '\0') return;  // Cyclone reads the user's configuration itself
   std::lock_guard<std::mutex> lock(mutex);
   if (domains.count(domain_id)) return;
-  const dds_entity_t domain = dds_create_domain(static_cast<dds_domainid_t>(domain_id),
-                                                kLoopbackConfig);
+  const dds_entity_t domain =
+      dds_create_domain(static_cast<dds_domainid_t>(domain_id), kLoopbackConfig);
   if (domain < 0 && domain != DDS_RETCODE_PRECONDITION_NOT_MET)
     check(domain, "create domain " + std::to_string(domain_id));
   domains[domain_id] = domain;
@@ -124,8 +124,8 @@ class CycloneReader : public DataReader {
       if (!si.valid_data) continue;  // dispose/unregister notifications carry no data
       if (info != nullptr) {
         info->source_timestamp_ns = si.source_timestamp;
-        dds_builtintopic_endpoint_t* pub = dds_get_matched_publication_data(reader_,
-                                                                            si.publication_handle);
+        dds_builtintopic_endpoint_t* pub =
+            dds_get_matched_publication_data(reader_, si.publication_handle);
         if (pub != nullptr) {
           std::memcpy(info->publication.data(), pub->key.v, 16);
           dds_builtintopic_free_endpoint(pub);
@@ -159,8 +159,8 @@ class CycloneParticipant : public Participant {
     const std::string user_data = participantUserData(Vendor::CYCLONEDDS, options.node_name);
     dds_qset_userdata(q.get(), user_data.data(), user_data.size());
     dds_qset_entity_name(q.get(), options.node_name.c_str());
-    participant_ = dds_create_participant(static_cast<dds_domainid_t>(options.domain_id), q.get(),
-                                          nullptr);
+    participant_ =
+        dds_create_participant(static_cast<dds_domainid_t>(options.domain_id), q.get(), nullptr);
     check(participant_, "create participant on domain " + std::to_string(options.domain_id));
   }
   ~CycloneParticipant() override { dds_delete(participant_); }

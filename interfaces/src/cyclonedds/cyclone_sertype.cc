@@ -28,8 +28,8 @@ struct Sertype : ddsi_sertype {
 };
 
 struct Serdata : ddsi_serdata {
-  std::vector<unsigned char> cdr;  // encapsulation header + XCDR1 body, padded to 4 bytes
-  uint32_t size = 0;               // serialized size without the padding
+  std::vector<unsigned char> cdr;           // encapsulation header + XCDR1 body, padded to 4 bytes
+  uint32_t size = 0;                        // serialized size without the padding
   std::array<unsigned char, 16> key{};      // keyhash as computed without forcing MD5
   std::array<unsigned char, 16> key_md5{};  // keyhash with MD5 forced
 };
@@ -208,11 +208,11 @@ void getKeyhash(const ddsi_serdata* dcmn, ddsi_keyhash* buf, bool force_md5) {
 }
 
 const ddsi_serdata_ops kSerdataOps = {
-    &eqkey,     &getSize,      &fromSer,        &fromSerIov, &fromKeyhash, &fromSample,
-    &toSer,     &toSerRef,     &toSerUnref,     &toSample,   &toUntyped,   &untypedToSample,
-    &freeSerdata, &print,      &getKeyhash,
+    &eqkey,      &getSize,         &fromSer,     &fromSerIov, &fromKeyhash,
+    &fromSample, &toSer,           &toSerRef,    &toSerUnref, &toSample,
+    &toUntyped,  &untypedToSample, &freeSerdata, &print,      &getKeyhash,
 #ifdef DDS_HAS_SHM
-    nullptr,    nullptr,
+    nullptr,     nullptr,
 #endif
 };
 
@@ -243,9 +243,8 @@ uint32_t hash(const ddsi_sertype* type) {
 }
 
 const ddsi_sertype_ops kSertypeOps = {
-    ddsi_sertype_v0, nullptr,  &freeSertype, &zeroSamples, &reallocSamples, &freeSamples,
-    &equal,          &hash,    nullptr,      nullptr,      nullptr,         nullptr,
-    nullptr,         nullptr,
+    ddsi_sertype_v0, nullptr, &freeSertype, &zeroSamples, &reallocSamples, &freeSamples, &equal,
+    &hash,           nullptr, nullptr,      nullptr,      nullptr,         nullptr,      nullptr,
 };
 
 }  // namespace

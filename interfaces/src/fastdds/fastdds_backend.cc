@@ -1,4 +1,5 @@
 // Fast DDS backend: the DDS-DCPS C++ API with the fastddsgen TopicDataTypes.
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
@@ -9,7 +10,6 @@
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/dds/topic/Topic.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
-#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 
 #include <cstdlib>
 #include <cstring>
@@ -48,17 +48,15 @@ void applyCommon(const QosProfile& p, EndpointQos& q) {
       p.history == History::KEEP_LAST ? dds::KEEP_LAST_HISTORY_QOS : dds::KEEP_ALL_HISTORY_QOS;
   q.history().depth = p.depth;
   q.deadline().period = toDuration(p.deadline_s);
-  q.liveliness().kind = p.liveliness == Liveliness::AUTOMATIC
-                            ? dds::AUTOMATIC_LIVELINESS_QOS
-                            : dds::MANUAL_BY_TOPIC_LIVELINESS_QOS;
+  q.liveliness().kind = p.liveliness == Liveliness::AUTOMATIC ? dds::AUTOMATIC_LIVELINESS_QOS
+                                                              : dds::MANUAL_BY_TOPIC_LIVELINESS_QOS;
   q.liveliness().lease_duration = toDuration(p.liveliness_lease_s);
   if (p.liveliness_lease_s > 0)  // Fast DDS requires announcement period < lease duration
     q.liveliness().announcement_period = toDuration(p.liveliness_lease_s * 0.5);
   // Fast DDS defaults (10 instances, 5000 samples) would silently cap keyed topics. In
   // Fast DDS 2.9 "unlimited" is 0 here: LENGTH_UNLIMITED (-1) makes keyed writes fail.
   q.resource_limits().max_samples = p.max_samples > 0 ? p.max_samples : 0;
-  q.resource_limits().max_instances =
-      p.max_instances > 0 ? p.max_instances : 0;
+  q.resource_limits().max_instances = p.max_instances > 0 ? p.max_instances : 0;
   q.resource_limits().max_samples_per_instance =
       p.max_samples_per_instance > 0 ? p.max_samples_per_instance : 0;
   // Messages have unbounded sequences: payloads are sized per sample.
@@ -161,8 +159,8 @@ dds::DomainParticipantQos fastddsParticipantQos(const ParticipantOptions& option
   }
   qos.name(options.node_name);
   const std::string user_data = participantUserData(Vendor::FASTDDS, options.node_name);
-  qos.user_data().setValue(std::vector<eprosima::fastrtps::rtps::octet>(user_data.begin(),
-                                                                        user_data.end()));
+  qos.user_data().setValue(
+      std::vector<eprosima::fastrtps::rtps::octet>(user_data.begin(), user_data.end()));
   return qos;
 }
 

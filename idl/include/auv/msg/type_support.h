@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include <fastdds/dds/topic/TopicDataType.hpp>
 #include <yaml-cpp/yaml.h>
+#include <fastdds/dds/topic/TopicDataType.hpp>
 
 namespace auv::msg {
 
@@ -25,12 +25,12 @@ struct EnumTraits {
 
 /// Run-time description of one message type, used where the type is only known by name.
 struct TypeSupport {
-  std::string name;  ///< DDS type name, identical on both vendors, e.g. "auv::msg::Odometry".
+  std::string name;    ///< DDS type name, identical on both vendors, e.g. "auv::msg::Odometry".
   bool keyed = false;  ///< True when the type has @key members (instances matter).
   /// A new Fast DDS TopicDataType (fastddsgen's CDR code); the caller owns it.
   std::function<eprosima::fastdds::dds::TopicDataType*()> make_topic_data_type;
   std::function<std::shared_ptr<void>()> create_sample;  ///< A default-constructed sample.
-  std::function<YAML::Node(const void*)> to_yaml;  ///< Sample -> YAML map of its fields.
+  std::function<YAML::Node(const void*)> to_yaml;        ///< Sample -> YAML map of its fields.
   /// Fills a sample from YAML; throws std::invalid_argument naming the offending field.
   std::function<void(const YAML::Node&, void*)> from_yaml;
 };

@@ -56,7 +56,8 @@ YAML::Node encode(const T& value) {
     const auto& names = EnumTraits<T>::kNames;
     return index < names.size() ? YAML::Node(names[index]) : YAML::Node(index);
   } else if constexpr (std::is_integral_v<T>) {
-    return YAML::Node(static_cast<std::conditional_t<std::is_signed_v<T>, int64_t, uint64_t>>(value));
+    return YAML::Node(
+        static_cast<std::conditional_t<std::is_signed_v<T>, int64_t, uint64_t>>(value));
   } else if constexpr (std::is_floating_point_v<T>) {
     return YAML::Node(static_cast<double>(value));
   } else if constexpr (IsVector<T>::value || IsArray<T>::value) {

@@ -68,9 +68,9 @@ struct ComponentRegistrar {
 #define AUV_REGISTER_COMPONENT_CAT2(a, b) a##b
 #define AUV_REGISTER_COMPONENT_CAT(a, b) AUV_REGISTER_COMPONENT_CAT2(a, b)
 /// Registers `Class` under `name` when its library is loaded.
-#define AUV_REGISTER_COMPONENT(Class, name, description)                                    \
-  static ::auv::interfaces::detail::ComponentRegistrar AUV_REGISTER_COMPONENT_CAT(          \
-      auv_component_registrar_, __LINE__)(name, description,                               \
+#define AUV_REGISTER_COMPONENT(Class, name, description)                           \
+  static ::auv::interfaces::detail::ComponentRegistrar AUV_REGISTER_COMPONENT_CAT( \
+      auv_component_registrar_, __LINE__)(name, description,                       \
                                           [] { return std::make_unique<Class>(); });
 
 /// One component instance to host: which component, under which node name.

@@ -37,13 +37,13 @@ class Logger {
 };
 
 /// Streams a message: AUV_INFO(node.logger(), "reached " << n << " waypoints").
-#define AUV_LOG(logger, severity, stream_expr)     \
-  do {                                             \
-    if ((severity) >= (logger).level()) {          \
-      std::ostringstream auv_log_stream_;          \
-      auv_log_stream_ << stream_expr;              \
+#define AUV_LOG(logger, severity, stream_expr)         \
+  do {                                                 \
+    if ((severity) >= (logger).level()) {              \
+      std::ostringstream auv_log_stream_;              \
+      auv_log_stream_ << stream_expr;                  \
       (logger).log((severity), auv_log_stream_.str()); \
-    }                                              \
+    }                                                  \
   } while (0)
 #define AUV_DEBUG(logger, s) AUV_LOG(logger, ::auv::interfaces::LogLevel::DEBUG, s)
 #define AUV_INFO(logger, s) AUV_LOG(logger, ::auv::interfaces::LogLevel::INFO, s)

@@ -25,10 +25,10 @@
 namespace auv::interfaces {
 
 struct NodeOptions {
-  std::optional<Vendor> vendor;          ///< Default: AUV_DDS (cyclonedds).
-  std::optional<int> domain_id;          ///< Default: AUV_DOMAIN_ID (0).
-  std::vector<std::string> params_files; ///< YAML parameter files, loaded in order.
-  std::vector<std::string> overrides;    ///< "name:=value" assignments (command line).
+  std::optional<Vendor> vendor;           ///< Default: AUV_DDS (cyclonedds).
+  std::optional<int> domain_id;           ///< Default: AUV_DOMAIN_ID (0).
+  std::vector<std::string> params_files;  ///< YAML parameter files, loaded in order.
+  std::vector<std::string> overrides;     ///< "name:=value" assignments (command line).
 };
 
 class Node {
@@ -56,13 +56,13 @@ class Node {
 
   /// Subscription of T; `callback` runs on the executor spinning this node.
   template <class T>
-  std::shared_ptr<Subscription<T>> createSubscription(
-      const std::string& topic, const QosProfile& qos,
-      std::function<void(const T&)> callback);
+  std::shared_ptr<Subscription<T>> createSubscription(const std::string& topic,
+                                                      const QosProfile& qos,
+                                                      std::function<void(const T&)> callback);
   template <class T>
-  std::shared_ptr<Subscription<T>> createSubscription(
-      const std::string& topic, const QosProfile& qos,
-      typename Subscription<T>::Callback callback);
+  std::shared_ptr<Subscription<T>> createSubscription(const std::string& topic,
+                                                      const QosProfile& qos,
+                                                      typename Subscription<T>::Callback callback);
 
   /// Timer on the node's clock; the first call is one period from now.
   std::shared_ptr<Timer> createTimer(double period_s, std::function<void()> callback);
@@ -98,9 +98,9 @@ class Node {
   std::shared_ptr<Waker> waker_;
   mutable std::mutex mutex_;
   std::vector<std::weak_ptr<Waitable>> waitables_;
-  std::unique_ptr<DataReader> clock_reader_;   // simulation time, taken in the DDS thread
-  std::atomic<bool> clock_ready_{false};       // clock_reader_ is assigned
-  std::unique_ptr<DataWriter> log_writer_;     // LogEntry on `log`
+  std::unique_ptr<DataReader> clock_reader_;  // simulation time, taken in the DDS thread
+  std::atomic<bool> clock_ready_{false};      // clock_reader_ is assigned
+  std::unique_ptr<DataWriter> log_writer_;    // LogEntry on `log`
 };
 
 // ---------------------------------------------------------------------------------------
@@ -122,8 +122,7 @@ std::shared_ptr<Publisher<T>> Node::createPublisher(const std::string& topic,
 
 template <class T>
 std::shared_ptr<Subscription<T>> Node::createSubscription(
-    const std::string& topic, const QosProfile& qos,
-    typename Subscription<T>::Callback callback) {
+    const std::string& topic, const QosProfile& qos, typename Subscription<T>::Callback callback) {
   const QosProfile resolved = resolveQos(topic, qos);
   auto subscription = std::make_shared<Subscription<T>>(topic, resolved, std::move(callback));
   std::weak_ptr<Subscription<T>> weak = subscription;
@@ -137,24 +136,27 @@ std::shared_ptr<Subscription<T>> Node::createSubscription(
 }
 
 template <class T>
-std::shared_ptr<Subscription<T>> Node::createSubscription(
-    const std::string& topic, const QosProfile& qos, std::function<void(const T&)> callback) {
+std::shared_ptr<Subscription<T>> Node::createSubscription(const std::string& topic,
+                                                          const QosProfile& qos,
+                                                          std::function<void(const T&)> callback) {
   return createSubscription<T>(
-      topic, qos, typename Subscription<T>::Callback([cb = std::move(callback)](
-                      const T& message, const SampleInfo&) { cb(message); }));
+      topic, qos,
+      typename Subscription<T>::Callback(
+          [cb = std::move(callback)](const T& message, const SampleInfo&) { cb(message); }));
 }
 
 template <class Req, class Rep>
-std::shared_ptr<Service<Req, Rep>> Node::createService(
-    const std::string& name, typename Service<Req, Rep>::Handler handler, const QosProfile& qos) {
+std::shared_ptr<Service<Req, Rep>> Node::createService(const std::string& name,
+                                                       typename Service<Req, Rep>::Handler handler,
+                                                       const QosProfile& qos) {
   auto service = std::make_shared<Service<Req, Rep>>(name, std::move(handler));
   std::weak_ptr<Service<Req, Rep>> weak = service;
   std::weak_ptr<Waker> waker = waker_;
-  auto requests = participant_->createReader(name + "/request", typeSupport<Req>(), qos,
-                                             [weak, waker] {
-                                               if (auto s = weak.lock()) s->markReady();
-                                               if (auto w = waker.lock()) w->notify();
-                                             });
+  auto requests =
+      participant_->createReader(name + "/request", typeSupport<Req>(), qos, [weak, waker] {
+        if (auto s = weak.lock()) s->markReady();
+        if (auto w = waker.lock()) w->notify();
+      });
   service->attach(std::move(requests),
                   participant_->createWriter(name + "/reply", typeSupport<Rep>(), qos));
   addWaitable(service);

@@ -17,18 +17,18 @@ enum class Liveliness { AUTOMATIC, MANUAL_BY_TOPIC };
 
 /// A complete QoS profile. Durations in seconds; 0 means infinite where noted.
 struct QosProfile {
-  std::string name;                               ///< Profile name, e.g. "sensor_data".
+  std::string name;  ///< Profile name, e.g. "sensor_data".
   Reliability reliability = Reliability::RELIABLE;
   Durability durability = Durability::VOLATILE;
   History history = History::KEEP_LAST;
-  int32_t depth = 10;                             ///< History depth for KEEP_LAST (samples).
-  double deadline_s = 0.0;                        ///< Max period between samples; 0 = none.
+  int32_t depth = 10;       ///< History depth for KEEP_LAST (samples).
+  double deadline_s = 0.0;  ///< Max period between samples; 0 = none.
   Liveliness liveliness = Liveliness::AUTOMATIC;
-  double liveliness_lease_s = 0.0;                ///< Liveliness lease duration; 0 = infinite.
-  int32_t max_samples = -1;                       ///< Resource limit; -1 = unlimited.
-  int32_t max_instances = -1;                     ///< Resource limit; -1 = unlimited.
-  int32_t max_samples_per_instance = -1;          ///< Resource limit; -1 = unlimited.
-  double max_blocking_time_s = 0.1;               ///< How long a reliable write may block.
+  double liveliness_lease_s = 0.0;        ///< Liveliness lease duration; 0 = infinite.
+  int32_t max_samples = -1;               ///< Resource limit; -1 = unlimited.
+  int32_t max_instances = -1;             ///< Resource limit; -1 = unlimited.
+  int32_t max_samples_per_instance = -1;  ///< Resource limit; -1 = unlimited.
+  double max_blocking_time_s = 0.1;       ///< How long a reliable write may block.
 
   /// Throws std::invalid_argument naming the field when the profile is inconsistent
   /// (e.g. best effort + transient local, which delivers nothing historical across vendors).

@@ -40,7 +40,8 @@ class Service : public Waitable {
  public:
   using Handler = std::function<void(const Req& request, Rep& reply)>;
 
-  Service(std::string name, Handler handler) : name_(std::move(name)), handler_(std::move(handler)) {}
+  Service(std::string name, Handler handler)
+      : name_(std::move(name)), handler_(std::move(handler)) {}
   void attach(std::unique_ptr<DataReader> requests, std::unique_ptr<DataWriter> replies) {
     requests_ = std::move(requests);
     replies_ = std::move(replies);
@@ -114,7 +115,9 @@ class Client {
   }
 
   /// True once a service is matched in both directions (requests and replies).
-  bool serviceReady() const { return requests_->matchedReaders() > 0 && replies_->matchedWriters() > 0; }
+  bool serviceReady() const {
+    return requests_->matchedReaders() > 0 && replies_->matchedWriters() > 0;
+  }
   /// Waits until serviceReady() or `timeout`.
   bool waitForService(std::chrono::milliseconds timeout) const {
     const auto deadline = std::chrono::steady_clock::now() + timeout;
@@ -142,8 +145,8 @@ class Client {
     Req sent = request;
     std::future<Rep> future = send(sent, &sequence);
     const auto deadline = std::chrono::steady_clock::now() + remaining;
-    while (future.wait_until(std::min(deadline, std::chrono::steady_clock::now() + kResendPeriod)) !=
-           std::future_status::ready) {
+    while (future.wait_until(std::min(deadline, std::chrono::steady_clock::now() +
+                                                    kResendPeriod)) != std::future_status::ready) {
       if (std::chrono::steady_clock::now() >= deadline) {
         std::lock_guard<std::mutex> lock(mutex_);
         pending_.erase(sequence);
