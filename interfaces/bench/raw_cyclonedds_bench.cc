@@ -192,7 +192,11 @@ class Receiver {
     if (options_.dispatch == Dispatch::THREAD) {
       cv_.wait_for(lock, timeout, [this] { return pending_; });
       pending_ = false;
+      // Take without our mutex: the vendor calls the listener holding its reader lock, and
+      // the listener takes our mutex (lock order reader -> ours; never the reverse).
+      lock.unlock();
       drain();
+      lock.lock();
     } else {
       cv_.wait_for(lock, timeout);
     }

@@ -213,14 +213,19 @@ class Receiver {
     if (options_.dispatch == Dispatch::THREAD) {
       cv_.wait_for(lock, timeout, [this] { return pending_; });
       pending_ = false;
+      // Take without our mutex: the vendor calls the listener holding its reader lock, and
+      // the listener takes our mutex (lock order reader -> ours; never the reverse).
+      lock.unlock();
       drain();
+      lock.lock();
     } else {
       cv_.wait_for(lock, timeout);
     }
   }
   /// Wakes a waiting main thread (listener mode, after handling).
   void notify() { cv_.notify_all(); }
-  /// Takes every available sample into the reused sample and handles it (lock held).
+  /// Takes every available sample into the reused sample and handles it: in the listener
+  /// under our mutex (listener mode), or on the main thread without it (thread mode).
   void drain() {
     if (reader_ == nullptr) return;
     dds::SampleInfo info;

@@ -1,5 +1,7 @@
 #include "launch_description.h"
 
+#include "auv/interfaces/spelling.h"
+
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -47,22 +49,6 @@ const std::map<std::string, std::string>& keyAliases() {
   return aliases;
 }
 
-// Optimal string alignment distance (Levenshtein plus adjacent transpositions).
-size_t editDistance(const std::string& a, const std::string& b) {
-  std::vector<std::vector<size_t>> d(a.size() + 1, std::vector<size_t>(b.size() + 1));
-  for (size_t i = 0; i <= a.size(); ++i) d[i][0] = i;
-  for (size_t j = 0; j <= b.size(); ++j) d[0][j] = j;
-  for (size_t i = 1; i <= a.size(); ++i) {
-    for (size_t j = 1; j <= b.size(); ++j) {
-      const size_t cost = a[i - 1] == b[j - 1] ? 0 : 1;
-      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + cost});
-      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) {
-        d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
-      }
-    }
-  }
-  return d[a.size()][b.size()];
-}
 
 // Closest candidate to `word`, or "" when nothing is close enough to be a plausible typo.
 std::string suggest(const std::string& word, const std::vector<std::string>& candidates) {
@@ -80,7 +66,7 @@ std::string suggest(const std::string& word, const std::vector<std::string>& can
   for (const std::string& candidate : candidates) {
     std::string normalized = candidate;
     std::replace(normalized.begin(), normalized.end(), '-', '_');
-    const size_t distance = editDistance(lowered, normalized);
+    const size_t distance = interfaces::editDistance(lowered, normalized);
     if (distance < best_distance) {
       best_distance = distance;
       best = candidate;

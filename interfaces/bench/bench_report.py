@@ -1,0 +1,312 @@
+#!/usr/bin/env python3
+"""Parsing and reporting for run_bench.sh (middleware benchmark).
+
+Subcommands:
+  ddsperf-latency LOG SIZE        ddsperf ping output -> one RESULT line
+  ddsperf-throughput LOG SIZE QOS ddsperf sub output  -> one RESULT line
+  report RAW CSV MD               tagged RESULT lines -> CSV, markdown tables (also printed)
+
+RESULT lines are `RESULT key=value ...`; run_bench.sh prefixes each with test, impl and pair.
+Ratios are performance ratios (1.0 = parity, >= 0.9 is the goal): anchor latency / our
+latency, and our throughput / anchor throughput.
+"""
+
+import csv
+import re
+import sys
+
+GOAL = 0.9
+
+
+def parse_result(line):
+    """`RESULT a=1 b=x` -> {'a': '1', 'b': 'x'} (None if not a RESULT line)."""
+    line = line.strip()
+    if not line.startswith("RESULT"):
+        return None
+    fields = {}
+    for token in line.split()[1:]:
+        key, _, value = token.partition("=")
+        fields[key] = value
+    return fields
+
+
+def result_line(fields):
+    return "RESULT " + " ".join(f"{k}={v}" for k, v in fields.items())
+
+
+# ddsperf ping prints per second (one-way = RTT/2):
+# [pid] 2.000  host:pid size 1024 mean 11.5us min 5.1us 50% 12.5us 90% 14.9us 99% 20.0us max 421.8us cnt 42859
+LAT_RE = re.compile(r"^\[\d+\]\s+([\d.]+)\s+\S+\s+size\s+(\d+)\s+mean\s+([\d.]+)(us|ms|s)\s+"
+                    r"min\s+([\d.]+)(us|ms|s)\s+50%\s+([\d.]+)(us|ms|s)\s+90%\s+([\d.]+)(us|ms|s)\s+"
+                    r"99%\s+([\d.]+)(us|ms|s)\s+max\s+([\d.]+)(us|ms|s)\s+cnt\s+(\d+)")
+UNIT_US = {"us": 1.0, "ms": 1e3, "s": 1e6}
+
+
+def ddsperf_latency(log, size):
+    intervals = []
+    with open(log, errors="replace") as f:
+        for line in f:
+            m = LAT_RE.match(line)
+            if not m:
+                continue
+            g = m.groups()
+            cnt = int(g[14])
+            if cnt == 0:
+                continue
+            intervals.append({
+                "t": float(g[0]),
+                "mean": float(g[2]) * UNIT_US[g[3]],
+                "min": float(g[4]) * UNIT_US[g[5]],
+                "p50": float(g[6]) * UNIT_US[g[7]],
+                "p90": float(g[8]) * UNIT_US[g[9]],
+                "p99": float(g[10]) * UNIT_US[g[11]],
+                "max": float(g[12]) * UNIT_US[g[13]],
+                "cnt": cnt,
+            })
+    fields = {"tool": "ddsperf", "vendor": "cyclonedds", "role": "ping", "qos": "command",
+              "size": str(size)}
+    if not intervals:
+        fields["status"] = "no_data"
+        return result_line(fields)
+    total = sum(i["cnt"] for i in intervals)
+    # ddsperf reports per-second percentiles only: combine them weighted by count.
+    wavg = lambda k: sum(i[k] * i["cnt"] for i in intervals) / total
+    span = max(1.0, len(intervals))  # each interval is one second
+    fields.update({
+        "status": "ok", "count": str(total), "intervals": str(len(intervals)),
+        "rtt_min_us": f"{2 * min(i['min'] for i in intervals):.3f}",
+        "rtt_mean_us": f"{2 * wavg('mean'):.3f}",
+        "rtt_median_us": f"{2 * wavg('p50'):.3f}",
+        "rtt_p90_us": f"{2 * wavg('p90'):.3f}",
+        "rtt_p99_us": f"{2 * wavg('p99'):.3f}",
+        "rtt_max_us": f"{2 * max(i['max'] for i in intervals):.3f}",
+        "oneway_median_us": f"{wavg('p50'):.3f}",
+        "oneway_p90_us": f"{wavg('p90'):.3f}",
+        "roundtrips_per_s": f"{total / span:.1f}",
+    })
+    return result_line(fields)
+
+
+# ddsperf sub prints per second (cumulative total/lost, then this interval's delta/lost):
+# [pid] 2.000  size 16384 total 187168 lost 8678 delta 114418 lost 4716 rate 114.42 kS/s ...
+THR_RE = re.compile(r"^\[\d+\]\s+([\d.]+)\s+size\s+(\d+)\s+total\s+(\d+)\s+lost\s+(\d+)\s+"
+                    r"delta\s+(\d+)\s+lost\s+(\d+)\s+rate")
+
+
+def ddsperf_throughput(log, size, qos):
+    lines = []
+    with open(log, errors="replace") as f:
+        for line in f:
+            if ": gone" in line and lines:
+                break  # the publisher left: later intervals are partial
+            m = THR_RE.match(line)
+            if m:
+                t, _, total, lost, delta, dlost = m.groups()
+                lines.append((float(t), int(total), int(lost), int(delta), int(dlost)))
+    data = [l for l in lines if l[3] > 0]
+    fields = {"tool": "ddsperf", "vendor": "cyclonedds", "role": "sub", "qos": qos,
+              "size": str(size)}
+    if not data:
+        fields["status"] = "no_data"
+        return result_line(fields)
+    # Drop the first interval (discovery, ramp-up), as our sub drops its first sub_warmup_s;
+    # intervals after the publisher left were cut off above.
+    steady = data[1:] if len(data) >= 2 else data
+    received = sum(l[3] for l in steady)
+    lost = sum(l[4] for l in steady)
+    window = steady[-1][0] - steady[0][0] + 1.0  # intervals are one second each
+    rate = received / window
+    fields.update({
+        "status": "ok", "received": str(data[-1][1]), "counted": str(received),
+        "lost": str(lost),
+        "loss_pct": f"{100.0 * lost / (received + lost) if received + lost else 0:.2f}",
+        "window_s": f"{window:.3f}", "msgs_per_s": f"{rate:.1f}",
+        "mb_per_s": f"{rate * size / 1e6:.2f}",
+    })
+    return result_line(fields)
+
+
+# ---------------------------------------------------------------------------------------
+# Report
+
+SIZE_NAMES = {64: "64 B", 1024: "1 KiB", 16384: "16 KiB", 262144: "256 KiB", 4194304: "4 MiB"}
+PAIRS = ["cyclonedds->cyclonedds", "fastdds->fastdds", "fastdds->cyclonedds",
+         "cyclonedds->fastdds"]
+
+
+def size_name(n):
+    n = int(n)
+    if n in SIZE_NAMES:
+        return SIZE_NAMES[n]
+    return f"{n} B"
+
+
+def num(r, key):
+    try:
+        return float(r[key])
+    except (KeyError, ValueError, TypeError):
+        return None
+
+
+def ratio_text(value):
+    if value is None:
+        return "n/a"
+    return f"{value:.2f}" + ("" if value >= GOAL else " ✗")
+
+
+def fmt_us(v):
+    if v is None:
+        return "n/a"
+    return f"{v:.1f}" if v < 1000 else f"{v:,.0f}"
+
+
+def fmt_rate(v):
+    return "n/a" if v is None else f"{v:,.0f}"
+
+
+def ok(r):
+    return r is not None and r.get("status") == "ok"
+
+
+def find(rows, test, impl, pair, size, qos=None, dispatch=None):
+    for r in rows:
+        if (r.get("test") == test and r.get("impl") == impl and r.get("pair") == pair
+                and r.get("size") == size and (qos is None or r.get("qos") == qos)
+                and (dispatch is None or r.get("dispatch", "listener") == dispatch)):
+            return r
+    return None
+
+
+def latency_table(rows, sizes):
+    out = ["| size | pair (ping->pong) | ours one-way median µs | ours p90 µs | raw anchor | "
+           "raw median µs | ratio | raw (thread) median µs | ratio | ddsperf median µs | ratio |",
+           "|---|---|---:|---:|---|---:|---:|---:|---:|---:|---:|"]
+    for size in sizes:
+        for pair in PAIRS:
+            ours = find(rows, "latency", "ours", pair, size)
+            if ours is None:
+                continue
+            o = num(ours, "oneway_median_us") if ok(ours) else None
+            raw = find(rows, "latency", "raw", pair, size, dispatch="listener")
+            thr = find(rows, "latency", "raw", pair, size, dispatch="thread")
+            dp = find(rows, "latency", "ddsperf", pair, size)
+            raw_tool = "-"
+            if raw is not None:
+                raw_tool = pair.replace("cyclonedds", "raw_cyclone").replace("fastdds", "raw_fastdds")
+            def cell(r):
+                v = num(r, "oneway_median_us") if ok(r) else None
+                rat = v / o if (v is not None and o) else None
+                if r is None:
+                    return "-", "-"
+                return fmt_us(v), ratio_text(rat)
+            rv, rr = cell(raw)
+            tv, tr = cell(thr)
+            dv, dr = cell(dp)
+            status = "" if ok(ours) else f" ({ours.get('status')})"
+            out.append(f"| {size_name(size)} | {pair} | {fmt_us(o)}{status} | "
+                       f"{fmt_us(num(ours, 'oneway_p90_us') if ok(ours) else None)} | {raw_tool} | "
+                       f"{rv} | {rr} | {tv} | {tr} | {dv} | {dr} |")
+    return "\n".join(out)
+
+
+def throughput_table(rows, sizes, qos):
+    out = ["| size | pair (pub->sub) | ours msg/s | ours MB/s | ours loss % | raw msg/s | "
+           "raw loss % | ratio | ddsperf msg/s | ddsperf loss % | ratio |",
+           "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    for size in sizes:
+        for pair in PAIRS:
+            ours = find(rows, "throughput", "ours", pair, size, qos)
+            if ours is None:
+                continue
+            o = num(ours, "msgs_per_s") if ok(ours) else None
+            def cell(r):
+                if r is None:
+                    return "-", "-", "-"
+                v = num(r, "msgs_per_s") if ok(r) else None
+                rat = o / v if (v and o is not None) else None
+                loss = num(r, "loss_pct") if ok(r) else None
+                return fmt_rate(v), "n/a" if loss is None else f"{loss:.1f}", ratio_text(rat)
+            rv, rl, rr = cell(find(rows, "throughput", "raw", pair, size, qos))
+            dv, dl, dr = cell(find(rows, "throughput", "ddsperf", pair, size, qos))
+            loss = num(ours, "loss_pct") if ok(ours) else None
+            status = "" if ok(ours) else f" ({ours.get('status')})"
+            out.append(f"| {size_name(size)} | {pair} | {fmt_rate(o)}{status} | "
+                       f"{'n/a' if not ok(ours) else ours.get('mb_per_s')} | "
+                       f"{'n/a' if loss is None else f'{loss:.1f}'} | {rv} | {rl} | {rr} | "
+                       f"{dv} | {dl} | {dr} |")
+    return "\n".join(out)
+
+
+CSV_FIELDS = ["test", "impl", "pair", "dispatch", "qos", "size", "status", "count",
+              "rtt_median_us", "rtt_p90_us", "rtt_p99_us", "oneway_median_us", "oneway_p90_us",
+              "roundtrips_per_s", "sent", "received", "counted", "lost", "loss_pct",
+              "window_s", "msgs_per_s", "mb_per_s", "tool", "domain"]
+
+
+def report(raw, csv_path, md_path):
+    rows = []
+    meta = {}
+    with open(raw) as f:
+        for line in f:
+            if line.startswith("#"):
+                key, _, value = line[1:].strip().partition(":")
+                meta[key.strip()] = value.strip()
+                continue
+            r = parse_result(line)
+            if r is not None:
+                rows.append(r)
+    with open(csv_path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=CSV_FIELDS, extrasaction="ignore")
+        w.writeheader()
+        for r in rows:
+            w.writerow(r)
+    sizes = sorted({r["size"] for r in rows if r.get("impl") == "ours"}, key=int)
+    md = []
+    if meta:
+        md.append("Run: " + "; ".join(f"{k}: {v}" for k, v in meta.items()))
+        md.append("")
+    md.append("### Round-trip latency (`command` profile: reliable, keep-last 10)")
+    md.append("")
+    md.append("One-way = RTT/2, medians over the measured round trips (ddsperf: count-weighted "
+              "mean of its per-second medians). Ratio = anchor / ours (1.0 = parity; ✗ below "
+              f"{GOAL}).")
+    md.append("")
+    md.append(latency_table(rows, sizes))
+    for qos, title in (("command", "reliable, keep-last 10"), ("sensor_data", "best effort, keep-last 5")):
+        if not any(r.get("qos") == qos and r.get("test") == "throughput" for r in rows):
+            continue
+        md.append("")
+        md.append(f"### Throughput, `{qos}` profile ({title}), publisher unthrottled")
+        md.append("")
+        md.append("Samples delivered per second to the subscriber's application in the steady "
+                  "window; loss = sequence gaps. Ratio = ours / anchor.")
+        md.append("")
+        md.append(throughput_table(rows, sizes, qos))
+    text = "\n".join(md) + "\n"
+    with open(md_path, "w") as f:
+        f.write(text)
+    print(text)
+    below = []
+    for r in rows:
+        if r.get("impl") == "ours" and not ok(r):
+            below.append(f"{r.get('test')} {r.get('pair')} {r.get('qos')} {r.get('size')}: "
+                         f"{r.get('status')}")
+    if below:
+        print("Failed measurements:\n  " + "\n  ".join(below))
+
+
+def main(argv):
+    if len(argv) >= 3 and argv[0] == "ddsperf-latency":
+        print(ddsperf_latency(argv[1], int(argv[2])))
+    elif len(argv) >= 4 and argv[0] == "ddsperf-throughput":
+        print(ddsperf_throughput(argv[1], int(argv[2]), argv[3]))
+    elif len(argv) >= 4 and argv[0] == "report":
+        report(argv[1], argv[2], argv[3])
+    else:
+        sys.stderr.write(__doc__)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
