@@ -244,6 +244,9 @@ uint64_t PingSession::startPing() {
   outstanding_ = next_sequence_++;
   awaiting_ = true;
   sent_ns_ = nowNs();
+  if (first_ping_ns_ == 0) first_ping_ns_ = sent_ns_;
+  if (measure_start_ns_ == 0 && sent_ns_ - first_ping_ns_ > kMaxWarmupS * 1e9)
+    measure_start_ns_ = sent_ns_;
   return outstanding_;
 }
 

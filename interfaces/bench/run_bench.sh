@@ -8,8 +8,11 @@
 #   /work/shared/tools/no-external-traffic interfaces/bench/run_bench.sh
 #
 # Usage: run_bench.sh [--full] [--sizes "64 1k 16k 256k 4M"] [--only latency|throughput]
-#                     [--build-dir DIR] [--out DIR] [--skip-build]
+#                     [--build-dir DIR] [--out DIR] [--skip-build] [--no-pin]
 # Default: a short run (about 6 minutes on 2 cores); --full: 10x the samples and durations.
+# The two processes of a pair are pinned to CPUs 0 and 1 (taskset) unless --no-pin: on a
+# 2-core machine this cuts the run-to-run spread of the throughput figures from about +-50 %
+# to about +-10 %.
 # Results: <workspace>/bench_results/dds_bench_<stamp>.{raw,csv,md} plus logs/; the markdown
 # tables are printed at the end with the ratio ours/anchor per row.
 set -uo pipefail
@@ -20,10 +23,11 @@ BUILD_DIR="${TMPDIR:-/tmp}/auv_bench_build"
 OUT_DIR="$WS/bench_results"
 FULL=0
 SKIP_BUILD=0
+PIN=1
 ONLY=""
 SIZES_ARG="64 1k 16k 256k 4M"
 
-usage() { sed -n '2,16p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; }
+usage() { sed -n '2,19p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; }
 
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -33,6 +37,7 @@ while [ $# -gt 0 ]; do
     --build-dir) BUILD_DIR="$2"; shift ;;
     --out) OUT_DIR="$2"; shift ;;
     --skip-build) SKIP_BUILD=1 ;;
+    --no-pin) PIN=0 ;;
     -h|--help) usage; exit 0 ;;
     *) echo "run_bench: unknown option '$1'" >&2; usage >&2; exit 2 ;;
   esac
@@ -70,6 +75,14 @@ ping_count() {
   esac
   echo $((base * SCALE))
 }
+
+# Server (pong/sub) on CPU 1, client (ping/pub) on CPU 0.
+PIN_SERVER=(); PIN_CLIENT=()
+if [ $PIN -eq 1 ] && [ "$(nproc)" -ge 2 ] && command -v taskset >/dev/null; then
+  PIN_SERVER=(taskset -c 1); PIN_CLIENT=(taskset -c 0)
+else
+  PIN=0
+fi
 
 # Our layer and the raw programs use their built-in loopback settings: no user configuration.
 unset CYCLONEDDS_URI FASTRTPS_DEFAULT_PROFILES_FILE AUV_DDS AUV_DOMAIN_ID
@@ -110,7 +123,8 @@ MD="$OUT_DIR/dds_bench_$STAMP.md"
   echo "# host: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//'), Linux $(uname -r)"
   echo "# versions: Fast DDS $(dpkg-query -W -f='${Version}' libfastrtps2.9 2>/dev/null || echo '?'), Cyclone DDS $(dpkg-query -W -f='${Version}' libddsc0debian 2>/dev/null || echo '?')"
   echo "# workspace commit: $(git -C "$WS" rev-parse --short HEAD 2>/dev/null || echo '?')$(git -C "$WS" diff --quiet 2>/dev/null || echo ' (modified)')"
-  echo "# mode: $([ $FULL -eq 1 ] && echo full || echo default) (ping cap ${PING_CAP} s, pub ${PUB_SECS} s, ddsperf ping ${DDSPERF_PING_SECS} s)"
+  echo "# mode: $([ $FULL -eq 1 ] && echo full || echo default) (ping cap ${PING_CAP} s, pub ${PUB_SECS} s, ddsperf ping ${DDSPERF_PING_SECS} s), $([ $PIN -eq 1 ] && echo 'pinned: client CPU 0, server CPU 1' || echo 'not pinned')"
+  echo "# load average at start: $(cut -d' ' -f1-3 /proc/loadavg)"
 } >"$RAW"
 
 START=$(date +%s)
@@ -134,9 +148,9 @@ run_pair() {
   local test="$1" impl="$2" pair="$3" dispatch="$4" qos="$5" size="$6"
   RUN=$((RUN + 1))
   local log="$LOG_DIR/$(printf %03d $RUN)_${test}_${impl}_${pair/->/_to_}_${dispatch}_${qos}_${size}"
-  timeout "$PROC_TIMEOUT" "${SERVER[@]}" >"$log.server.out" 2>"$log.server.err" &
+  "${PIN_SERVER[@]}" timeout "$PROC_TIMEOUT" "${SERVER[@]}" >"$log.server.out" 2>"$log.server.err" &
   local server_pid=$!
-  timeout "$PROC_TIMEOUT" "${CLIENT[@]}" >"$log.client.out" 2>"$log.client.err"
+  "${PIN_CLIENT[@]}" timeout "$PROC_TIMEOUT" "${CLIENT[@]}" >"$log.client.out" 2>"$log.client.err"
   local client_rc=$?
   wait "$server_pid"
   local server_rc=$?
@@ -157,10 +171,10 @@ run_ddsperf_latency() {  # SIZE DOMAIN
   local size="$1" domain="$2"
   RUN=$((RUN + 1))
   local log="$LOG_DIR/$(printf %03d $RUN)_latency_ddsperf_${size}"
-  CYCLONEDDS_URI="$DDSPERF_URI" timeout "$PROC_TIMEOUT" \
+  CYCLONEDDS_URI="$DDSPERF_URI" "${PIN_SERVER[@]}" timeout "$PROC_TIMEOUT" \
     ddsperf -i "$domain" -D $((DDSPERF_PING_SECS + 2)) pong >"$log.server.out" 2>&1 &
   local server_pid=$!
-  CYCLONEDDS_URI="$DDSPERF_URI" timeout "$PROC_TIMEOUT" \
+  CYCLONEDDS_URI="$DDSPERF_URI" "${PIN_CLIENT[@]}" timeout "$PROC_TIMEOUT" \
     ddsperf -i "$domain" -D "$DDSPERF_PING_SECS" ping size "$size" >"$log.client.out" 2>&1
   kill "$server_pid" 2>/dev/null; wait "$server_pid" 2>/dev/null
   record "test=latency impl=ddsperf pair=cyclonedds->cyclonedds dispatch=listener" \
@@ -175,11 +189,11 @@ run_ddsperf_throughput() {  # SIZE DOMAIN QOS
   # One second more publishing than ours: ddsperf reports whole seconds and the first one
   # is dropped as partial (ramp-up).
   local pub_secs=$((PUB_SECS + 1))
-  CYCLONEDDS_URI="$DDSPERF_URI" timeout "$PROC_TIMEOUT" \
+  CYCLONEDDS_URI="$DDSPERF_URI" "${PIN_SERVER[@]}" timeout "$PROC_TIMEOUT" \
     ddsperf -i "$domain" -D $((pub_secs + 10)) "${flags[@]}" sub >"$log.server.out" 2>&1 &
   local server_pid=$!
   sleep 0.2
-  CYCLONEDDS_URI="$DDSPERF_URI" timeout "$PROC_TIMEOUT" \
+  CYCLONEDDS_URI="$DDSPERF_URI" "${PIN_CLIENT[@]}" timeout "$PROC_TIMEOUT" \
     ddsperf -i "$domain" -D "$pub_secs" "${flags[@]}" pub size "$size" >"$log.client.out" 2>&1
   sleep 1.2  # the sub prints its last interval and notices the publisher leave
   kill -TERM "$server_pid" 2>/dev/null
@@ -241,7 +255,7 @@ if [ "$ONLY" != latency ]; then
       i=0
       for c in "${TP_CONFIGS[@]}"; do
         read -r impl a b dispatch <<<"$c"
-        domain=$((212 + 10 * q + i)); i=$((i + 1))
+        domain=$((211 + 9 * q + i)); i=$((i + 1))
         common=(--qos "$qos" --size "$size" --domain "$domain" --timeout $((PROC_TIMEOUT - 5)))
         read -r -a SERVER <<<"$(bin_of "$impl" "$b")"
         SERVER+=(--role sub "${common[@]}")
@@ -249,12 +263,12 @@ if [ "$ONLY" != latency ]; then
         CLIENT+=(--role pub "${common[@]}" --duration "$PUB_SECS")
         run_pair throughput "$impl" "$a->$b" "${dispatch/-/executor}" "$qos" "$size"
       done
-      [ $HAVE_DDSPERF -eq 1 ] && run_ddsperf_throughput "$size" $((212 + 10 * q + i)) "$qos"
+      [ $HAVE_DDSPERF -eq 1 ] && run_ddsperf_throughput "$size" $((211 + 9 * q + i)) "$qos"
       q=$((q + 1))
     done
   done
 fi
 
-echo "# elapsed: $(($(date +%s) - START)) s" >>"$RAW"
+echo "# elapsed: $(($(date +%s) - START)) s; load average at end: $(cut -d' ' -f1-3 /proc/loadavg)" >>"$RAW"
 python3 "$BENCH_DIR/bench_report.py" report "$RAW" "$CSV" "$MD"
 echo "run_bench: $(($(date +%s) - START)) s; results in $CSV and $MD (raw: $RAW, logs: $LOG_DIR)" >&2

@@ -50,7 +50,14 @@ std::vector<fs::path> pluginDirectories() {
   split(std::getenv("AUV_COMPONENT_PATH"), "");
   std::error_code ec;
   const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec) dirs.push_back(exe.parent_path().parent_path() / "lib" / "auv_components");
+  if (!ec) {
+    // Merged colcon install: <prefix>/bin/auv next to <prefix>/lib/auv_components.
+    const fs::path prefix = exe.parent_path().parent_path();
+    dirs.push_back(prefix / "lib" / "auv_components");
+    // Isolated colcon install: install/auv_bringup/bin/auv, install/<package>/lib/...
+    for (const auto& sibling : fs::directory_iterator(prefix.parent_path(), ec))
+      dirs.push_back(sibling.path() / "lib" / "auv_components");
+  }
   split(std::getenv("CMAKE_PREFIX_PATH"), "lib/auv_components");
   return dirs;
 }

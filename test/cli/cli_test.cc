@@ -150,7 +150,7 @@ TEST(CliTest, LateJoinerOfOtherVendorGetsLatchedStatus) {
   Background listener(env("cyclonedds", 176), "run demo_listener:latched");
   const Result pub =
       run(env("fastdds", 176),
-          "topic pub /chatter String '{data: ping}' --times 3 --rate 5 --wait-matching 20");
+          "topic pub /chatter String '{data: ping}' --times 5 --rate 5 --wait-matching 20");
   ASSERT_EQ(pub.exit_code, 0) << pub.out;
   std::this_thread::sleep_for(500ms);
   const Result echo =

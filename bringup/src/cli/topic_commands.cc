@@ -400,6 +400,10 @@ int topicPub(const Args& args) {
   while (writer->matchedReaders() == 0 && Clock::now() < match_deadline &&
          !interfaces::Executor::signalled())
     std::this_thread::sleep_for(20ms);
+  // Discovery is asymmetric: this writer may see a reader before that reader sees this
+  // writer, and a volatile reader that matches late treats earlier samples as history it is
+  // not owed (it acknowledges them unread). A short settle time avoids losing the first ones.
+  if (writer->matchedReaders() > 0) std::this_thread::sleep_for(500ms);
   YAML::Emitter echo;
   echo << type.to_yaml(sample.get());
   std::cout << "publisher: beginning loop\n";
@@ -413,8 +417,10 @@ int topicPub(const Args& args) {
     next += period;
     std::this_thread::sleep_until(next);
   }
-  if (qos.reliability == Reliability::RELIABLE)
-    std::this_thread::sleep_for(300ms);  // let acks flow
+  // Reliable: stay until subscribers acknowledged (a subscriber of the other vendor may
+  // still be completing discovery of this writer when the samples go out).
+  if (qos.reliability == Reliability::RELIABLE && !writer->waitForAcknowledgments(5.0))
+    std::cerr << "auv topic: warning: not every subscriber acknowledged within 5 s\n";
   return 0;
 }
 

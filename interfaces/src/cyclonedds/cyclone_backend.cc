@@ -102,6 +102,9 @@ class CycloneWriter : public DataWriter {
                ? static_cast<int>(status.current_count)
                : 0;
   }
+  bool waitForAcknowledgments(double timeout_s) override {
+    return dds_wait_for_acks(writer_, static_cast<dds_duration_t>(timeout_s * 1e9)) == 0;
+  }
   Guid guid() const override { return guidOf(writer_); }
 
  private:

@@ -88,6 +88,10 @@ class FastddsWriter : public DataWriter {
                ? status.current_count
                : 0;
   }
+  bool waitForAcknowledgments(double timeout_s) override {
+    return writer_->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(timeout_s)) ==
+           ReturnCode_t::RETCODE_OK;
+  }
   Guid guid() const override { return toGuid(writer_->guid()); }
 
  private:

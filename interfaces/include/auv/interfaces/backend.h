@@ -44,6 +44,9 @@ class DataWriter {
   virtual void write(const void* sample) = 0;
   /// Number of currently matched readers (both vendors).
   virtual int matchedReaders() const = 0;
+  /// Waits until every matched reliable reader acknowledged what was written; false on
+  /// timeout. Lets a short-lived writer (e.g. `auv topic pub --times n`) exit without loss.
+  virtual bool waitForAcknowledgments(double timeout_s) = 0;
   virtual Guid guid() const = 0;
 };
 

@@ -48,8 +48,9 @@ class ComponentRegistry {
   const ComponentInfo* find(const std::string& name) const;
   std::vector<ComponentInfo> list() const;
   /// Loads every component library (lib*_components.so) found in AUV_COMPONENT_PATH, in
-  /// `lib/auv_components` next to the running executable's prefix, and under each
-  /// CMAKE_PREFIX_PATH entry; returns the files loaded. Errors name the library.
+  /// `lib/auv_components` of the running executable's prefix and of its sibling prefixes
+  /// (an isolated colcon install), and under each CMAKE_PREFIX_PATH entry; returns the
+  /// files loaded. Errors name the library.
   std::vector<std::string> loadPlugins();
 
  private:

@@ -17,6 +17,8 @@ class Publisher {
   void publish(const T& message) { writer_->write(&message); }
   /// Subscriptions currently matched, of both vendors.
   int matchedSubscriptions() const { return writer_->matchedReaders(); }
+  /// Waits until matched reliable subscriptions acknowledged everything; false on timeout.
+  bool waitForAcknowledgments(double timeout_s) { return writer_->waitForAcknowledgments(timeout_s); }
   const std::string& topic() const { return topic_; }
   const QosProfile& qos() const { return qos_; }
   Guid guid() const { return writer_->guid(); }
