@@ -42,13 +42,13 @@ struct BenchOptions {
   Dispatch dispatch = Dispatch::LISTENER;  ///< Raw programs only.
   uint32_t size = 1024;                    ///< Bytes in the message's `data` sequence.
   int count = 1000;                        ///< Ping: measured round trips.
-  int warmup = 100;                   ///< Ping: unmeasured round trips first (at most kMaxWarmupS).
-  double duration_s = 3.0;                 ///< Pub: seconds of publishing; ping: cap on measuring.
-  double sub_warmup_s = 0.5;               ///< Sub: seconds after the first sample not counted.
-  double timeout_s = 30.0;                 ///< Matching deadline, and pong/sub overall deadline, s.
-  double ping_timeout_s = 2.0;             ///< Ping: a round trip slower than this is lost, s.
-  double idle_timeout_s = 2.0;             ///< Sub: ends this long after the last sample, s.
-  int domain = 200;                        ///< DDS domain id, 0..232.
+  int warmup = 100;             ///< Ping: unmeasured round trips first (at most kMaxWarmupS).
+  double duration_s = 3.0;      ///< Pub: seconds of publishing; ping: cap on measuring.
+  double sub_warmup_s = 0.5;    ///< Sub: seconds after the first sample not counted.
+  double timeout_s = 30.0;      ///< Matching deadline, and pong/sub overall deadline, s.
+  double ping_timeout_s = 2.0;  ///< Ping: a round trip slower than this is lost, s.
+  double idle_timeout_s = 2.0;  ///< Sub: ends this long after the last sample, s.
+  int domain = 200;             ///< DDS domain id, 0..232.
   std::string topic = "bench";  ///< Topic prefix: <topic>/ping, <topic>/pong, <topic>/data.
 
   /// Throws std::invalid_argument naming the field and value when an option is out of range.

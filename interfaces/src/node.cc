@@ -85,24 +85,23 @@ Node::Node(const std::string& name, const NodeOptions& options)
   if (use_sim_time) {
     static const msg::TypeSupport clock_type = msg::makeTypeSupport<msg::Clock>();
     // Taken in the DDS thread so time advances even while a callback runs.
-    clock_reader_ = participant_->createReader("clock", clock_type, clockQos(), [this] {
-      msg::Clock sample;
-      bool advanced = false;
-      while (clock_ready_ && clock_reader_->take(&sample, nullptr)) {
-        clock_->setSimulationTime(static_cast<int64_t>(sample.sim_time().sec()) * 1000000000LL +
-                                  sample.sim_time().nanosec());
-        advanced = true;
-      }
-      if (advanced) waker_->notify();
-    });
-    clock_ready_ = true;  // the listener may fire before clock_reader_ is assigned
-    waker_->notify();
+    clock_reader_ = participant_->createReader(
+        "clock", clock_type, clockQos(), [this](DataReader& reader) {
+          msg::Clock sample;
+          bool advanced = false;
+          while (reader.take(&sample, nullptr)) {
+            clock_->setSimulationTime(static_cast<int64_t>(sample.sim_time().sec()) *
+                                          1000000000LL +
+                                      sample.sim_time().nanosec());
+            advanced = true;
+          }
+          if (advanced) waker_->notify();
+        });
   }
 }
 
 Node::~Node() {
   logger_.setSink(nullptr);
-  clock_ready_ = false;
   clock_reader_.reset();
   log_writer_.reset();
 }

@@ -64,7 +64,7 @@ struct Talker {
   Talker(Vendor vendor, int domain) {
     participant = createParticipant(vendor, {domain, "talker"});
     writer = participant->createWriter(kTopic, testType(), writerQos());
-    reader = participant->createReader(kTopic, testType(), readerQos(), [] {});
+    reader = participant->createReader(kTopic, testType(), readerQos(), [](DataReader&) {});
   }
   std::unique_ptr<Participant> participant;
   std::unique_ptr<DataWriter> writer;

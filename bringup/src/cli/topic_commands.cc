@@ -99,7 +99,7 @@ class GenericReader {
                                           {interfaces::domainFromEnvironment(), "_auv_cli"})),
         topic_data_type_(type.make_topic_data_type()) {
     std::weak_ptr<interfaces::Waker> waker = waker_;
-    reader_ = participant_->createReader(topic, type, qos, [waker] {
+    reader_ = participant_->createReader(topic, type, qos, [waker](interfaces::DataReader&) {
       if (auto w = waker.lock()) w->notify();
     });
   }

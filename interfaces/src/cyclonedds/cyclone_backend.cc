@@ -113,7 +113,7 @@ class CycloneWriter : public DataWriter {
 
 class CycloneReader : public DataReader {
  public:
-  CycloneReader(std::function<void()> on_data) : on_data_(std::move(on_data)) {}
+  explicit CycloneReader(DataCallback on_data) : on_data_(std::move(on_data)) {}
   ~CycloneReader() override {
     if (reader_ > 0) dds_delete(reader_);
   }
@@ -146,11 +146,11 @@ class CycloneReader : public DataReader {
   Guid guid() const override { return guidOf(reader_); }
   static void onDataAvailable(dds_entity_t, void* arg) {
     auto* self = static_cast<CycloneReader*>(arg);
-    if (self->on_data_) self->on_data_();
+    if (self->on_data_) self->on_data_(*self);
   }
 
  private:
-  std::function<void()> on_data_;
+  DataCallback on_data_;
   dds_entity_t reader_ = 0;
 };
 
@@ -182,7 +182,7 @@ class CycloneParticipant : public Participant {
 
   std::unique_ptr<DataReader> createReader(const std::string& topic, const msg::TypeSupport& type,
                                            const QosProfile& qos,
-                                           std::function<void()> on_data) override {
+                                           DataCallback on_data) override {
     const dds_entity_t t = createTopic(topic, type);
     QosPtr q = toCycloneQos(qos);
     auto reader = std::make_unique<CycloneReader>(std::move(on_data));

@@ -72,11 +72,24 @@ Guid toGuid(const eprosima::fastrtps::rtps::GUID_t& g) {
   return guid;
 }
 
+// The participant with its one publisher and subscriber. Shared by the participant and every
+// reader/writer, so a reader or writer that outlives its Node still deletes itself safely.
+struct DomainEntities {
+  dds::DomainParticipant* participant = nullptr;
+  dds::Publisher* publisher = nullptr;
+  dds::Subscriber* subscriber = nullptr;
+  ~DomainEntities() {
+    if (participant == nullptr) return;
+    participant->delete_contained_entities();
+    dds::DomainParticipantFactory::get_instance()->delete_participant(participant);
+  }
+};
+
 class FastddsWriter : public DataWriter {
  public:
-  FastddsWriter(dds::Publisher* publisher, dds::DataWriter* writer)
-      : publisher_(publisher), writer_(writer) {}
-  ~FastddsWriter() override { publisher_->delete_datawriter(writer_); }
+  FastddsWriter(std::shared_ptr<DomainEntities> domain, dds::DataWriter* writer)
+      : domain_(std::move(domain)), writer_(writer) {}
+  ~FastddsWriter() override { domain_->publisher->delete_datawriter(writer_); }
   void write(const void* sample) override {
     if (!writer_->write(const_cast<void*>(sample)))
       throw std::runtime_error("fastdds: write on '" + writer_->get_topic()->get_name() +
@@ -95,21 +108,28 @@ class FastddsWriter : public DataWriter {
   Guid guid() const override { return toGuid(writer_->guid()); }
 
  private:
-  dds::Publisher* publisher_;
+  std::shared_ptr<DomainEntities> domain_;
   dds::DataWriter* writer_;
 };
 
 class FastddsReader : public DataReader, public dds::DataReaderListener {
  public:
-  explicit FastddsReader(std::function<void()> on_data) : on_data_(std::move(on_data)) {}
+  explicit FastddsReader(DataCallback on_data) : on_data_(std::move(on_data)) {}
   ~FastddsReader() override {
+    {
+      // Fast DDS 2.9 may still be inside on_data_available after set_listener(nullptr):
+      // wait for a running callback and keep new ones out before the reader goes.
+      std::lock_guard<std::mutex> lock(callback_mutex_);
+      closed_ = true;
+    }
     if (reader_ != nullptr) {
       reader_->set_listener(nullptr);
-      subscriber_->delete_datareader(reader_);
+      domain_->subscriber->delete_datareader(reader_);
     }
   }
-  void attach(dds::Subscriber* subscriber, dds::DataReader* reader) {
-    subscriber_ = subscriber;
+  void attach(std::shared_ptr<DomainEntities> domain, dds::DataReader* reader) {
+    std::lock_guard<std::mutex> lock(callback_mutex_);
+    domain_ = std::move(domain);
     reader_ = reader;
   }
   bool take(void* sample, SampleInfo* info) override {
@@ -134,12 +154,15 @@ class FastddsReader : public DataReader, public dds::DataReaderListener {
   }
   Guid guid() const override { return toGuid(reader_->guid()); }
   void on_data_available(dds::DataReader*) override {
-    if (on_data_) on_data_();
+    std::lock_guard<std::mutex> lock(callback_mutex_);
+    if (!closed_ && reader_ != nullptr && on_data_) on_data_(*this);
   }
 
  private:
-  std::function<void()> on_data_;
-  dds::Subscriber* subscriber_ = nullptr;
+  DataCallback on_data_;
+  std::mutex callback_mutex_;
+  bool closed_ = false;
+  std::shared_ptr<DomainEntities> domain_;
   dds::DataReader* reader_ = nullptr;
 };
 
@@ -172,18 +195,18 @@ namespace {
 
 class FastddsParticipant : public Participant {
  public:
-  explicit FastddsParticipant(const ParticipantOptions& options) {
+  explicit FastddsParticipant(const ParticipantOptions& options)
+      : domain_(std::make_shared<DomainEntities>()) {
     auto* factory = dds::DomainParticipantFactory::get_instance();
-    participant_ = factory->create_participant(options.domain_id, fastddsParticipantQos(options));
+    domain_->participant =
+        factory->create_participant(options.domain_id, fastddsParticipantQos(options));
+    participant_ = domain_->participant;
     check(participant_ != nullptr,
           "create participant on domain " + std::to_string(options.domain_id));
-    publisher_ = participant_->create_publisher(dds::PUBLISHER_QOS_DEFAULT);
-    subscriber_ = participant_->create_subscriber(dds::SUBSCRIBER_QOS_DEFAULT);
+    publisher_ = domain_->publisher = participant_->create_publisher(dds::PUBLISHER_QOS_DEFAULT);
+    subscriber_ = domain_->subscriber =
+        participant_->create_subscriber(dds::SUBSCRIBER_QOS_DEFAULT);
     check(publisher_ != nullptr && subscriber_ != nullptr, "create publisher/subscriber");
-  }
-  ~FastddsParticipant() override {
-    participant_->delete_contained_entities();
-    dds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
   }
 
   Vendor vendor() const override { return Vendor::FASTDDS; }
@@ -199,12 +222,12 @@ class FastddsParticipant : public Participant {
     wqos.reliable_writer_qos().times.heartbeatPeriod = eprosima::fastrtps::Duration_t(0.25);
     dds::DataWriter* w = publisher_->create_datawriter(t, wqos);
     check(w != nullptr, "create writer on '" + topic + "'");
-    return std::make_unique<FastddsWriter>(publisher_, w);
+    return std::make_unique<FastddsWriter>(domain_, w);
   }
 
   std::unique_ptr<DataReader> createReader(const std::string& topic, const msg::TypeSupport& type,
                                            const QosProfile& qos,
-                                           std::function<void()> on_data) override {
+                                           DataCallback on_data) override {
     dds::Topic* t = createTopic(topic, type);
     dds::DataReaderQos rqos = subscriber_->get_default_datareader_qos();
     applyCommon(qos, rqos);
@@ -212,7 +235,7 @@ class FastddsParticipant : public Participant {
     dds::DataReader* r =
         subscriber_->create_datareader(t, rqos, reader.get(), dds::StatusMask::data_available());
     check(r != nullptr, "create reader on '" + topic + "'");
-    reader->attach(subscriber_, r);
+    reader->attach(domain_, r);
     return reader;
   }
 
@@ -241,7 +264,8 @@ class FastddsParticipant : public Participant {
     return t;
   }
 
-  dds::DomainParticipant* participant_ = nullptr;
+  std::shared_ptr<DomainEntities> domain_;
+  dds::DomainParticipant* participant_ = nullptr;  // shortcuts into domain_
   dds::Publisher* publisher_ = nullptr;
   dds::Subscriber* subscriber_ = nullptr;
   std::mutex mutex_;

@@ -67,6 +67,10 @@ struct ParticipantOptions {
   std::string node_name;  ///< Shown by `auv node list`.
 };
 
+/// Called from a middleware thread when `reader` has samples. It must only signal or take
+/// from `reader`, never destroy it: deleting a reader waits for its running callbacks.
+using DataCallback = std::function<void(DataReader& reader)>;
+
 /// One DDS domain participant of one vendor.
 class Participant {
  public:
@@ -77,12 +81,11 @@ class Participant {
   virtual std::unique_ptr<DataWriter> createWriter(const std::string& topic,
                                                    const msg::TypeSupport& type,
                                                    const QosProfile& qos) = 0;
-  /// Creates a reader; `on_data` is called from a middleware thread when samples arrive and
-  /// must only signal (take happens elsewhere).
+  /// Creates a reader; `on_data` is called from a middleware thread when samples arrive.
   virtual std::unique_ptr<DataReader> createReader(const std::string& topic,
                                                    const msg::TypeSupport& type,
                                                    const QosProfile& qos,
-                                                   std::function<void()> on_data) = 0;
+                                                   DataCallback on_data) = 0;
 };
 
 /// Creates a participant of `vendor`. Unless the user set the vendor's own configuration

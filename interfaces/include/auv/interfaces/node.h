@@ -3,7 +3,6 @@
 // it), its parameters, logger and clock, and the publishers, subscriptions, timers and
 // services it creates. Like an rclcpp node, its callbacks run when an Executor spins it.
 
-#include <atomic>
 #include <functional>
 #include <memory>
 #include <mutex>
@@ -98,9 +97,9 @@ class Node {
   std::shared_ptr<Waker> waker_;
   mutable std::mutex mutex_;
   std::vector<std::weak_ptr<Waitable>> waitables_;
+  std::unique_ptr<DataWriter> log_writer_;  // LogEntry on `log`
+  // Last, so it is destroyed first: its callback uses the members above.
   std::unique_ptr<DataReader> clock_reader_;  // simulation time, taken in the DDS thread
-  std::atomic<bool> clock_ready_{false};      // clock_reader_ is assigned
-  std::unique_ptr<DataWriter> log_writer_;    // LogEntry on `log`
 };
 
 // ---------------------------------------------------------------------------------------
@@ -125,12 +124,15 @@ std::shared_ptr<Subscription<T>> Node::createSubscription(
     const std::string& topic, const QosProfile& qos, typename Subscription<T>::Callback callback) {
   const QosProfile resolved = resolveQos(topic, qos);
   auto subscription = std::make_shared<Subscription<T>>(topic, resolved, std::move(callback));
-  std::weak_ptr<Subscription<T>> weak = subscription;
-  std::weak_ptr<Waker> waker = waker_;
-  subscription->attach(participant_->createReader(topic, typeSupport<T>(), resolved, [weak, waker] {
-    if (auto s = weak.lock()) s->markReady();
-    if (auto w = waker.lock()) w->notify();
-  }));
+  // Raw pointer, not a shared_ptr: the subscription owns the reader, whose deletion waits for
+  // running callbacks; a callback holding a reference could end up deleting its own reader.
+  Subscription<T>* raw = subscription.get();
+  std::shared_ptr<Waker> waker = waker_;
+  subscription->attach(participant_->createReader(topic, typeSupport<T>(), resolved,
+                                                  [raw, waker](DataReader&) {
+                                                    raw->markReady();
+                                                    waker->notify();
+                                                  }));
   addWaitable(subscription);
   return subscription;
 }
@@ -150,13 +152,13 @@ std::shared_ptr<Service<Req, Rep>> Node::createService(const std::string& name,
                                                        typename Service<Req, Rep>::Handler handler,
                                                        const QosProfile& qos) {
   auto service = std::make_shared<Service<Req, Rep>>(name, std::move(handler));
-  std::weak_ptr<Service<Req, Rep>> weak = service;
-  std::weak_ptr<Waker> waker = waker_;
-  auto requests =
-      participant_->createReader(name + "/request", typeSupport<Req>(), qos, [weak, waker] {
-        if (auto s = weak.lock()) s->markReady();
-        if (auto w = waker.lock()) w->notify();
-      });
+  Service<Req, Rep>* raw = service.get();  // owns the reader: see createSubscription
+  std::shared_ptr<Waker> waker = waker_;
+  auto requests = participant_->createReader(name + "/request", typeSupport<Req>(), qos,
+                                             [raw, waker](DataReader&) {
+                                               raw->markReady();
+                                               waker->notify();
+                                             });
   service->attach(std::move(requests),
                   participant_->createWriter(name + "/reply", typeSupport<Rep>(), qos));
   addWaitable(service);
@@ -167,10 +169,9 @@ template <class Req, class Rep>
 std::shared_ptr<Client<Req, Rep>> Node::createClient(const std::string& name,
                                                      const QosProfile& qos) {
   auto client = std::make_shared<Client<Req, Rep>>(name);
-  std::weak_ptr<Client<Req, Rep>> weak = client;
-  auto replies = participant_->createReader(name + "/reply", typeSupport<Rep>(), qos, [weak] {
-    if (auto c = weak.lock()) c->onReplies();
-  });
+  Client<Req, Rep>* raw = client.get();  // owns the reader: see createSubscription
+  auto replies = participant_->createReader(name + "/reply", typeSupport<Rep>(), qos,
+                                            [raw](DataReader& reader) { raw->onReplies(reader); });
   client->attach(participant_->createWriter(name + "/request", typeSupport<Req>(), qos),
                  std::move(replies));
   return client;

@@ -86,11 +86,11 @@ class Service : public Waitable {
  private:
   std::string name_;
   Handler handler_;
-  std::unique_ptr<DataReader> requests_;
   std::unique_ptr<DataWriter> replies_;
   std::atomic<bool> ready_{true};
   std::atomic<uint64_t> served_{0};
   std::map<std::array<uint8_t, 16>, std::pair<uint64_t, Rep>> last_reply_;  // per client
+  std::unique_ptr<DataReader> requests_;  // last: destroyed first, before what its callback uses
 };
 
 /// Outcome of a Client call that got no reply.
@@ -161,11 +161,11 @@ class Client {
   }
 
   /// Called from the middleware thread when replies arrive: keeps ours, drops others'.
-  void onReplies() {
+  void onReplies(DataReader& replies) {
     if (!attached_) return;
     Rep reply;
     SampleInfo info;
-    while (replies_->take(&reply, &info)) {
+    while (replies.take(&reply, &info)) {
       if (reply.header().client_guid() != client_id_) continue;
       std::lock_guard<std::mutex> lock(mutex_);
       auto it = pending_.find(reply.header().sequence_number());
@@ -192,12 +192,12 @@ class Client {
 
   std::string name_;
   std::unique_ptr<DataWriter> requests_;
-  std::unique_ptr<DataReader> replies_;
   std::atomic<bool> attached_{false};
   std::array<uint8_t, 16> client_id_{};
   std::mutex mutex_;
   uint64_t sequence_ = 0;
   std::map<uint64_t, std::promise<Rep>> pending_;
+  std::unique_ptr<DataReader> replies_;  // last: destroyed first, before what its callback uses
 };
 
 }  // namespace auv::interfaces
