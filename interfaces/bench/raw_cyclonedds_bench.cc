@@ -198,7 +198,7 @@ class Receiver {
       drain();
       lock.lock();
     } else {
-      cv_.wait_for(lock, timeout);
+      cv_.wait_for(lock, timeout);  // listener mode: a poll period (the listener does the work)
     }
   }
   void drain() {
@@ -215,11 +215,13 @@ class Receiver {
   static void onDataAvailable(dds_entity_t, void* arg) {
     auto* self = static_cast<Receiver*>(arg);
     std::lock_guard<std::mutex> lock(self->mutex_);
-    if (self->options_.dispatch == Dispatch::THREAD)
+    // Listener mode wakes nobody: the main thread only polls for the end of the run.
+    if (self->options_.dispatch == Dispatch::THREAD) {
       self->pending_ = true;
-    else
+      self->cv_.notify_one();
+    } else {
       self->drain();
-    self->cv_.notify_all();
+    }
   }
 
   BenchOptions options_;
