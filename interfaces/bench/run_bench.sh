@@ -5,7 +5,7 @@
 # APIs on our message type, QoS and transport). All traffic stays on loopback: our layer and
 # the raw programs bind 127.0.0.1/lo by default, ddsperf gets cyclonedds_loopback.xml.
 # To prove it, wrap the run:
-#   /work/shared/tools/no-external-traffic interfaces/bench/run_bench.sh
+#   ../shared/tools/no-external-traffic interfaces/bench/run_bench.sh
 #
 # Usage: run_bench.sh [--full] [--sizes "64 1k 16k 256k 4M"] [--only latency|throughput]
 #                     [--build-dir DIR] [--out DIR] [--skip-build] [--no-pin]
@@ -27,7 +27,7 @@ PIN=1
 ONLY=""
 SIZES_ARG="64 1k 16k 256k 4M"
 
-usage() { sed -n '2,19p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; }
+usage() { sed -n '2,17p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; }
 
 while [ $# -gt 0 ]; do
   case "$1" in
