@@ -85,13 +85,12 @@ Node::Node(const std::string& name, const NodeOptions& options)
   if (use_sim_time) {
     static const msg::TypeSupport clock_type = msg::makeTypeSupport<msg::Clock>();
     // Taken in the DDS thread so time advances even while a callback runs.
-    clock_reader_ = participant_->createReader(
-        "clock", clock_type, clockQos(), [this](DataReader& reader) {
+    clock_reader_ =
+        participant_->createReader("clock", clock_type, clockQos(), [this](DataReader& reader) {
           msg::Clock sample;
           bool advanced = false;
           while (reader.take(&sample, nullptr)) {
-            clock_->setSimulationTime(static_cast<int64_t>(sample.sim_time().sec()) *
-                                          1000000000LL +
+            clock_->setSimulationTime(static_cast<int64_t>(sample.sim_time().sec()) * 1000000000LL +
                                       sample.sim_time().nanosec());
             advanced = true;
           }
@@ -134,7 +133,7 @@ void Node::addWaitable(const std::shared_ptr<Waitable>& waitable) {
 }
 
 bool Node::executeReady() {
-  std::vector<std::shared_ptr<Waitable>> alive;
+  std::vector<std::shared_ptr<Waitable>>& alive = execute_scratch_;  // no allocation per call
   {
     std::lock_guard<std::mutex> lock(mutex_);
     waitables_.erase(std::remove_if(waitables_.begin(), waitables_.end(),
@@ -146,6 +145,7 @@ bool Node::executeReady() {
   for (const auto& w : alive) {
     if (w) any = w->execute() || any;
   }
+  alive.clear();  // keeps the capacity, drops the references
   return any;
 }
 

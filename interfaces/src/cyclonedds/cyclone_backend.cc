@@ -190,8 +190,7 @@ class CycloneParticipant : public Participant {
   }
 
   std::unique_ptr<DataReader> createReader(const std::string& topic, const msg::TypeSupport& type,
-                                           const QosProfile& qos,
-                                           DataCallback on_data) override {
+                                           const QosProfile& qos, DataCallback on_data) override {
     const dds_entity_t t = createTopic(topic, type);
     QosPtr q = toCycloneQos(qos);
     auto reader = std::make_unique<CycloneReader>(std::move(on_data));

@@ -226,8 +226,7 @@ class FastddsParticipant : public Participant {
   }
 
   std::unique_ptr<DataReader> createReader(const std::string& topic, const msg::TypeSupport& type,
-                                           const QosProfile& qos,
-                                           DataCallback on_data) override {
+                                           const QosProfile& qos, DataCallback on_data) override {
     dds::Topic* t = createTopic(topic, type);
     dds::DataReaderQos rqos = subscriber_->get_default_datareader_qos();
     applyCommon(qos, rqos);

@@ -75,7 +75,8 @@ class Node {
   std::shared_ptr<Client<Req, Rep>> createClient(const std::string& name,
                                                  const QosProfile& qos = commandQos());
 
-  /// Runs every ready callback of this node once; returns true if any ran.
+  /// Runs every ready callback of this node once; returns true if any ran. Called by the one
+  /// executor spinning this node, from its thread.
   bool executeReady();
   /// Steady-clock nanoseconds until the earliest timer is due (nullopt: no system timer).
   std::optional<int64_t> nanosecondsUntilNextTimer() const;
@@ -97,7 +98,8 @@ class Node {
   std::shared_ptr<Waker> waker_;
   mutable std::mutex mutex_;
   std::vector<std::weak_ptr<Waitable>> waitables_;
-  std::unique_ptr<DataWriter> log_writer_;  // LogEntry on `log`
+  std::vector<std::shared_ptr<Waitable>> execute_scratch_;  // executeReady() only (one thread)
+  std::unique_ptr<DataWriter> log_writer_;                  // LogEntry on `log`
   // Last, so it is destroyed first: its callback uses the members above.
   std::unique_ptr<DataReader> clock_reader_;  // simulation time, taken in the DDS thread
 };
@@ -128,11 +130,11 @@ std::shared_ptr<Subscription<T>> Node::createSubscription(
   // running callbacks; a callback holding a reference could end up deleting its own reader.
   Subscription<T>* raw = subscription.get();
   std::shared_ptr<Waker> waker = waker_;
-  subscription->attach(participant_->createReader(topic, typeSupport<T>(), resolved,
-                                                  [raw, waker](DataReader&) {
-                                                    raw->markReady();
-                                                    waker->notify();
-                                                  }));
+  subscription->attach(
+      participant_->createReader(topic, typeSupport<T>(), resolved, [raw, waker](DataReader&) {
+        raw->markReady();
+        waker->notify();
+      }));
   addWaitable(subscription);
   return subscription;
 }

@@ -41,8 +41,8 @@ class Subscription : public Waitable {
   std::string topic_;
   QosProfile qos_;
   Callback callback_;
-  T message_;                      // reused by execute()
-  std::atomic<bool> ready_{true};  // a transient-local history may be waiting at creation
+  T message_;                           // reused by execute()
+  std::atomic<bool> ready_{true};       // a transient-local history may be waiting at creation
   std::unique_ptr<DataReader> reader_;  // last: destroyed first, before what its callback uses
 };
 
