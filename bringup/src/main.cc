@@ -1,6 +1,9 @@
 // `auv`: the command-line tool of auv-inspect, modelled on ros2cli.
 #include <unistd.h>
 
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <iostream>
 #include <string>
@@ -19,12 +22,45 @@ constexpr const char* kUsage =
     "  interface list|show              message types and their fields\n"
     "  run <component>[:name] ...       run components (several: composed in one process)\n"
     "  launch <file.yaml>               start and supervise processes from a launch file\n"
+    "  sim generate|check|render|calibration   simulator tools (`auv sim --help`)\n"
+    "Other commands run the program `auv-<command>` (next to `auv`, in a sibling install\n"
+    "prefix, or on PATH), like git.\n"
     "Environment: AUV_DDS=cyclonedds|fastdds (default cyclonedds), AUV_DOMAIN_ID (default 0).\n";
 
 std::string selfExecutable(const char* argv0) {
   std::error_code ec;
   const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
   return ec ? std::string(argv0) : exe.string();
+}
+
+// `auv <command>` for a command of another package: the program auv-<command> next to this
+// one, in a sibling prefix of an isolated colcon install (<prefix>/../*/bin), or on PATH.
+std::string findExternalCommand(const std::string& command, const std::string& self) {
+  namespace fs = std::filesystem;
+  const std::string name = "auv-" + command;
+  if (command.empty() || command.find('/') != std::string::npos) return "";
+  const auto executable = [](const fs::path& p) {
+    std::error_code ec;
+    return fs::is_regular_file(p, ec) && ::access(p.c_str(), X_OK) == 0;
+  };
+  const fs::path bin = fs::path(self).parent_path();
+  if (executable(bin / name)) return (bin / name).string();
+  std::error_code ec;
+  for (const auto& prefix : fs::directory_iterator(bin.parent_path().parent_path(), ec)) {
+    if (executable(prefix.path() / "bin" / name)) return (prefix.path() / "bin" / name).string();
+  }
+  const char* path = std::getenv("PATH");
+  std::string dirs = path ? path : "";
+  size_t start = 0;
+  while (start <= dirs.size()) {
+    const size_t end = dirs.find(':', start);
+    const std::string dir =
+        dirs.substr(start, end == std::string::npos ? std::string::npos : end - start);
+    if (!dir.empty() && executable(fs::path(dir) / name)) return (fs::path(dir) / name).string();
+    if (end == std::string::npos) break;
+    start = end + 1;
+  }
+  return "";
 }
 
 }  // namespace
@@ -43,6 +79,16 @@ int main(int argc, char** argv) {
     if (command == "interface") return auv::bringup::interfaceMain(rest);
     if (command == "run") return auv::bringup::runMain(rest);
     if (command == "launch") return auv::bringup::launchMain(rest, selfExecutable(argv[0]));
+    const std::string external = findExternalCommand(command, selfExecutable(argv[0]));
+    if (!external.empty()) {
+      std::vector<char*> external_argv;
+      external_argv.push_back(const_cast<char*>(external.c_str()));
+      for (int i = 2; i < argc; ++i) external_argv.push_back(argv[i]);
+      external_argv.push_back(nullptr);
+      ::execv(external.c_str(), external_argv.data());
+      std::cerr << "auv: cannot run " << external << ": " << std::strerror(errno) << std::endl;
+      return 1;
+    }
     std::cerr << "auv: unknown command '" << command << "'\n" << kUsage;
     return 2;
   } catch (const auv::bringup::CliError& e) {

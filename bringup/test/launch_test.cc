@@ -160,6 +160,52 @@ TEST(LaunchDescriptionTest, ParsesFullExample) {
   EXPECT_EQ(probe.vendor, DdsVendor::CYCLONEDDS);
 }
 
+TEST(LaunchDescriptionTest, ArgumentsAreSubstitutedWithDefaultsAndCommandLineValues) {
+  constexpr const char* kYaml = R"(
+arguments:
+  world: {default: canyon, description: world name}
+  seed: "1"
+processes:
+  - name: sim
+    component: simulator
+    parameters: {world: $(arg world), seed: $(arg seed), run_dir: runs/$(arg world)-$(arg seed)}
+)";
+  const LaunchDescription defaults = parseLaunchYaml(kYaml, "sim.yaml", "/");
+  const YAML::Node p = defaults.processes[0].components[0].parameters;
+  EXPECT_EQ(p["world"].as<std::string>(), "canyon");
+  EXPECT_EQ(p["seed"].as<int>(), 1);  // still a number for the parameter parser
+  EXPECT_EQ(p["run_dir"].as<std::string>(), "runs/canyon-1");
+  ASSERT_EQ(defaults.arguments.size(), 2u);
+  EXPECT_EQ(defaults.arguments[0].description, "world name");
+
+  const LaunchDescription given =
+      parseLaunchYaml(kYaml, "sim.yaml", "/", {{"world", "breakwater"}});
+  EXPECT_EQ(given.processes[0].components[0].parameters["run_dir"].as<std::string>(),
+            "runs/breakwater-1");
+}
+
+TEST(LaunchDescriptionTest, ArgumentErrorsNameTheArgument) {
+  constexpr const char* kYaml =
+      "arguments: {world: {default: canyon}, rate: {description: required}}\n"
+      "processes:\n  - {name: a, command: [echo, $(arg world), $(arg rate)]}\n";
+  try {
+    parseLaunchYaml(kYaml, "sim.yaml", "/", {{"wrold", "x"}, {"rate", "1"}});
+    ADD_FAILURE() << "accepted an undeclared argument";
+  } catch (const LaunchFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("did you mean 'world'"), std::string::npos) << e.what();
+  }
+  try {
+    parseLaunchYaml(kYaml, "sim.yaml", "/");
+    ADD_FAILURE() << "accepted a missing required argument";
+  } catch (const LaunchFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("arguments.rate"), std::string::npos) << e.what();
+  }
+  const LaunchFileError undeclared =
+      parseError("processes:\n  - {name: a, command: [echo, $(arg nope)]}\n");
+  EXPECT_NE(std::string(undeclared.what()).find("$(arg nope)"), std::string::npos);
+  EXPECT_EQ(undeclared.field(), "processes[0].command[1]");
+}
+
 TEST(LaunchDescriptionTest, MinimalFileGetsDefaults) {
   const LaunchDescription launch =
       parseLaunchYaml("processes:\n  - {name: a, command: [true]}\n", "min.yaml", "/");

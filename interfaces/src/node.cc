@@ -30,13 +30,6 @@ QosProfile logQos() {
   return q;
 }
 
-// `clock`: best effort, keep last 1 — only the newest time matters.
-QosProfile clockQos() {
-  QosProfile q = viewingQos();
-  q.name = "clock";
-  return q;
-}
-
 }  // namespace
 
 Node::Node(const std::string& name, const NodeOptions& options)

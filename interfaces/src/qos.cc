@@ -84,6 +84,12 @@ QosProfile viewingQos() {
   return q;
 }
 
+QosProfile clockQos() {
+  QosProfile q = viewingQos();
+  q.name = "clock";
+  return q;
+}
+
 QosProfile latchedStateQos() {
   QosProfile q;
   q.name = "latched_state";

@@ -623,7 +623,8 @@ void LaunchDescription::check() const {
 }
 
 LaunchDescription parseLaunchYaml(const std::string& yaml, const std::string& source,
-                                  const std::string& base_dir) {
+                                  const std::string& base_dir,
+                                  const std::map<std::string, std::string>& arguments) {
   std::error_code error;
   fs::path base = base_dir.empty() ? fs::current_path(error) : fs::path(base_dir);
   if (base.is_relative()) base = fs::absolute(base, error);
@@ -641,10 +642,14 @@ LaunchDescription parseLaunchYaml(const std::string& yaml, const std::string& so
     throw LaunchFileError(source, "",
                           "empty launch file; expected a mapping with a 'processes' list");
   }
-  return Parser(source, base.lexically_normal().string()).parse(root);
+  const std::vector<LaunchArgument> declared = applyLaunchArguments(root, arguments, source);
+  LaunchDescription launch = Parser(source, base.lexically_normal().string()).parse(root);
+  launch.arguments = declared;
+  return launch;
 }
 
-LaunchDescription parseLaunchFile(const std::string& path) {
+LaunchDescription parseLaunchFile(const std::string& path,
+                                  const std::map<std::string, std::string>& arguments) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw LaunchFileError(path, "", std::string("cannot open: ") + std::strerror(errno));
   std::ostringstream content;
@@ -652,7 +657,7 @@ LaunchDescription parseLaunchFile(const std::string& path) {
   if (in.bad()) throw LaunchFileError(path, "", "read error");
   std::error_code error;
   const fs::path absolute = fs::absolute(fs::path(path), error);
-  return parseLaunchYaml(content.str(), path, absolute.parent_path().string());
+  return parseLaunchYaml(content.str(), path, absolute.parent_path().string(), arguments);
 }
 
 }  // namespace auv::bringup

@@ -8,6 +8,8 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "launch_arguments.h"
+
 namespace auv::bringup {
 
 /// What the supervisor does when a process exits on its own.
@@ -65,6 +67,7 @@ struct LaunchDescription {
   std::map<std::string, std::string> environment;  // for all processes
   double shutdown_timeout = 5.0;  // [s] SIGINT -> SIGTERM and SIGTERM -> SIGKILL waits
   std::vector<ProcessDescription> processes;
+  std::vector<LaunchArgument> arguments;  // declared arguments with their resolved values
 
   /// Semantic checks shared by the parser and by programmatically built descriptions
   /// (names, uniqueness, ranges, non-empty argv). Throws LaunchFileError naming the field.
@@ -95,11 +98,14 @@ class LaunchFileError : public std::runtime_error {
 
 /// Reads and validates a launch file. Relative params_file entries are resolved against the
 /// launch file's folder. Throws LaunchFileError.
-LaunchDescription parseLaunchFile(const std::string& path);
+/// `arguments` are the command line's name:=value settings (see launch_arguments.h).
+LaunchDescription parseLaunchFile(const std::string& path,
+                                  const std::map<std::string, std::string>& arguments = {});
 
 /// Parses launch YAML held in memory; `source` names it in messages and `base_dir` anchors
 /// relative paths (empty = current directory). Throws LaunchFileError.
 LaunchDescription parseLaunchYaml(const std::string& yaml, const std::string& source,
-                                  const std::string& base_dir = "");
+                                  const std::string& base_dir = "",
+                                  const std::map<std::string, std::string>& arguments = {});
 
 }  // namespace auv::bringup

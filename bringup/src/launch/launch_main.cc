@@ -8,6 +8,7 @@
 #include <exception>
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <sstream>
 
 extern char** environ;
@@ -17,7 +18,7 @@ namespace {
 
 constexpr int kUsageError = 2;  // bad arguments or invalid launch file
 constexpr int kSetupError = 1;  // valid launch that could not be set up
-constexpr const char* kUsage = "usage: auv launch <file.yaml> [--dry-run]";
+constexpr const char* kUsage = "usage: auv launch <file.yaml> [name:=value ...] [--dry-run]";
 
 std::string describeRestart(const ProcessDescription& process) {
   std::ostringstream out;
@@ -40,6 +41,10 @@ void printDryRun(const LaunchDescription& launch, const std::string& auv_executa
           .string();
   out << "# " << launch.source << ": " << launch.processes.size()
       << " process(es), shutdown_timeout: " << launch.shutdown_timeout << " s\n";
+  for (const LaunchArgument& a : launch.arguments) {
+    out << "# argument " << a.name << " := " << a.default_value
+        << (a.description.empty() ? "" : "  (" + a.description + ")") << "\n";
+  }
   for (const ProcessDescription& process : launch.processes) {
     const ProcessCommand command = buildProcessCommand(launch, process, auv_executable, params_dir);
     out << process.name << ":\n";
@@ -72,17 +77,23 @@ void printDryRun(const LaunchDescription& launch, const std::string& auv_executa
 int launchMain(const std::vector<std::string>& args, const std::string& auv_executable) {
   std::string file;
   bool dry_run = false;
+  std::map<std::string, std::string> arguments;
   for (const std::string& arg : args) {
     if (arg == "--dry-run") {
       dry_run = true;
     } else if (arg == "-h" || arg == "--help") {
       std::cout << kUsage << "\n"
                 << "Starts and supervises the processes described in <file.yaml>.\n"
-                << "  --dry-run  print the resolved commands and environments, run nothing\n";
+                << "  name:=value  set a launch argument declared in the file's `arguments:`\n"
+                << "  --dry-run    print the arguments, resolved commands and environments;\n"
+                << "               run nothing\n";
       return 0;
     } else if (!arg.empty() && arg[0] == '-') {
       std::cerr << "auv launch: unknown option '" << arg << "' (" << kUsage << ")\n";
       return kUsageError;
+    } else if (!file.empty() && arg.find(":=") != std::string::npos) {
+      const size_t at = arg.find(":=");
+      arguments[arg.substr(0, at)] = arg.substr(at + 2);
     } else if (!file.empty()) {
       std::cerr << "auv launch: unexpected argument '" << arg << "' (" << kUsage << ")\n";
       return kUsageError;
@@ -97,7 +108,7 @@ int launchMain(const std::vector<std::string>& args, const std::string& auv_exec
 
   LaunchDescription launch;
   try {
-    launch = parseLaunchFile(file);
+    launch = parseLaunchFile(file, arguments);
   } catch (const LaunchFileError& e) {
     std::cerr << "auv launch: " << e.what() << "\n";
     return kUsageError;

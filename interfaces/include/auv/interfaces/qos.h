@@ -51,6 +51,8 @@ QosProfile bulkTransferQos();
 QosProfile viewingQos();
 /// Latched state (mission status): reliable, transient local, keep last 1.
 QosProfile latchedStateQos();
+/// The simulation `clock`: best effort, keep last 1 (only the newest time matters).
+QosProfile clockQos();
 
 /// The profile called `name` (sensor_data, state, map, command, bulk_transfer, viewing,
 /// latched_state); throws std::invalid_argument listing the known names otherwise.

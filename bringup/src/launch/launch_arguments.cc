@@ -1,0 +1,136 @@
+#include "launch_arguments.h"
+
+#include <regex>
+
+#include "auv/interfaces/spelling.h"
+#include "launch_description.h"
+
+namespace auv::bringup {
+namespace {
+
+std::string declaredList(const std::vector<LaunchArgument>& declared) {
+  std::string list;
+  for (const LaunchArgument& a : declared) list += (list.empty() ? "" : ", ") + a.name;
+  return list.empty() ? "none" : list;
+}
+
+std::string closest(const std::string& name, const std::vector<LaunchArgument>& declared) {
+  std::string best;
+  size_t best_distance = 3;
+  for (const LaunchArgument& a : declared) {
+    const size_t d = interfaces::editDistance(name, a.name);
+    if (d < best_distance) best_distance = d, best = a.name;
+  }
+  return best;
+}
+
+void substitute(YAML::Node node, const std::map<std::string, std::string>& values,
+                const std::vector<LaunchArgument>& declared, const std::string& source,
+                const std::string& path) {
+  if (node.IsScalar()) {
+    static const std::regex pattern(R"(\$\(arg\s+([A-Za-z_][A-Za-z0-9_]*)\s*\))");
+    const std::string text = node.Scalar();
+    if (text.find("$(") == std::string::npos) return;
+    std::string out;
+    auto begin = std::sregex_iterator(text.begin(), text.end(), pattern);
+    size_t last = 0;
+    for (auto it = begin; it != std::sregex_iterator(); ++it) {
+      const std::string name = (*it)[1];
+      const auto value = values.find(name);
+      if (value == values.end()) {
+        const std::string hint = closest(name, declared);
+        throw LaunchFileError(source, path,
+                              "$(arg " + name + ") refers to an undeclared argument" +
+                                  (hint.empty() ? "" : " (did you mean '" + hint + "'?)") +
+                                  "; declared: " + declaredList(declared));
+      }
+      out += text.substr(last, it->position() - last) + value->second;
+      last = it->position() + it->length();
+    }
+    out += text.substr(last);
+    if (out.find("$(") != std::string::npos) {
+      throw LaunchFileError(
+          source, path, "malformed substitution in '" + text + "' (the only one is $(arg name))");
+    }
+    node = out;
+    return;
+  }
+  if (node.IsSequence()) {
+    for (size_t i = 0; i < node.size(); ++i) {
+      substitute(node[i], values, declared, source, path + "[" + std::to_string(i) + "]");
+    }
+  } else if (node.IsMap()) {
+    for (auto entry : node) {
+      const std::string key = entry.first.Scalar();
+      substitute(entry.second, values, declared, source, path.empty() ? key : path + "." + key);
+    }
+  }
+}
+
+}  // namespace
+
+std::vector<LaunchArgument> applyLaunchArguments(YAML::Node& root,
+                                                 const std::map<std::string, std::string>& given,
+                                                 const std::string& source) {
+  std::vector<LaunchArgument> declared;
+  if (root.IsMap() && root["arguments"]) {
+    const YAML::Node args = root["arguments"];
+    if (!args.IsMap()) {
+      throw LaunchFileError(source, "arguments",
+                            "expected a mapping of name: {default, description}");
+    }
+    for (auto entry : args) {
+      LaunchArgument a;
+      a.name = entry.first.Scalar();
+      const std::string path = "arguments." + a.name;
+      if (entry.second.IsScalar()) {
+        a.default_value = entry.second.Scalar();
+        a.has_default = true;
+      } else if (entry.second.IsMap()) {
+        for (auto field : entry.second) {
+          const std::string key = field.first.Scalar();
+          if (key == "default" && field.second.IsScalar()) {
+            a.default_value = field.second.Scalar();
+            a.has_default = true;
+          } else if (key == "description" && field.second.IsScalar()) {
+            a.description = field.second.Scalar();
+          } else {
+            throw LaunchFileError(source, path + "." + key,
+                                  "unknown or non-scalar key; expected default, description");
+          }
+        }
+      } else if (!entry.second.IsNull()) {
+        throw LaunchFileError(source, path, "expected a default value or {default, description}");
+      }
+      declared.push_back(a);
+    }
+    root.remove("arguments");
+  }
+  std::map<std::string, std::string> values;
+  for (const LaunchArgument& a : declared) {
+    if (a.has_default) values[a.name] = a.default_value;
+  }
+  for (const auto& [name, value] : given) {
+    bool known = false;
+    for (const LaunchArgument& a : declared) known = known || a.name == name;
+    if (!known) {
+      const std::string hint = closest(name, declared);
+      throw LaunchFileError(source, "arguments",
+                            "'" + name + ":=" + value + "' sets an undeclared argument" +
+                                (hint.empty() ? "" : " (did you mean '" + hint + "'?)") +
+                                "; declared: " + declaredList(declared));
+    }
+    values[name] = value;
+  }
+  for (LaunchArgument& a : declared) {
+    if (!values.count(a.name)) {
+      throw LaunchFileError(source, "arguments." + a.name,
+                            "required argument not given (add " + a.name + ":=<value>)");
+    }
+    a.default_value = values[a.name];
+  }
+  substitute(root, values, declared, source, "");
+  return declared;
+}
+
+}  // namespace auv::bringup
