@@ -1,0 +1,310 @@
+#include "auv/sim/components/controller_component.h"
+
+#include <cmath>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "auv/sim/components/message_conversion.h"
+
+namespace auv::sim {
+namespace {
+
+// The mirrors in controller.h must keep the IDL's numbering: messages are cast, not mapped.
+static_assert(static_cast<uint32_t>(ControlMode::SURFACE) == msg::CONTROL_MODE_SURFACE);
+static_assert(static_cast<uint32_t>(ControlMode::WAYPOINT) == msg::CONTROL_MODE_WAYPOINT);
+static_assert(static_cast<uint32_t>(ControllerState::FAULT) == msg::CONTROLLER_STATE_FAULT);
+static_assert(static_cast<uint32_t>(ControllerState::SAFETY_MANEUVER) ==
+              msg::CONTROLLER_STATE_SAFETY_MANEUVER);
+static_assert(static_cast<uint32_t>(SafetyReason::NAVIGATION_LOST) ==
+              msg::SAFETY_REASON_NAVIGATION_LOST);
+static_assert(static_cast<uint32_t>(SafetyReason::OTHER) == msg::SAFETY_REASON_OTHER);
+
+constexpr double kBig = 1e6;
+
+// A double parameter bound to a field, declared with its description, unit and range.
+template <class Owner>
+struct DoubleParameter {
+  const char* name;
+  double Owner::*field;
+  const char* description;
+  const char* unit;
+  double min;
+  double max;
+};
+
+const std::vector<DoubleParameter<ControllerOptions>>& controllerParameters() {
+  using C = ControllerOptions;
+  static const std::vector<DoubleParameter<C>> list = {
+      {"heading_kp", &C::heading_kp, "heading PID proportional gain", "N m/rad", 0, kBig},
+      {"heading_ki", &C::heading_ki, "heading PID integral gain", "N m/(rad s)", 0, kBig},
+      {"heading_kd", &C::heading_kd, "heading PID yaw-rate damping", "N m/(rad/s)", 0, kBig},
+      {"heading_integral_limit", &C::heading_integral_limit, "bound of the heading integral term",
+       "N m", 0, kBig},
+      {"depth_kp", &C::depth_kp, "depth PI proportional gain", "N/m", 0, kBig},
+      {"depth_ki", &C::depth_ki, "depth PI integral gain", "N/(m s)", 0, kBig},
+      {"depth_kd", &C::depth_kd, "depth heave-velocity damping", "N/(m/s)", 0, kBig},
+      {"depth_integral_limit", &C::depth_integral_limit, "bound of the depth integral term", "N", 0,
+       kBig},
+      {"surge_kp", &C::surge_kp, "surge-speed PI proportional gain", "N/(m/s)", 0, kBig},
+      {"surge_ki", &C::surge_ki, "surge-speed PI integral gain", "N/m", 0, kBig},
+      {"surge_integral_limit", &C::surge_integral_limit, "bound of the surge integral term", "N", 0,
+       kBig},
+      {"default_surge_speed", &C::default_surge_speed,
+       "WAYPOINT speed when the command's surge_speed is 0", "m/s", 0.01, 5},
+      {"max_surge_speed", &C::max_surge_speed, "largest commanded surge speed accepted", "m/s",
+       0.01, 5},
+      {"default_tolerance", &C::default_tolerance,
+       "WAYPOINT tolerance when the command's is 0, and the HOLD radius", "m", 0.01, 100},
+      {"slow_down_radius", &C::slow_down_radius,
+       "horizontal distance to a waypoint where the speed starts ramping down", "m", 0.01, 1000},
+      {"min_approach_fraction", &C::min_approach_fraction,
+       "floor of the slow-down ramp, as a fraction of the commanded speed", "", 0.01, 1},
+      {"hold_speed", &C::hold_speed, "speed to return to a held position", "m/s", 0.01, 5},
+      {"surface_depth", &C::surface_depth, "SURFACE is reached at or above this depth", "m", 0,
+       100},
+      {"max_depth", &C::max_depth, "deeper starts the MAX_DEPTH safety manoeuvre", "m", 0.1, 10000},
+      {"min_altitude", &C::min_altitude,
+       "a known altitude below this starts the MIN_ALTITUDE safety manoeuvre", "m", 0, 1000},
+      {"navigation_timeout", &C::navigation_timeout,
+       "without nav/odometry this long starts the NAVIGATION_LOST safety manoeuvre", "s", 0.01,
+       3600},
+      {"safety_clear_time", &C::safety_clear_time,
+       "a safety condition gone this long ends the manoeuvre (the command is dropped)", "s", 0,
+       3600},
+  };
+  return list;
+}
+
+// The part of the vehicle model the controller uses (feed-forward and allocation).
+const std::vector<DoubleParameter<VehicleOptions>>& modelParameters() {
+  using V = VehicleOptions;
+  static const std::vector<DoubleParameter<V>> list = {
+      {"drag_linear_surge", &V::drag_linear_surge, "model: linear surge drag", "N/(m/s)", 0, kBig},
+      {"drag_quadratic_surge", &V::drag_quadratic_surge, "model: quadratic surge drag", "N/(m/s)^2",
+       0, kBig},
+      {"max_thrust_forward", &V::max_thrust_forward, "model: thrust of one thruster at +1", "N",
+       0.01, kBig},
+      {"max_thrust_reverse", &V::max_thrust_reverse, "model: thrust of one thruster at -1", "N",
+       0.01, kBig},
+      {"thruster_spacing", &V::thruster_spacing,
+       "model: lateral distance between the horizontal thrusters", "m", 0.01, 10},
+      {"net_buoyancy", &V::net_buoyancy, "model: buoyancy minus weight (> 0 floats)", "N", -kBig,
+       kBig},
+  };
+  return list;
+}
+
+const char* faultActionName(FaultAction action) {
+  return action == FaultAction::STOP ? "stop" : "hold_depth";
+}
+
+template <class Owner>
+void declareAll(interfaces::Parameters& p, const std::string& prefix,
+                const std::vector<DoubleParameter<Owner>>& list, Owner& owner) {
+  for (const auto& d : list) {
+    owner.*d.field = p.declare<double>(prefix + d.name, owner.*d.field,
+                                       {d.description, d.unit, d.min, d.max, {}, false});
+  }
+}
+
+void stamp(msg::Header& header, const interfaces::Clock& clock, const char* frame) {
+  const int64_t ns = clock.nowNs();
+  header.stamp().sec(static_cast<int32_t>(ns / 1000000000));
+  header.stamp().nanosec(static_cast<uint32_t>(ns % 1000000000));
+  header.frame_id(frame);
+}
+
+}  // namespace
+
+void ControllerComponent::configure(interfaces::Node& node) {
+  node_ = &node;
+  auto& p = node.parameters();
+  options_.control_rate = p.declare<double>(
+      "control_rate", options_.control_rate,
+      {"control steps and control/thrusters messages per second", "Hz", 1.0, 1000.0, {}, true});
+  options_.status_rate =
+      p.declare<double>("status_rate", options_.status_rate,
+                        {"periodic control/status messages per second (also sent on every change)",
+                         "Hz",
+                         0.01,
+                         100.0,
+                         {},
+                         true});
+  declareAll(p, "controller.", controllerParameters(), options_.controller);
+  declareAll(p, "controller.model.", modelParameters(), options_.controller.model);
+  const std::string fault_action = p.declare<std::string>(
+      "controller.fault_action", faultActionName(options_.controller.fault_action),
+      {"after a command timeout: hold_depth (horizontal thrusters off, keep depth) or stop (all "
+       "thrusters off)",
+       "",
+       {},
+       {},
+       {"hold_depth", "stop"},
+       false});
+  options_.controller.fault_action =
+      fault_action == "stop" ? FaultAction::STOP : FaultAction::HOLD_DEPTH;
+  controller_ = std::make_unique<LowLevelController>(options_.controller);  // check()s
+  last_reported_ = controller_->status();
+
+  thrusters_pub_ = node.createPublisher<msg::ThrusterSetpoints>("control/thrusters",
+                                                                interfaces::sensorDataQos());
+  status_pub_ =
+      node.createPublisher<msg::ControllerStatus>("control/status", interfaces::stateQos());
+  command_sub_ = node.createSubscription<msg::ControllerCommand>(
+      "control/waypoint", interfaces::commandQos(),
+      std::function<void(const msg::ControllerCommand&)>(
+          [this](const msg::ControllerCommand& m) { onCommand(m); }));
+  odometry_sub_ = node.createSubscription<msg::Odometry>(
+      "nav/odometry", interfaces::stateQos(),
+      std::function<void(const msg::Odometry&)>([this](const msg::Odometry& m) { onOdometry(m); }));
+}
+
+void ControllerComponent::activate() {
+  control_timer_ = node_->createTimer(1.0 / options_.control_rate, [this] { controlStep(); });
+  status_timer_ = node_->createTimer(1.0 / options_.status_rate, [this] { publishStatus(); });
+  const ControllerOptions& c = options_.controller;
+  AUV_INFO(node_->logger(), "controlling at " << options_.control_rate << " Hz; max_depth "
+                                              << c.max_depth << " m, min_altitude "
+                                              << c.min_altitude << " m, navigation_timeout "
+                                              << c.navigation_timeout << " s");
+}
+
+void ControllerComponent::deactivate() {
+  if (control_timer_) control_timer_->cancel();
+  if (status_timer_) status_timer_->cancel();
+  control_timer_.reset();
+  status_timer_.reset();
+  if (thrusters_pub_) publishThrusters({});  // leave the thrusters stopped
+}
+
+void ControllerComponent::cleanup() {
+  command_sub_.reset();
+  odometry_sub_.reset();
+  thrusters_pub_.reset();
+  status_pub_.reset();
+  controller_.reset();
+}
+
+void ControllerComponent::onOdometry(const msg::Odometry& odometry) {
+  const auto& pose = odometry.pose().pose();
+  const auto& q = pose.orientation();
+  const auto& twist = odometry.twist().twist();
+  const Eigen::Quaterniond orientation(q.w(), q.x(), q.y(), q.z());
+  ControllerNavigation nav;
+  nav.position = {pose.position().x(), pose.position().y(), pose.position().z()};
+  // Yaw of the body -> world rotation (ZYX Euler), whatever the small roll and pitch.
+  nav.yaw = std::atan2(2.0 * (q.w() * q.z() + q.x() * q.y()),
+                       1.0 - 2.0 * (q.y() * q.y() + q.z() * q.z()));
+  nav.surge = twist.linear().x();
+  nav.sway = twist.linear().y();
+  nav.heave = twist.linear().z();
+  nav.yaw_rate = twist.angular().z();
+  nav.altitude = odometry.altitude();
+  nav.stamp = toSeconds(odometry.header().stamp());
+  const double norm = orientation.coeffs().norm();
+  // A zero quaternion (an unset orientation) has no yaw: treat it as a broken estimate.
+  const bool orientation_ok = std::isfinite(norm) && std::abs(norm - 1.0) < 0.1;
+  if (!orientation_ok || !controller_->setNavigation(nav, node_->clock().nowSeconds())) {
+    // Throttled: at 10-50 Hz a broken source would flood the log.
+    if (bad_odometry_count_++ % 100 == 0) {
+      AUV_WARN(node_->logger(),
+               "nav/odometry: ignoring an estimate with "
+                   << (orientation_ok ? "a non-finite field" : "an invalid orientation quaternion")
+                   << " (" << bad_odometry_count_ << " so far); without navigation the "
+                   << "NAVIGATION_LOST manoeuvre starts after "
+                   << options_.controller.navigation_timeout << " s");
+    }
+  }
+}
+
+void ControllerComponent::onCommand(const msg::ControllerCommand& m) {
+  ControlCommand command;
+  command.command_id = m.command_id();
+  command.mode = static_cast<ControlMode>(static_cast<uint32_t>(m.mode()));
+  command.position = {m.position().x(), m.position().y(), m.position().z()};
+  command.heading = m.heading();
+  command.depth = m.depth();
+  command.surge_speed = m.surge_speed();
+  command.tolerance = m.tolerance();
+  command.timeout = m.timeout();
+  const CommandResult result = controller_->setCommand(command, node_->clock().nowSeconds());
+  switch (result.outcome) {
+    case CommandResult::Outcome::ACCEPTED: {
+      const ControlCommand& c = controller_->command();
+      AUV_INFO(node_->logger(),
+               "command " << c.command_id << " " << toString(c.mode) << " (" << c.position.x()
+                          << ", " << c.position.y() << ", " << c.position.z() << ") heading "
+                          << c.heading << " depth " << c.depth << " speed " << c.surge_speed
+                          << " tolerance " << c.tolerance << " timeout " << c.timeout);
+      break;
+    }
+    case CommandResult::Outcome::REJECTED:
+      AUV_ERROR(node_->logger(), "control/waypoint: rejected "
+                                     << result.reason << "; keeping command "
+                                     << controller_->command().command_id);
+      break;
+    case CommandResult::Outcome::REFUSED:
+      AUV_WARN(node_->logger(), "control/waypoint: " << result.reason);
+      break;
+    case CommandResult::Outcome::IGNORED:
+      AUV_DEBUG(node_->logger(), "control/waypoint: ignored: " << result.reason);
+      break;
+  }
+  reportChanges();
+}
+
+void ControllerComponent::controlStep() {
+  if (!node_->clock().valid()) return;  // simulation time not started yet
+  publishThrusters(controller_->update(node_->clock().nowSeconds()));
+  reportChanges();
+}
+
+void ControllerComponent::publishThrusters(const ThrusterCommand& command) {
+  msg::ThrusterSetpoints setpoints;
+  stamp(setpoints.header(), node_->clock(), "base_link");
+  setpoints.port(command.port);
+  setpoints.starboard(command.starboard);
+  setpoints.vertical(command.vertical);
+  thrusters_pub_->publish(setpoints);
+}
+
+void ControllerComponent::publishStatus() {
+  const ControllerStatusReport& s = controller_->status();
+  msg::ControllerStatus status;
+  stamp(status.header(), node_->clock(), "");
+  status.active_command_id(s.active_command_id);
+  status.state(static_cast<msg::ControllerState>(s.state));
+  status.reached(s.reached);
+  status.safety_maneuver(s.safety_maneuver);
+  status.safety_reason(static_cast<msg::SafetyReason>(s.safety_reason));
+  status.safety_text(s.safety_text);
+  status.depth(s.depth);
+  status.altitude(s.altitude);
+  status.distance_to_target(s.distance_to_target);
+  status_pub_->publish(status);
+}
+
+void ControllerComponent::reportChanges() {
+  const ControllerStatusReport& now = controller_->status();
+  if (!now.differsInState(last_reported_)) return;
+  const auto& log = node_->logger();
+  if (now.safety_maneuver &&
+      (!last_reported_.safety_maneuver || now.safety_reason != last_reported_.safety_reason)) {
+    AUV_WARN(log, "safety manoeuvre " << toString(now.safety_reason) << ": " << now.safety_text);
+  } else if (!now.safety_maneuver && last_reported_.safety_maneuver) {
+    AUV_INFO(log, "safety manoeuvre over; command " << now.active_command_id << " dropped");
+  } else if (now.state == ControllerState::FAULT) {
+    AUV_WARN(log, "command " << now.active_command_id << " timed out after "
+                             << controller_->command().timeout << " s without reaching its goal");
+  } else if (now.reached && !last_reported_.reached) {
+    AUV_INFO(log, "command " << now.active_command_id << " reached");
+  }
+  last_reported_ = now;
+  publishStatus();
+}
+
+}  // namespace auv::sim
+
+AUV_REGISTER_COMPONENT(auv::sim::ControllerComponent, "controller",
+                       "low-level controller: control/waypoint -> control/thrusters")

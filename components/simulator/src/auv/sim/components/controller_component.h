@@ -1,0 +1,59 @@
+#pragma once
+// The vehicle's low-level controller as a component (`auv run controller`): LowLevelController
+// on DDS. Subscribes `control/waypoint` (ControllerCommand) and `nav/odometry` (Odometry);
+// publishes `control/thrusters` (ThrusterSetpoints) at control_rate and `control/status`
+// (ControllerStatus) at status_rate and on every change of state. Runs on the node clock, so
+// `use_sim_time` makes it follow the simulator.
+
+#include <memory>
+
+#include "auv/interfaces/component.h"
+#include "auv/sim/vehicle/controller.h"
+
+namespace auv::sim {
+
+class ControllerComponent : public interfaces::Component {
+ public:
+  struct Options {
+    double control_rate = 20.0;    ///< Hz, control steps and `control/thrusters` messages
+    double status_rate = 2.0;      ///< Hz, periodic `control/status` (also sent on changes)
+    ControllerOptions controller;  ///< parameters `controller.*` (model: `controller.model.*`)
+  };
+
+  /// Declares and checks the parameters (ParameterError or ConfigError naming the parameter)
+  /// and creates the publishers and subscriptions.
+  void configure(interfaces::Node& node) override;
+  /// Starts the control and status timers.
+  void activate() override;
+  /// Stops the timers and sends one all-stop setpoint.
+  void deactivate() override;
+  void cleanup() override;
+
+  /// The controller's current status (call from the executor's thread, e.g. in tests).
+  const ControllerStatusReport& status() const { return controller_->status(); }
+  const Options& options() const { return options_; }
+
+ private:
+  void onOdometry(const msg::Odometry& odometry);
+  void onCommand(const msg::ControllerCommand& command);
+  void controlStep();
+  void publishThrusters(const ThrusterCommand& command);
+  void publishStatus();
+  /// Publishes the status at once when its state changed, and logs the transition.
+  void reportChanges();
+
+  interfaces::Node* node_ = nullptr;
+  Options options_;
+  std::unique_ptr<LowLevelController> controller_;
+  ControllerStatusReport last_reported_;
+  int64_t bad_odometry_count_ = 0;  // for throttled warnings
+
+  std::shared_ptr<interfaces::Subscription<msg::ControllerCommand>> command_sub_;
+  std::shared_ptr<interfaces::Subscription<msg::Odometry>> odometry_sub_;
+  std::shared_ptr<interfaces::Publisher<msg::ThrusterSetpoints>> thrusters_pub_;
+  std::shared_ptr<interfaces::Publisher<msg::ControllerStatus>> status_pub_;
+  std::shared_ptr<interfaces::Timer> control_timer_;
+  std::shared_ptr<interfaces::Timer> status_timer_;
+};
+
+}  // namespace auv::sim

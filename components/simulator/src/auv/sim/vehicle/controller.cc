@@ -1,0 +1,466 @@
+#include "auv/sim/vehicle/controller.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <vector>
+
+namespace auv::sim {
+namespace {
+
+// Integrals only accumulate close to the setpoint and nearly at rest there (conditional
+// integration): they are for steady model errors, and integrating during the approach would
+// only add overshoot.
+constexpr double kHeadingIntegralBand = 0.1;   // rad
+constexpr double kYawRateIntegralBand = 0.03;  // rad/s
+constexpr double kDepthIntegralBand = 0.25;    // m
+constexpr double kHeaveIntegralBand = 0.03;    // m/s
+constexpr double kSurgeIntegralBand = 0.05;    // m/s
+// Longest step the integrals take, so a stalled caller does not jolt them.
+constexpr double kMaxControlStep = 0.2;  // s
+
+std::string number(double value) {
+  std::ostringstream out;
+  out << value;
+  return out.str();
+}
+
+double clampIntegral(double integral, double gain, double limit) {
+  if (gain <= 0) return 0.0;
+  const double bound = limit / gain;
+  return std::clamp(integral, -bound, bound);
+}
+
+template <size_t N, class Enum>
+const char* nameOf(const char* const (&names)[N], Enum value) {
+  const auto index = static_cast<size_t>(value);
+  return index < N ? names[index] : "UNKNOWN_VALUE";
+}
+
+}  // namespace
+
+const char* toString(ControlMode mode) {
+  static const char* const kNames[] = {"NONE", "STOP", "HOLD", "WAYPOINT", "SETPOINT", "SURFACE"};
+  return nameOf(kNames, mode);
+}
+
+const char* toString(ControllerState state) {
+  static const char* const kNames[] = {"UNKNOWN",         "IDLE", "ACTIVE", "HOLDING",
+                                       "SAFETY_MANEUVER", "FAULT"};
+  return nameOf(kNames, state);
+}
+
+const char* toString(SafetyReason reason) {
+  static const char* const kNames[] = {
+      "NONE",        "MIN_ALTITUDE", "MAX_DEPTH",       "OBSTACLE", "NAVIGATION_LOST",
+      "LOW_BATTERY", "LEAK",         "COMMAND_TIMEOUT", "OPERATOR", "OTHER"};
+  return nameOf(kNames, reason);
+}
+
+ControllerNavigation ControllerNavigation::fromState(const VehicleState& state, double altitude,
+                                                     double stamp) {
+  ControllerNavigation nav;
+  nav.position = state.position;
+  nav.yaw = state.yaw;
+  nav.surge = state.surge;
+  nav.sway = state.sway;
+  nav.heave = state.heave;
+  nav.yaw_rate = state.yaw_rate;
+  nav.altitude = altitude;
+  nav.stamp = stamp;
+  return nav;
+}
+
+bool ControllerNavigation::valid() const {
+  return position.allFinite() && std::isfinite(yaw) && std::isfinite(surge) &&
+         std::isfinite(sway) && std::isfinite(heave) && std::isfinite(yaw_rate) &&
+         std::isfinite(altitude) && std::isfinite(stamp);
+}
+
+bool ControllerStatusReport::differsInState(const ControllerStatusReport& other) const {
+  return active_command_id != other.active_command_id || state != other.state ||
+         reached != other.reached || safety_maneuver != other.safety_maneuver ||
+         safety_reason != other.safety_reason;
+}
+
+void ControllerOptions::check() const {
+  struct Bound {
+    const char* name;
+    double value;
+    double min;
+    bool min_exclusive;
+  };
+  const Bound bounds[] = {
+      {"heading_kp", heading_kp, 0.0, false},
+      {"heading_ki", heading_ki, 0.0, false},
+      {"heading_kd", heading_kd, 0.0, false},
+      {"heading_integral_limit", heading_integral_limit, 0.0, false},
+      {"depth_kp", depth_kp, 0.0, false},
+      {"depth_ki", depth_ki, 0.0, false},
+      {"depth_kd", depth_kd, 0.0, false},
+      {"depth_integral_limit", depth_integral_limit, 0.0, false},
+      {"surge_kp", surge_kp, 0.0, false},
+      {"surge_ki", surge_ki, 0.0, false},
+      {"surge_integral_limit", surge_integral_limit, 0.0, false},
+      {"default_surge_speed", default_surge_speed, 0.0, true},
+      {"max_surge_speed", max_surge_speed, 0.0, true},
+      {"default_tolerance", default_tolerance, 0.0, true},
+      {"slow_down_radius", slow_down_radius, 0.0, true},
+      {"min_approach_fraction", min_approach_fraction, 0.0, true},
+      {"hold_speed", hold_speed, 0.0, true},
+      {"surface_depth", surface_depth, 0.0, false},
+      {"max_depth", max_depth, 0.0, true},
+      {"min_altitude", min_altitude, 0.0, false},
+      {"navigation_timeout", navigation_timeout, 0.0, true},
+      {"safety_clear_time", safety_clear_time, 0.0, false},
+  };
+  for (const Bound& b : bounds) {
+    if (!std::isfinite(b.value) || (b.min_exclusive ? b.value <= b.min : b.value < b.min)) {
+      throw ConfigError(std::string("controller.") + b.name + ": expected a finite number " +
+                        (b.min_exclusive ? "> " : ">= ") + number(b.min) + ", got " +
+                        number(b.value));
+    }
+  }
+  if (min_approach_fraction > 1) {
+    throw ConfigError("controller.min_approach_fraction: expected a number <= 1, got " +
+                      number(min_approach_fraction));
+  }
+  if (default_surge_speed > max_surge_speed) {
+    throw ConfigError("controller.default_surge_speed: " + number(default_surge_speed) +
+                      " m/s exceeds controller.max_surge_speed " + number(max_surge_speed));
+  }
+  if (fault_action != FaultAction::STOP && fault_action != FaultAction::HOLD_DEPTH) {
+    throw ConfigError("controller.fault_action: unknown value " +
+                      std::to_string(static_cast<uint32_t>(fault_action)));
+  }
+  try {
+    model.check();
+  } catch (const ConfigError& e) {
+    // Name the field as the controller knows it: "vehicle.x" -> "controller.model.x".
+    std::string message = e.what();
+    if (message.rfind("vehicle.", 0) == 0) message = "controller.model." + message.substr(8);
+    throw ConfigError(message);
+  }
+}
+
+LowLevelController::LowLevelController(const ControllerOptions& options) : options_(options) {
+  options_.check();
+}
+
+bool LowLevelController::setNavigation(const ControllerNavigation& navigation, double now) {
+  if (!navigation.valid()) return false;
+  navigation_ = navigation;
+  navigation_time_ = now;
+  status_.depth = navigation.position.z();
+  status_.altitude = navigation.altitude;
+  return true;
+}
+
+std::optional<std::string> LowLevelController::validate(const ControlCommand& command) const {
+  const std::string prefix = "command " + std::to_string(command.command_id) + ": ";
+  if (static_cast<uint32_t>(command.mode) > static_cast<uint32_t>(ControlMode::SURFACE)) {
+    return prefix + "mode: unknown value " + std::to_string(static_cast<uint32_t>(command.mode));
+  }
+  if (command.command_id == 0) return prefix + "command_id: must be >= 1 (0 means none)";
+  const std::pair<const char*, double> values[] = {{"position.x", command.position.x()},
+                                                   {"position.y", command.position.y()},
+                                                   {"position.z", command.position.z()},
+                                                   {"heading", command.heading},
+                                                   {"depth", command.depth},
+                                                   {"surge_speed", command.surge_speed},
+                                                   {"tolerance", command.tolerance},
+                                                   {"timeout", command.timeout}};
+  for (const auto& [name, value] : values) {
+    if (!std::isfinite(value))
+      return prefix + name + ": not a finite number (" + number(value) + ")";
+  }
+  if (command.tolerance < 0) {
+    return prefix + "tolerance: must be >= 0 m, got " + number(command.tolerance);
+  }
+  if (command.timeout < 0)
+    return prefix + "timeout: must be >= 0 s, got " + number(command.timeout);
+  const double max_depth = options_.max_depth;
+  const double max_speed = options_.max_surge_speed;
+  if (command.mode == ControlMode::WAYPOINT) {
+    if (command.position.z() < 0) {
+      return prefix + "position.z: " + number(command.position.z()) +
+             " m is above the surface (z is depth, >= 0)";
+    }
+    if (command.position.z() > max_depth) {
+      return prefix + "position.z: " + number(command.position.z()) +
+             " m is deeper than max_depth " + number(max_depth) + " m";
+    }
+    if (command.surge_speed < 0 || command.surge_speed > max_speed) {
+      return prefix + "surge_speed: must be in [0, " + number(max_speed) + "] m/s, got " +
+             number(command.surge_speed);
+    }
+  }
+  if (command.mode == ControlMode::SETPOINT) {
+    if (command.depth < 0 || command.depth > max_depth) {
+      return prefix + "depth: must be in [0, " + number(max_depth) + "] m, got " +
+             number(command.depth);
+    }
+    if (std::abs(command.surge_speed) > max_speed) {
+      return prefix + "surge_speed: must be in [-" + number(max_speed) + ", " + number(max_speed) +
+             "] m/s, got " + number(command.surge_speed);
+    }
+  }
+  return std::nullopt;
+}
+
+CommandResult LowLevelController::setCommand(const ControlCommand& command, double now) {
+  if (command.mode == ControlMode::NONE) {
+    return {CommandResult::Outcome::IGNORED, "mode NONE carries no command"};
+  }
+  if (auto problem = validate(command)) return {CommandResult::Outcome::REJECTED, *problem};
+  if (command_.mode != ControlMode::NONE && command.command_id == command_.command_id) {
+    return {CommandResult::Outcome::IGNORED,
+            "command " + std::to_string(command.command_id) + " is already the active one"};
+  }
+  if (status_.safety_maneuver) {
+    return {CommandResult::Outcome::REFUSED, "command " + std::to_string(command.command_id) +
+                                                 ": refused during the " +
+                                                 toString(status_.safety_reason) +
+                                                 " safety manoeuvre (" + status_.safety_text + ")"};
+  }
+
+  command_ = command;
+  if (command_.mode == ControlMode::WAYPOINT) {
+    if (command_.tolerance == 0) command_.tolerance = options_.default_tolerance;
+    if (command_.surge_speed == 0) command_.surge_speed = options_.default_surge_speed;
+  }
+  command_.heading = wrapAngle(command_.heading);
+  command_start_ = now;
+  status_.active_command_id = command.command_id;
+  status_.reached = false;
+  status_.distance_to_target = -1.0;
+  hold_pending_ = false;
+  returning_ = false;
+  resetIntegrals(false);  // the depth integral estimates the buoyancy error: keep it
+
+  switch (command_.mode) {
+    case ControlMode::STOP:
+      status_.state = ControllerState::IDLE;
+      break;
+    case ControlMode::HOLD:
+      status_.state = ControllerState::HOLDING;
+      if (navigation_) {
+        startHolding(navigation_->position, options_.default_tolerance, navigation_->yaw);
+      } else {
+        hold_pending_ = true;
+      }
+      break;
+    case ControlMode::WAYPOINT:
+      if (navigation_)
+        status_.distance_to_target = (command_.position - navigation_->position).norm();
+      status_.state = ControllerState::ACTIVE;
+      break;
+    default:
+      status_.state = ControllerState::ACTIVE;
+      break;
+  }
+  return {CommandResult::Outcome::ACCEPTED, ""};
+}
+
+void LowLevelController::resetIntegrals(bool depth_too) {
+  heading_integral_ = 0.0;
+  surge_integral_ = 0.0;
+  if (depth_too) depth_integral_ = 0.0;
+}
+
+void LowLevelController::startHolding(const Eigen::Vector3d& point, double radius, double yaw) {
+  hold_point_ = point;
+  hold_radius_ = radius;
+  hold_yaw_ = yaw;
+  returning_ = false;
+  hold_pending_ = false;
+}
+
+void LowLevelController::updateSafety(double now) {
+  SafetyReason reason = SafetyReason::NONE;
+  std::string text;
+  if (!navigation_ || now - navigation_time_ > options_.navigation_timeout) {
+    const double since = now - (navigation_ ? navigation_time_ : *first_update_);
+    if (since > options_.navigation_timeout) {
+      reason = SafetyReason::NAVIGATION_LOST;
+      text = (navigation_ ? "no navigation for " : "no valid navigation received in ") +
+             number(since) + " s (navigation_timeout " + number(options_.navigation_timeout) +
+             " s)";
+    }
+  }
+  if (reason == SafetyReason::NONE && navigation_) {
+    const double depth = navigation_->position.z();
+    const double altitude = navigation_->altitude;
+    if (depth > options_.max_depth) {
+      reason = SafetyReason::MAX_DEPTH;
+      text = "depth " + number(depth) + " m > max_depth " + number(options_.max_depth) + " m";
+    } else if (altitude >= 0 && altitude < options_.min_altitude) {
+      reason = SafetyReason::MIN_ALTITUDE;
+      text = "altitude " + number(altitude) + " m < min_altitude " + number(options_.min_altitude) +
+             " m";
+    }
+  }
+
+  if (reason != SafetyReason::NONE) {
+    condition_seen_ = now;
+    status_.safety_maneuver = true;
+    status_.state = ControllerState::SAFETY_MANEUVER;
+    status_.safety_reason = reason;
+    status_.safety_text = text;
+    status_.reached = false;
+    status_.distance_to_target = -1.0;
+    return;
+  }
+  if (status_.safety_maneuver && now - *condition_seen_ >= options_.safety_clear_time) {
+    // Over: drop the interrupted command, the mission handler decides what comes next.
+    status_.safety_maneuver = false;
+    status_.safety_reason = SafetyReason::NONE;
+    status_.safety_text.clear();
+    status_.state = ControllerState::IDLE;
+    command_ = ControlCommand();
+    resetIntegrals(true);
+  }
+}
+
+ThrusterCommand LowLevelController::update(double now) {
+  if (!first_update_) first_update_ = now;
+  const double dt = last_update_ ? std::clamp(now - *last_update_, 0.0, kMaxControlStep) : 0.0;
+  last_update_ = now;
+
+  updateSafety(now);
+  if (status_.safety_maneuver) {
+    resetIntegrals(false);
+    return {0.0, 0.0, -1.0};  // horizontal off, full up: the surface is the safe place
+  }
+  const bool running =
+      status_.state == ControllerState::ACTIVE || status_.state == ControllerState::HOLDING;
+  if (running && command_.timeout > 0 && !status_.reached &&
+      now - command_start_ > command_.timeout) {
+    status_.state = ControllerState::FAULT;
+    status_.distance_to_target = -1.0;
+    fault_depth_ = navigation_ ? navigation_->position.z() : 0.0;
+  }
+  if (!navigation_) return {};  // nothing to regulate on; NAVIGATION_LOST follows
+
+  switch (status_.state) {
+    case ControllerState::FAULT: {
+      if (options_.fault_action == FaultAction::STOP) return {};
+      Targets hold{navigation_->yaw, fault_depth_, 0.0};
+      ThrusterCommand out = regulate(hold, dt);
+      out.port = out.starboard = 0.0;
+      return out;
+    }
+    case ControllerState::ACTIVE:
+    case ControllerState::HOLDING:
+      if (command_.mode == ControlMode::SURFACE) {
+        if (navigation_->position.z() <= options_.surface_depth) status_.reached = true;
+        return {0.0, 0.0, status_.reached ? 0.0 : -1.0};  // buoyancy keeps it up there
+      }
+      return regulate(guidance(), dt);
+    default:
+      return {};
+  }
+}
+
+LowLevelController::Targets LowLevelController::guidance() {
+  const ControllerNavigation& nav = *navigation_;
+  switch (command_.mode) {
+    case ControlMode::HOLD:
+      if (hold_pending_) startHolding(nav.position, options_.default_tolerance, nav.yaw);
+      return holdTargets();
+    case ControlMode::SETPOINT:
+      return {command_.heading, command_.depth, command_.surge_speed};
+    case ControlMode::WAYPOINT: {
+      const Eigen::Vector3d target = command_.position;
+      const double distance = (target - nav.position).norm();
+      status_.distance_to_target = distance;
+      if (status_.state == ControllerState::HOLDING) return holdTargets();
+      if (distance <= command_.tolerance) {
+        status_.reached = true;
+        status_.state = ControllerState::HOLDING;
+        startHolding(target, command_.tolerance, nav.yaw);
+        return holdTargets();
+      }
+      Targets targets{nav.yaw, target.z(), 0.0};
+      const Eigen::Vector2d horizontal = (target - nav.position).head<2>();
+      const double range = horizontal.norm();
+      // Right above or below the target the line of sight is undefined: only change depth.
+      if (range > 0.5 * command_.tolerance) {
+        targets.yaw = std::atan2(horizontal.y(), horizontal.x());
+        const double ramp =
+            std::clamp(range / options_.slow_down_radius, options_.min_approach_fraction, 1.0);
+        // Turn first: full speed only when pointing at the target, none when it is abeam.
+        const double alignment = std::max(0.0, std::cos(wrapAngle(targets.yaw - nav.yaw)));
+        targets.surge_speed = command_.surge_speed * ramp * alignment;
+      }
+      return targets;
+    }
+    default:
+      return {nav.yaw, nav.position.z(), 0.0};
+  }
+}
+
+LowLevelController::Targets LowLevelController::holdTargets() {
+  const ControllerNavigation& nav = *navigation_;
+  const Eigen::Vector2d offset = (hold_point_ - nav.position).head<2>();
+  const double range = offset.norm();
+  // Hysteresis: drive back once outside the radius, stop again well inside it.
+  if (range > hold_radius_) {
+    returning_ = true;
+  } else if (returning_ && range < 0.5 * hold_radius_) {
+    returning_ = false;
+    hold_yaw_ = nav.yaw;  // keep the heading it arrived with
+  }
+  if (!returning_) return {hold_yaw_, hold_point_.z(), 0.0};
+  const double yaw = std::atan2(offset.y(), offset.x());
+  const double alignment = std::max(0.0, std::cos(wrapAngle(yaw - nav.yaw)));
+  return {yaw, hold_point_.z(), options_.hold_speed * alignment};
+}
+
+ThrusterCommand LowLevelController::regulate(const Targets& targets, double dt) {
+  const ControllerNavigation& nav = *navigation_;
+  const ControllerOptions& o = options_;
+
+  const double yaw_error = wrapAngle(targets.yaw - nav.yaw);
+  if (std::abs(yaw_error) < kHeadingIntegralBand && std::abs(nav.yaw_rate) < kYawRateIntegralBand) {
+    heading_integral_ =
+        clampIntegral(heading_integral_ + yaw_error * dt, o.heading_ki, o.heading_integral_limit);
+  }
+  const double yaw_moment =
+      o.heading_kp * yaw_error + o.heading_ki * heading_integral_ - o.heading_kd * nav.yaw_rate;
+
+  const double depth_error = targets.depth - nav.position.z();
+  if (std::abs(depth_error) < kDepthIntegralBand && std::abs(nav.heave) < kHeaveIntegralBand) {
+    depth_integral_ =
+        clampIntegral(depth_integral_ + depth_error * dt, o.depth_ki, o.depth_integral_limit);
+  }
+  // Buoyancy pushes up (-z): the vertical thruster holds it with as much force down.
+  const double heave_force = o.model.net_buoyancy + o.depth_kp * depth_error +
+                             o.depth_ki * depth_integral_ - o.depth_kd * nav.heave;
+
+  const double speed_error = targets.surge_speed - nav.surge;
+  if (std::abs(speed_error) < kSurgeIntegralBand) {
+    surge_integral_ =
+        clampIntegral(surge_integral_ + speed_error * dt, o.surge_ki, o.surge_integral_limit);
+  }
+  const double surge_force = o.model.surgeDrag(targets.surge_speed) + o.surge_kp * speed_error +
+                             o.surge_ki * surge_integral_;
+
+  return allocate(surge_force, yaw_moment, heave_force);
+}
+
+ThrusterCommand LowLevelController::allocate(double surge_force, double yaw_moment,
+                                             double heave_force) const {
+  const VehicleOptions& m = options_.model;
+  // port = X/2 + N/s and starboard = X/2 - N/s give surge X and yaw moment s/2 (port -
+  // starboard) = N. The moment comes first; surge gets what thrust is left.
+  const double moment = std::clamp(yaw_moment, -m.maxYawMoment(), m.maxYawMoment());
+  const double differential = moment / m.thruster_spacing;
+  const double lowest = 2.0 * (-m.max_thrust_reverse + std::abs(differential));
+  const double highest = 2.0 * (m.max_thrust_forward - std::abs(differential));
+  const double surge = std::clamp(surge_force, lowest, highest);
+  return {m.commandForThrust(0.5 * surge + differential),
+          m.commandForThrust(0.5 * surge - differential), m.commandForThrust(heave_force)};
+}
+
+}  // namespace auv::sim
