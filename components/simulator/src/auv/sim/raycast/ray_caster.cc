@@ -132,6 +132,7 @@ float linearToSrgb(float c) {
 struct RayCaster::Impl {
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
+  std::vector<Eigen::Vector3f> linear_vertex_colors;  // converted once: shading is hot
 };
 
 RayCaster::RayCaster(const Mesh& mesh) : mesh_(mesh), impl_(std::make_unique<Impl>()) {
@@ -158,6 +159,11 @@ RayCaster::RayCaster(const Mesh& mesh) : mesh_(mesh), impl_(std::make_unique<Imp
   }
   for (size_t i = 0; i < mesh.triangles.size(); ++i) {
     for (int k = 0; k < 3; ++k) indices[3 * i + k] = static_cast<unsigned>(mesh.triangles[i][k]);
+  }
+  impl_->linear_vertex_colors.reserve(mesh.vertex_colors.size());
+  for (const Eigen::Vector3f& c : mesh.vertex_colors) {
+    impl_->linear_vertex_colors.emplace_back(srgbToLinear(c.x()), srgbToLinear(c.y()),
+                                             srgbToLinear(c.z()));
   }
   rtcCommitGeometry(geometry);
   rtcAttachGeometry(impl_->scene, geometry);
@@ -249,14 +255,8 @@ Eigen::Vector3f RayCaster::colorAt(const RayHit& hit) const {
   }
   if (mesh_.hasVertexColors()) {
     const Eigen::Vector3i& t = mesh_.triangles[hit.triangle];
-    Eigen::Vector3f color = Eigen::Vector3f::Zero();
-    const float w[3] = {w0, hit.u, hit.v};
-    for (int k = 0; k < 3; ++k) {
-      const Eigen::Vector3f& c = mesh_.vertex_colors[t[k]];
-      color +=
-          w[k] * Eigen::Vector3f(srgbToLinear(c.x()), srgbToLinear(c.y()), srgbToLinear(c.z()));
-    }
-    return color;
+    const auto& c = impl_->linear_vertex_colors;
+    return w0 * c[t[0]] + hit.u * c[t[1]] + hit.v * c[t[2]];
   }
   return Eigen::Vector3f::Constant(0.5f);
 }

@@ -61,7 +61,7 @@ Scenario loadScenario(const std::string& path) {
   s.root = loadYamlFile(path);
   const YamlSection& root = s.root;
   root.rejectUnknownKeys({"name", "description", "world", "water", "vehicle", "navigation", "sonar",
-                          "cameras", "queries", "simulation"});
+                          "cameras", "lighting", "queries", "simulation"});
   s.name = fs::path(path).stem().string();
   root.read("name", s.name);
   root.read("description", s.description);
