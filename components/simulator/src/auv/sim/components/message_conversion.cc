@@ -1,0 +1,122 @@
+#include "auv/sim/components/message_conversion.h"
+
+#include <cmath>
+
+namespace auv::sim {
+namespace {
+
+msg::Point toPoint(const Eigen::Vector3d& p) {
+  msg::Point out;
+  out.x(p.x());
+  out.y(p.y());
+  out.z(p.z());
+  return out;
+}
+
+msg::Vector3 toVector3(const Eigen::Vector3d& v) {
+  msg::Vector3 out;
+  out.x(v.x());
+  out.y(v.y());
+  out.z(v.z());
+  return out;
+}
+
+msg::Header header(double t, const char* frame) {
+  msg::Header h;
+  h.stamp(toTime(t));
+  h.frame_id(frame);
+  return h;
+}
+
+}  // namespace
+
+msg::Time toTime(double seconds) {
+  msg::Time time;
+  const double whole = std::floor(seconds);
+  int64_t ns = std::llround((seconds - whole) * 1e9);
+  int64_t sec = static_cast<int64_t>(whole);
+  if (ns >= 1000000000) sec += 1, ns -= 1000000000;
+  time.sec(static_cast<int32_t>(sec));
+  time.nanosec(static_cast<uint32_t>(ns));
+  return time;
+}
+
+double toSeconds(const msg::Time& time) { return time.sec() + time.nanosec() * 1e-9; }
+
+msg::Pose toPose(const Eigen::Isometry3d& pose) {
+  msg::Pose out;
+  out.position(toPoint(pose.translation()));
+  const Eigen::Quaterniond q(pose.linear());
+  out.orientation().x(q.x());
+  out.orientation().y(q.y());
+  out.orientation().z(q.z());
+  out.orientation().w(q.w());
+  return out;
+}
+
+msg::Odometry toOdometry(const NavigationEstimate& estimate) {
+  msg::Odometry odom;
+  odom.header(header(estimate.stamp, "world"));
+  odom.child_frame_id("base_link");
+  odom.pose().pose(toPose(estimate.pose()));
+  std::array<double, 36> pose_cov{}, twist_cov{};
+  for (int r = 0; r < 6; ++r) {
+    for (int c = 0; c < 6; ++c) {
+      pose_cov[6 * r + c] = estimate.pose_covariance(r, c);
+      twist_cov[6 * r + c] = estimate.twist_covariance(r, c);
+    }
+  }
+  odom.pose().covariance(pose_cov);
+  odom.twist().twist().linear(toVector3(estimate.velocity));
+  odom.twist().twist().angular(toVector3(estimate.angular_velocity));
+  odom.twist().covariance(twist_cov);
+  odom.altitude(estimate.altitude);
+  odom.source_flags(estimate.source_flags);
+  return odom;
+}
+
+msg::Odometry groundTruthOdometry(const VehicleState& state, double t, double altitude) {
+  msg::Odometry odom;
+  odom.header(header(t, "world"));
+  odom.child_frame_id("base_link");
+  odom.pose().pose(toPose(state.pose()));
+  odom.twist().twist().linear(toVector3({state.surge, state.sway, state.heave}));
+  odom.twist().twist().angular(toVector3({0, 0, state.yaw_rate}));
+  odom.altitude(altitude);
+  odom.source_flags(msg::ODOMETRY_SOURCE_GROUND_TRUTH);
+  return odom;
+}
+
+msg::SonarBeam toSonarBeam(const SonarPing& ping) {
+  msg::SonarBeam beam;
+  beam.header(header(ping.stamp, "sonar"));
+  beam.mounting(toPose(ping.mounting));
+  beam.beam_angle(static_cast<float>(ping.angle));
+  beam.horizontal_beam_width(static_cast<float>(ping.horizontal_beam_width));
+  beam.vertical_beam_width(static_cast<float>(ping.vertical_beam_width));
+  beam.min_range(static_cast<float>(ping.min_range));
+  beam.max_range(static_cast<float>(ping.max_range));
+  beam.range_resolution(static_cast<float>(ping.range_resolution));
+  beam.sound_speed(static_cast<float>(ping.sound_speed));
+  beam.ranges(ping.ranges);
+  beam.range_intensities(ping.intensities);
+  beam.bins(ping.bins);
+  beam.flags(ping.flags);
+  return beam;
+}
+
+msg::CollisionEvent toCollisionEvent(const HullContact& contact, const VehicleState& state,
+                                     double t, double speed, bool started) {
+  msg::CollisionEvent event;
+  event.header(header(t, "world"));
+  event.contact_point(toPoint(contact.point));
+  event.contact_normal(toVector3(contact.normal));
+  event.penetration(contact.penetration);
+  event.speed(speed);
+  event.vehicle_pose(toPose(state.pose()));
+  event.face_index(contact.triangle);
+  event.started(started);
+  return event;
+}
+
+}  // namespace auv::sim

@@ -1,0 +1,352 @@
+#include "auv/sim/components/simulator_component.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <chrono>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+
+#include "auv/sim/components/message_conversion.h"
+#include "auv/sim/worldgen/world_generator.h"
+
+namespace auv::sim {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string joinWorldNames() {
+  std::string names;
+  for (const std::string& w : availableWorlds()) names += (names.empty() ? "" : ", ") + w;
+  return names;
+}
+
+std::string timestampForFolder() {
+  const std::time_t now = std::time(nullptr);
+  char text[32];
+  std::strftime(text, sizeof(text), "%Y%m%d-%H%M%S", std::localtime(&now));
+  return text;
+}
+
+// The scenario as used, next to the ground truth, with the mesh path made absolute so that
+// `auv sim render <run>` finds the world from anywhere.
+void writeRunScenario(const Scenario& scenario, const std::string& run_dir) {
+  YAML::Node root = YAML::Clone(scenario.root.node());
+  root["world"]["mesh"] = scenario.mesh_path;
+  const fs::path path = fs::path(run_dir) / "scenario.yaml";
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error(path.string() + ": cannot write the file");
+  out << "# Scenario used by this run (written by the simulator; world.mesh made absolute).\n"
+      << root << "\n";
+}
+
+}  // namespace
+
+void SimulatorComponent::configure(interfaces::Node& node) {
+  node_ = &node;
+  auto& p = node.parameters();
+  using D = interfaces::ParameterDescriptor;
+  options_.world = p.declare<std::string>(
+      "world", options_.world,
+      D{"world name (" + joinWorldNames() + ") or the path of a scenario .yaml",
+        "",
+        {},
+        {},
+        {},
+        true});
+  options_.seed =
+      p.declare<int64_t>("seed", options_.seed,
+                         D{"seed of world generation and sensor noise", "", 0.0, 1e15, {}, true});
+  options_.world_cache = p.declare<std::string>(
+      "world_cache", defaultWorldCache(), D{"folder of generated worlds", "", {}, {}, {}, true});
+  options_.real_time_factor =
+      p.declare<double>("real_time_factor", options_.real_time_factor,
+                        D{"simulated seconds per wall-clock second; 0 = as fast as possible",
+                          "",
+                          0.0,
+                          1000.0,
+                          {},
+                          true});
+  options_.physics_rate =
+      p.declare<double>("physics_rate", options_.physics_rate,
+                        D{"physics and clock rate", "Hz", 10.0, 1000.0, {}, true});
+  options_.odometry_rate =
+      p.declare<double>("odometry_rate", options_.odometry_rate,
+                        D{"rate of sim/ground_truth (nav/odometry follows navigation.output_rate)",
+                          "Hz",
+                          0.1,
+                          1000.0,
+                          {},
+                          true});
+  options_.trajectory_rate = p.declare<double>(
+      "trajectory_rate", options_.trajectory_rate,
+      D{"rows per second of ground_truth/trajectory.tum (the cameras render from it)",
+        "Hz",
+        1.0,
+        1000.0,
+        {},
+        true});
+  options_.thruster_timeout = p.declare<double>(
+      "thruster_timeout", options_.thruster_timeout,
+      D{"thrusters stop when no setpoint arrived for this long", "s", 0.01, 60.0, {}, true});
+  options_.collision_repeat = p.declare<double>(
+      "collision_repeat", options_.collision_repeat,
+      D{"period of repeated collision events while a contact lasts", "s", 0.01, 3600.0, {}, true});
+  options_.duration = p.declare<double>(
+      "duration", options_.duration,
+      D{"simulated time after which the simulation stops; 0 = unlimited", "s", 0.0, 1e7, {}, true});
+  options_.run_dir = p.declare<std::string>(
+      "run_dir", "auto",
+      D{"folder for ground truth and videos; auto = auv_runs/<scenario>-<date-time>",
+        "",
+        {},
+        {},
+        {},
+        true});
+  if (p.get<bool>("use_sim_time")) {
+    throw ConfigError("simulator: use_sim_time must be false: the simulator is the clock");
+  }
+
+  const std::string scenario_path =
+      ensureWorld(options_.world, options_.seed, options_.world_cache);
+  scenario_ = loadScenario(scenario_path);
+  MeshReport report;
+  mesh_ = std::make_unique<Mesh>(loadWorldMesh(scenario_, &report));
+  world_ = std::make_unique<RayCaster>(*mesh_);
+  if (report.removed_degenerate > 0) {
+    AUV_WARN(node.logger(), scenario_.mesh_path << ": removed " << report.removed_degenerate
+                                                << " degenerate triangles");
+  }
+
+  const VehicleOptions vehicle = VehicleOptions::fromYaml(scenario_.root.child("vehicle"));
+  hull_.length = vehicle.length;
+  hull_.radius = vehicle.radius;
+  dynamics_ = std::make_unique<VehicleDynamics>(vehicle);
+  const uint64_t seed = static_cast<uint64_t>(options_.seed);
+  navigation_ = std::make_unique<NavigationSimulator>(
+      NavigationOptions::fromYaml(scenario_.root.child("navigation")), seed * 2654435761u + 1);
+  sonar_ = std::make_unique<ProfilingSonar>(SonarOptions::fromYaml(scenario_.root.child("sonar")),
+                                            seed * 2654435761u + 2);
+
+  state_ = VehicleState();
+  state_.position = scenario_.start_position;
+  state_.yaw = scenario_.start_yaw;
+  if (const auto contact = findHullContact(*world_, scenario_.seabed_depth, hull_, state_.pose())) {
+    throw ConfigError(
+        scenario_.file + ": vehicle.start: the hull at [" + std::to_string(state_.position.x()) +
+        ", " + std::to_string(state_.position.y()) + ", " + std::to_string(state_.position.z()) +
+        "] touches the world (" + std::to_string(contact->penetration) + " m deep)");
+  }
+
+  if (options_.run_dir.empty() || options_.run_dir == "auto") {
+    options_.run_dir =
+        (fs::path("auv_runs") / (scenario_.name + "-" + timestampForFolder())).string();
+  }
+  log_ = std::make_unique<GroundTruthLog>(options_.run_dir);
+  writeRunScenario(scenario_, options_.run_dir);
+
+  clock_pub_ = node.createPublisher<msg::Clock>("clock", interfaces::clockQos());
+  odometry_pub_ = node.createPublisher<msg::Odometry>("nav/odometry", interfaces::stateQos());
+  ground_truth_pub_ =
+      node.createPublisher<msg::Odometry>("sim/ground_truth", interfaces::stateQos());
+  sonar_pub_ = node.createPublisher<msg::SonarBeam>("sonar/beam", interfaces::sensorDataQos());
+  collision_pub_ =
+      node.createPublisher<msg::CollisionEvent>("sim/collision", interfaces::commandQos());
+  thrusters_sub_ = node.createSubscription<msg::ThrusterSetpoints>(
+      "control/thrusters", interfaces::sensorDataQos(),
+      std::function<void(const msg::ThrusterSetpoints&)>([this](const msg::ThrusterSetpoints& m) {
+        ThrusterCommand c{m.port(), m.starboard(), m.vertical()};
+        if (!std::isfinite(c.port) || !std::isfinite(c.starboard) || !std::isfinite(c.vertical)) {
+          AUV_ERROR(node_->logger(),
+                    "control/thrusters: ignoring a setpoint with a non-finite "
+                    "field (port, starboard or vertical)");
+          return;
+        }
+        const double now = simulationTime();
+        std::lock_guard<std::mutex> lock(thrust_mutex_);
+        thrust_ = c;
+        thrust_stamp_ = now;
+      }));
+
+  AUV_INFO(node.logger(), "world " << scenario_.name << " (" << report.triangles
+                                   << " triangles) from " << scenario_.file << "; run folder "
+                                   << options_.run_dir);
+}
+
+void SimulatorComponent::activate() {
+  running_ = true;
+  thread_ = std::thread([this] { run(); });
+}
+
+void SimulatorComponent::deactivate() {
+  running_ = false;
+  if (thread_.joinable()) thread_.join();
+  if (log_) log_->flush();
+}
+
+void SimulatorComponent::cleanup() {
+  thrusters_sub_.reset();
+  clock_pub_.reset();
+  odometry_pub_.reset();
+  ground_truth_pub_.reset();
+  sonar_pub_.reset();
+  collision_pub_.reset();
+  log_.reset();
+  sonar_.reset();
+  navigation_.reset();
+  dynamics_.reset();
+  world_.reset();
+  mesh_.reset();
+}
+
+VehicleState SimulatorComponent::trueState() const {
+  std::lock_guard<std::mutex> lock(state_mutex_);
+  return state_;
+}
+
+double SimulatorComponent::simulationTime() const {
+  std::lock_guard<std::mutex> lock(state_mutex_);
+  return time_;
+}
+
+void SimulatorComponent::run() {
+  using Clock = std::chrono::steady_clock;
+  const double dt = 1.0 / options_.physics_rate;
+  const Clock::time_point wall_start = Clock::now();
+  const double sim_start = simulationTime();
+  double next_report = sim_start + 60.0;
+  bool finished = false;
+  while (running_) {
+    if (options_.duration > 0 && simulationTime() >= options_.duration) {
+      if (!finished) {
+        AUV_INFO(node_->logger(), "duration of " << options_.duration << " s reached: stopped");
+        log_->flush();
+        finished = true;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      continue;
+    }
+    try {
+      step(dt);
+    } catch (const std::exception& e) {
+      AUV_ERROR(node_->logger(), "simulation step failed, stopping: " << e.what());
+      running_ = false;
+      break;
+    }
+    const double t = simulationTime();
+    const double elapsed_sim = t - sim_start;
+    if (options_.real_time_factor > 0) {
+      std::this_thread::sleep_until(
+          wall_start + std::chrono::duration_cast<Clock::duration>(
+                           std::chrono::duration<double>(elapsed_sim / options_.real_time_factor)));
+    }
+    if (t >= next_report) {
+      const double wall = std::chrono::duration<double>(Clock::now() - wall_start).count();
+      AUV_INFO(node_->logger(), "t = " << t << " s, running at " << elapsed_sim / wall
+                                       << "x real time, " << collisions_.load()
+                                       << " collision events");
+      next_report += 60.0;
+    }
+  }
+}
+
+double SimulatorComponent::trueAltitude(const VehicleState& state) const {
+  const Eigen::Vector3f origin = state.position.cast<float>();
+  const RayHit hit = world_->cast(origin, Eigen::Vector3f::UnitZ(), 200.0f);
+  const double below_mesh = hit.hit() ? hit.distance : std::numeric_limits<double>::infinity();
+  const double below_seabed = scenario_.seabed_depth - state.position.z();
+  const double altitude = std::min(below_mesh, below_seabed);
+  return altitude > 0 && std::isfinite(altitude) ? altitude : -1.0;
+}
+
+void SimulatorComponent::step(double dt) {
+  ThrusterCommand command;
+  VehicleState state;
+  double t = 0;
+  {
+    std::lock_guard<std::mutex> lock(state_mutex_);
+    state = state_;
+    t = time_;
+  }
+  {
+    std::lock_guard<std::mutex> lock(thrust_mutex_);
+    if (t - thrust_stamp_ <= options_.thruster_timeout) command = thrust_;
+  }
+  dynamics_->step(state, command, dt);
+  t += dt;
+  checkCollision(t, state);
+  {
+    std::lock_guard<std::mutex> lock(state_mutex_);
+    state_ = state;
+    time_ = t;
+  }
+  publishClock(t);
+
+  const double altitude = trueAltitude(state);
+  if (altitude > 0 && last_altitude_ > 0) {
+    // Roughness: how fast the seabed's distance changes, low-pass filtered over ~2 s.
+    const double rate = std::abs(altitude - last_altitude_) / dt;
+    roughness_ += (rate - roughness_) * std::min(1.0, dt / 2.0);
+  }
+  last_altitude_ = altitude;
+  if (navigation_->update(state, t, altitude, roughness_)) {
+    const NavigationEstimate& estimate = navigation_->estimate();
+    odometry_pub_->publish(toOdometry(estimate));
+    log_->navigation(t, estimate.pose());
+  }
+  if (t + 1e-9 >= next_odometry_) {
+    next_odometry_ = t + 1.0 / options_.odometry_rate;
+    ground_truth_pub_->publish(groundTruthOdometry(state, t, altitude));
+  }
+  if (t + 1e-9 >= next_trajectory_) {
+    next_trajectory_ = t + 1.0 / options_.trajectory_rate;
+    log_->trajectory(t, state.pose());
+  }
+  while (sonar_->due(t)) {
+    sonar_pub_->publish(toSonarBeam(sonar_->ping(state.pose(), t, *world_)));
+  }
+}
+
+void SimulatorComponent::checkCollision(double t, VehicleState& state) {
+  const auto contact = findHullContact(*world_, scenario_.seabed_depth, hull_, state.pose());
+  if (!contact) {
+    in_contact_ = false;
+    return;
+  }
+  const double speed = state.velocityWorld().norm();
+  const bool started = !in_contact_;
+  if (started || t - last_collision_event_ >= options_.collision_repeat) {
+    last_collision_event_ = t;
+    ++collisions_;
+    collision_pub_->publish(toCollisionEvent(*contact, state, t, speed, started));
+    log_->collision(t, contact->point, contact->normal, contact->penetration, speed, started);
+    if (started) {
+      AUV_WARN(node_->logger(), "COLLISION at t = " << t << " s, [" << contact->point.x() << ", "
+                                                    << contact->point.y() << ", "
+                                                    << contact->point.z() << "] at " << speed
+                                                    << " m/s");
+    }
+  }
+  in_contact_ = true;
+  // Contact response: push the hull out of the surface and remove the velocity into it.
+  state.position += contact->normal * contact->penetration;
+  state.position.z() = std::max(0.0, state.position.z());
+  Eigen::Vector3d v = state.velocityWorld();
+  const double into = v.dot(contact->normal);
+  if (into < 0) v -= into * contact->normal;
+  const double c = std::cos(state.yaw), s = std::sin(state.yaw);
+  state.surge = c * v.x() + s * v.y();
+  state.sway = -s * v.x() + c * v.y();
+  state.heave = v.z();
+}
+
+void SimulatorComponent::publishClock(double t) {
+  msg::Clock clock;
+  clock.sim_time(toTime(t));
+  clock_pub_->publish(clock);
+}
+
+}  // namespace auv::sim
+
+AUV_REGISTER_COMPONENT(auv::sim::SimulatorComponent, "simulator",
+                       "vehicle hardware stand-in: clock, dynamics, navigation, sonar, collisions")

@@ -1,0 +1,169 @@
+// The simulator component on real DDS (domains 190..199): it publishes clock, odometry and
+// sonar; thrusters move the vehicle; driving into a wall publishes a collision event and logs
+// it; bad worlds are refused naming the file.
+#include "auv/sim/components/simulator_component.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "../core/test_meshes.h"
+#include "auv/interfaces/executor.h"
+
+namespace auv::sim {
+namespace {
+
+using namespace std::chrono_literals;
+using interfaces::Node;
+using interfaces::NodeOptions;
+using interfaces::Vendor;
+namespace fs = std::filesystem;
+
+NodeOptions on(Vendor vendor, int domain, std::vector<std::string> overrides = {}) {
+  NodeOptions o;
+  o.vendor = vendor;
+  o.domain_id = domain;
+  o.overrides = std::move(overrides);
+  return o;
+}
+
+class SimulatorComponentTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("auv_sim_component_test_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+    // A wall 6 m north of the start (mesh z-up: x north), 20 m wide and 10 m deep.
+    Mesh wall = test::box({6, -10, -10}, {7, 10, 0});
+    saveMesh(wall, (dir_ / "wall.ply").string());
+    scenario_ = (dir_ / "wall.yaml").string();
+    std::ofstream(scenario_) << "name: wall\n"
+                                "world: {mesh: wall.ply, seabed_depth: 10}\n"
+                                "water: {visibility: 5}\n"
+                                "vehicle: {start: {position: [0, 0, 3], yaw_deg: 0}}\n"
+                                "sonar: {max_range: 20}\n";
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::vector<std::string> params(double rtf = 4.0) const {
+    return {"world:=" + scenario_, "run_dir:=" + (dir_ / "run").string(),
+            "real_time_factor:=" + std::to_string(rtf)};
+  }
+  fs::path dir_;
+  std::string scenario_;
+};
+
+TEST_F(SimulatorComponentTest, PublishesClockOdometryAndSonarAcrossVendors) {
+  Node sim_node("simulator", on(Vendor::CYCLONEDDS, 190, params()));
+  Node probe("probe", on(Vendor::FASTDDS, 190));
+  SimulatorComponent sim;
+  sim.configure(sim_node);
+  int clocks = 0, odometry = 0, echoes = 0, beams = 0;
+  double last_clock = 0;
+  bool clock_monotonic = true;
+  auto c = probe.createSubscription<msg::Clock>(
+      "clock", interfaces::clockQos(),
+      std::function<void(const msg::Clock&)>([&](const msg::Clock& m) {
+        const double t = m.sim_time().sec() + m.sim_time().nanosec() * 1e-9;
+        clock_monotonic = clock_monotonic && t > last_clock;
+        last_clock = t;
+        ++clocks;
+      }));
+  auto o = probe.createSubscription<msg::Odometry>(
+      "nav/odometry", interfaces::stateQos(),
+      std::function<void(const msg::Odometry&)>([&](const msg::Odometry& m) {
+        EXPECT_NEAR(m.pose().pose().position().z(), 3.0, 0.5);
+        ++odometry;
+      }));
+  auto s = probe.createSubscription<msg::SonarBeam>(
+      "sonar/beam", interfaces::sensorDataQos(),
+      std::function<void(const msg::SonarBeam&)>([&](const msg::SonarBeam& m) {
+        ++beams;
+        if (m.ranges().empty()) return;
+        // Every echo is the wall (6 m ahead) or farther; none closer than the wall can be.
+        EXPECT_GE(m.ranges()[0], 5.0f);
+        ++echoes;
+      }));
+  interfaces::Executor executor;
+  executor.add(sim_node);
+  executor.add(probe);
+  sim.activate();
+  EXPECT_TRUE(executor.spinUntil([&] { return odometry >= 10 && echoes >= 3; }, 30s))
+      << "odometry " << odometry << " beams " << beams << " echoes " << echoes;
+  sim.deactivate();
+  EXPECT_GT(clocks, 20);
+  EXPECT_TRUE(clock_monotonic);
+  // Ground truth trajectory was written while running.
+  std::ifstream trajectory(dir_ / "run" / "ground_truth" / "trajectory.tum");
+  std::string line;
+  int rows = 0;
+  while (std::getline(trajectory, line)) rows += line.empty() || line[0] == '#' ? 0 : 1;
+  EXPECT_GT(rows, 10);
+  EXPECT_TRUE(fs::exists(dir_ / "run" / "scenario.yaml"));
+}
+
+TEST_F(SimulatorComponentTest, ThrustersDriveTheVehicleIntoTheWallAndTheCollisionIsReported) {
+  Node sim_node("simulator", on(Vendor::FASTDDS, 191, params(5.0)));
+  Node pilot("pilot", on(Vendor::CYCLONEDDS, 191));
+  SimulatorComponent sim;
+  sim.configure(sim_node);
+  auto thrusters = pilot.createPublisher<msg::ThrusterSetpoints>("control/thrusters",
+                                                                 interfaces::sensorDataQos());
+  std::vector<msg::CollisionEvent> events;
+  auto collisions = pilot.createSubscription<msg::CollisionEvent>(
+      "sim/collision", interfaces::commandQos(),
+      std::function<void(const msg::CollisionEvent&)>(
+          [&](const msg::CollisionEvent& e) { events.push_back(e); }));
+  interfaces::Executor executor;
+  executor.add(sim_node);
+  executor.add(pilot);
+  sim.activate();
+  msg::ThrusterSetpoints full;
+  full.port(0.8);
+  full.starboard(0.8);
+  auto timer = pilot.createTimer(0.05, [&] { thrusters->publish(full); });
+  ASSERT_TRUE(executor.spinUntil([&] { return !events.empty(); }, 60s))
+      << "no collision; vehicle at " << sim.trueState().position.transpose();
+  sim.deactivate();
+  const msg::CollisionEvent& first = events.front();
+  EXPECT_TRUE(first.started());
+  EXPECT_NEAR(first.contact_point().x(), 6.0, 0.05);  // the wall's face
+  EXPECT_NEAR(first.contact_normal().x(), -1.0, 0.05);
+  EXPECT_GT(first.speed(), 0.2);
+  // The vehicle is stopped by the wall, not through it.
+  EXPECT_LT(sim.trueState().position.x(), 6.0 - 0.7);
+  std::ifstream csv(dir_ / "run" / "ground_truth" / "collisions.csv");
+  std::string header, row;
+  std::getline(csv, header);
+  ASSERT_TRUE(static_cast<bool>(std::getline(csv, row)));
+  EXPECT_EQ(row.back(), '1');  // started
+}
+
+TEST_F(SimulatorComponentTest, AStartInsideTheWorldIsRefusedNamingTheScenario) {
+  std::ofstream(scenario_) << "world: {mesh: wall.ply}\n"
+                              "vehicle: {start: {position: [6.5, 0, 3]}}\n";
+  Node node("simulator", on(Vendor::CYCLONEDDS, 192, params()));
+  SimulatorComponent sim;
+  try {
+    sim.configure(node);
+    FAIL() << "started inside the wall";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("wall.yaml: vehicle.start"), std::string::npos)
+        << e.what();
+  }
+}
+
+TEST_F(SimulatorComponentTest, AnUnknownWorldNameListsTheKnownWorlds) {
+  Node node("simulator", on(Vendor::CYCLONEDDS, 193, {"world:=canyn"}));
+  SimulatorComponent sim;
+  try {
+    sim.configure(node);
+    FAIL() << "accepted world 'canyn'";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("canyon"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace auv::sim
