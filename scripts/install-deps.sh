@@ -15,6 +15,8 @@ PACKAGES=(
   libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools cyclonedds-dev cyclonedds-tools
   # common libraries and tests
   libyaml-cpp-dev libgtest-dev libgmock-dev libbenchmark-dev
+  # simulator: geometry, ray casting (Embree), meshes (Open3D), images and H.264 video
+  libeigen3-dev libembree-dev libopen3d-dev libfmt-dev libopencv-dev ffmpeg
 )
 
 echo "install-deps: apt-get update"
