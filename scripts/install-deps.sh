@@ -6,7 +6,7 @@ if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 
 PACKAGES=(
   # build tools
-  build-essential cmake ccache python3 git iproute2
+  build-essential cmake ccache python3 python3-yaml git iproute2
   colcon python3-colcon-cmake python3-colcon-recursive-crawl python3-colcon-parallel-executor
   python3-colcon-output python3-colcon-package-selection python3-colcon-bash
   python3-colcon-defaults python3-colcon-metadata python3-colcon-package-information
