@@ -5,7 +5,10 @@
 //   sim_bench [--world canyon] [--seed 1] [--rays 2000000] [--sim-seconds 300]
 //             [--width 960 --height 720] [--domain 229] [--out results.md]
 // Run it pinned to one core for the per-core figures: bench/run_sim_bench.sh does.
+#include <unistd.h>
+
 #include <chrono>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
@@ -111,7 +114,7 @@ int main(int argc, char** argv) {
   MeshReport mesh_report;
   const Mesh mesh = loadWorldMesh(scenario, &mesh_report);
   auto t0 = Clock::now();
-  const RayCaster caster(mesh);
+  const RayCaster caster(mesh, scenario.surface_detail);
   const double build_s = secondsSince(t0);
   std::ostringstream head;
   head << "# Simulator benchmark: world " << scenario.name << " (seed " << args.seed << ", "

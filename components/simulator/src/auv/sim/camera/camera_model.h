@@ -80,7 +80,7 @@ struct CameraOptions {
   double exposure = 1.0;         ///< gain applied to the linear radiance before encoding
   double exposure_time = 0.008;  ///< s, shutter time (motion blur); 0 = instantaneous
   int max_blur_samples = 6;      ///< sub-exposure renders per frame at most (1 = no blur)
-  double noise_sigma = 0.008;    ///< sensor noise std, fraction of full scale (x255 for 8 bit)
+  double noise_sigma = 0.004;    ///< sensor noise std, fraction of full scale (x255 for 8 bit)
   double vignetting = 0.35;      ///< 0..1: blend from flat (0) to cos^4 fall-off (1)
   uint64_t noise_seed = 1;       ///< seed of the sensor noise (mixed with the frame index)
 

@@ -50,7 +50,9 @@ struct IlluminationOptions {
   Eigen::Vector3d surface_irradiance{1.0, 1.0, 1.0};
   double sun_zenith_deg = 20.0;  ///< deg from the vertical, underwater (refracted, <= ~48)
   double sun_azimuth_deg = 0.0;  ///< deg, direction the light comes from, 0 = north, 90 = east
-  double ambient = 0.35;         ///< fraction of the downwelling light that is diffuse (0..1)
+  /// Fraction of the downwelling light that is diffuse (0..1). A few metres down in coastal
+  /// water the light field is mostly diffuse: walls facing away from the sun still get half.
+  double ambient = 0.5;
   /// Downwelling (diffuse) attenuation over depth as a fraction of the beam attenuation (0..1].
   double diffuse_attenuation_ratio = 0.4;
   double veiling_gain_up = 0.3;  ///< extra veiling light looking straight up (fraction)

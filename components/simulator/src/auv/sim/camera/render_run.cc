@@ -160,7 +160,7 @@ RenderRunReport renderRun(const std::string& run_dir, const RenderRunOptions& op
                                 std::to_string(trajectory.endTime()) + "] s");
   }
   const Mesh mesh = loadWorldMesh(scenario);
-  const RayCaster caster(mesh);
+  const RayCaster caster(mesh, scenario.surface_detail);
   const int threads =
       options.threads > 0 ? options.threads : std::max(1u, std::thread::hardware_concurrency());
 

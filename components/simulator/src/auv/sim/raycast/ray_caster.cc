@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -133,10 +134,13 @@ struct RayCaster::Impl {
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
   std::vector<Eigen::Vector3f> linear_vertex_colors;  // converted once: shading is hot
+  std::optional<SurfaceDetail> detail;
 };
 
-RayCaster::RayCaster(const Mesh& mesh) : mesh_(mesh), impl_(std::make_unique<Impl>()) {
+RayCaster::RayCaster(const Mesh& mesh, const SurfaceDetailOptions& detail)
+    : mesh_(mesh), impl_(std::make_unique<Impl>()) {
   if (mesh.triangles.empty()) throw std::runtime_error("RayCaster: the mesh has no triangles");
+  if (detail.enabled()) impl_->detail.emplace(detail);
   impl_->device = rtcNewDevice(nullptr);
   if (!impl_->device) throw std::runtime_error("Embree: cannot create a device");
   impl_->scene = rtcNewScene(impl_->device);
@@ -228,6 +232,12 @@ Eigen::Vector3f RayCaster::pointAt(const RayHit& hit) const {
 
 Eigen::Vector3f RayCaster::colorAt(const RayHit& hit) const {
   if (!hit.hit()) return Eigen::Vector3f::Zero();
+  const Eigen::Vector3f color = meshColorAt(hit);
+  return impl_->detail ? Eigen::Vector3f(color * impl_->detail->factor(pointAt(hit), hit.normal))
+                       : color;
+}
+
+Eigen::Vector3f RayCaster::meshColorAt(const RayHit& hit) const {
   const float w0 = 1.0f - hit.u - hit.v;
   if (mesh_.hasTexture()) {
     const size_t base = 3 * static_cast<size_t>(hit.triangle);

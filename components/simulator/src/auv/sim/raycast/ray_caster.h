@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "auv/sim/world/mesh.h"
+#include "auv/sim/world/surface_detail.h"
 
 namespace auv::sim {
 
@@ -24,8 +25,9 @@ struct RayHit {
 class RayCaster {
  public:
   /// Builds the acceleration structure; the mesh must outlive the caster (colours are read
-  /// from it). Throws std::runtime_error with Embree's error text on failure.
-  explicit RayCaster(const Mesh& mesh);
+  /// from it). `detail` adds fine albedo detail in colorAt (off by default). Throws
+  /// std::runtime_error with Embree's error text on failure.
+  explicit RayCaster(const Mesh& mesh, const SurfaceDetailOptions& detail = {});
   ~RayCaster();
   RayCaster(const RayCaster&) = delete;
   RayCaster& operator=(const RayCaster&) = delete;
@@ -40,8 +42,8 @@ class RayCaster {
   /// True if anything lies on the segment (for visibility / shadow tests).
   bool occluded(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction, float t_max) const;
 
-  /// Surface colour at a hit, linear RGB in [0, 1] (texture bilinear, or interpolated vertex
-  /// colours, converted from sRGB).
+  /// Surface colour at a hit, linear RGB (texture bilinear, or interpolated vertex colours,
+  /// converted from sRGB; times the surface detail when enabled).
   Eigen::Vector3f colorAt(const RayHit& hit) const;
   /// World position of a hit from its triangle and barycentrics.
   Eigen::Vector3f pointAt(const RayHit& hit) const;
@@ -54,6 +56,8 @@ class RayCaster {
   const Mesh& mesh() const { return mesh_; }
 
  private:
+  Eigen::Vector3f meshColorAt(const RayHit& hit) const;
+
   struct Impl;
   const Mesh& mesh_;
   std::unique_ptr<Impl> impl_;

@@ -67,8 +67,8 @@ Scenario loadScenario(const std::string& path) {
   root.read("description", s.description);
 
   const YamlSection world = root.child("world");
-  world.rejectUnknownKeys(
-      {"mesh", "up_axis", "origin", "yaw_deg", "scale", "default_color", "seabed_depth"});
+  world.rejectUnknownKeys({"mesh", "up_axis", "origin", "yaw_deg", "scale", "default_color",
+                           "seabed_depth", "surface_detail"});
   if (!world.has("mesh")) world.fail("mesh", "missing: the world's mesh file (.ply or .obj)");
   std::string mesh;
   world.read("mesh", mesh);
@@ -89,6 +89,14 @@ Scenario loadScenario(const std::string& path) {
     s.default_color = c.cast<float>();
   }
   world.read("seabed_depth", s.seabed_depth, 0.0, 12000.0);
+  const YamlSection detail = world.child("surface_detail");
+  detail.rejectUnknownKeys({"amplitude", "tile_size", "seed"});
+  if (world.has("surface_detail")) s.surface_detail.amplitude = 0.5;  // present = on
+  detail.read("amplitude", s.surface_detail.amplitude, 0.0, 2.0);
+  detail.read("tile_size", s.surface_detail.tile_size, 0.01, 100.0);
+  int detail_seed = 1;
+  detail.read("seed", detail_seed, 0);
+  s.surface_detail.seed = detail_seed;
 
   const YamlSection water = root.child("water");
   water.rejectUnknownKeys({"visibility", "attenuation", "backscatter", "veiling_light"});

@@ -11,6 +11,7 @@
 
 #include "auv/sim/common/yaml_section.h"
 #include "auv/sim/world/mesh.h"
+#include "auv/sim/world/surface_detail.h"
 
 namespace auv::sim {
 
@@ -49,6 +50,7 @@ struct Scenario {
   double scale = 1.0;               ///< uniform scale of the mesh's units to metres
   std::optional<Eigen::Vector3f> default_color;  ///< sRGB for meshes with no colour/texture
   double seabed_depth = 20.0;  ///< m, depth of the flat seabed beyond the mesh (altitude fallback)
+  SurfaceDetailOptions surface_detail;  ///< fine albedo detail for cameras (off unless given)
 
   WaterOptics water;
 

@@ -173,6 +173,8 @@ std::string scenarioYaml(const GeneratedWorld& world, const std::string& mesh_fi
       << "  yaw_deg: 0\n"
       << "  scale: 1.0\n"
       << "  seabed_depth: " << world.seabed_depth << "\n"
+      << "  surface_detail: {amplitude: 0.9, tile_size: 0.5, seed: " << world.seed
+      << "}  # grain below the texture's 2 cm texels\n"
       << "water:\n"
       << "  visibility: " << world.visibility << "\n"
       << "vehicle:\n"

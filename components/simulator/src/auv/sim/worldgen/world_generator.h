@@ -18,7 +18,7 @@
 namespace auv::sim {
 
 /// Bumped whenever generated output changes, so cached worlds of an older generator are rebuilt.
-constexpr int kWorldGeneratorVersion = 1;
+constexpr int kWorldGeneratorVersion = 2;
 
 struct WorldGenOptions {
   uint64_t seed = 1;            ///< same seed, same world; another seed moves and reshapes the rock
