@@ -24,14 +24,15 @@ guard=()
 set -euo pipefail
 step() { printf "\n\033[1m== %s\033[0m\n" "$*"; }
 rm -rf "$AUV_DEMO_RUN"
-step "auv sim generate $AUV_DEMO_WORLD   (procedural world from seed 1, cached)"
-auv sim generate "$AUV_DEMO_WORLD" --seed 1
 step "auv launch bringup/launch/sim.yaml world:=$AUV_DEMO_WORLD real_time_factor:=4   (simulator + controller)"
 auv launch bringup/launch/sim.yaml world:=$AUV_DEMO_WORLD real_time_factor:=4 domain:=42 \
   run_dir:="$AUV_DEMO_RUN" > /tmp/auv-demo-sim.log 2>&1 &
 launch_pid=$!
 trap "kill -INT $launch_pid 2>/dev/null; wait $launch_pid || true" EXIT
-for i in $(seq 1 60); do grep -q "run folder" /tmp/auv-demo-sim.log && break; sleep 0.5; done
+# The first launch generates the world from its seed into the world cache (~10 s).
+for i in $(seq 1 120); do grep -q "run folder" /tmp/auv-demo-sim.log && break; sleep 0.5; done
+step "auv sim check $AUV_DEMO_RUN/scenario.yaml   (the world the simulator loaded)"
+auv sim check "$AUV_DEMO_RUN/scenario.yaml"
 step "AUV_DDS=fastdds auv topic list -t"
 AUV_DDS=fastdds auv topic list -t
 for topic in clock nav/odometry sonar/beam; do

@@ -42,7 +42,7 @@ cv::Mat renderRadiance(const CameraModel& camera,
         origins.assign(count, pose.translation().cast<float>());
         directions.resize(count);
         for (size_t i = 0; i < count; ++i) directions[i] = rotation * rays[first + i];
-        caster.castMany(origins, directions, kMaxRange, hits);
+        caster.castMany(origins, directions, kMaxRange, hits, /*coherent=*/true);
         for (int row = row_begin; row < row_end; ++row) {
           cv::Vec3f* out = radiance.ptr<cv::Vec3f>(row);
           for (int col = 0; col < width; ++col) {

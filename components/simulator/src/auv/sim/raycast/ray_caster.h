@@ -35,10 +35,12 @@ class RayCaster {
   /// Closest hit along origin + t * direction for t in [t_min, t_max]; `direction` unit.
   RayHit cast(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction, float t_max,
               float t_min = 0.0f) const;
-  /// Many rays at once (Embree ray streams: faster than one by one). Sizes must match.
+  /// Many rays at once. `coherent`: the rays share an origin and nearby directions (a camera's
+  /// primary rays) and go through Embree's ray streams, traced as packets; otherwise one by
+  /// one, which is faster for scattered rays. Sizes must match.
   void castMany(const std::vector<Eigen::Vector3f>& origins,
                 const std::vector<Eigen::Vector3f>& directions, float t_max,
-                std::vector<RayHit>& hits) const;
+                std::vector<RayHit>& hits, bool coherent = false) const;
   /// True if anything lies on the segment (for visibility / shadow tests).
   bool occluded(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction, float t_max) const;
 
