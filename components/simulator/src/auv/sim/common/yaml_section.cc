@@ -187,6 +187,21 @@ void YamlSection::read(const std::string& key, std::vector<double>& value) const
   value = std::move(out);
 }
 
+void YamlSection::readDegrees(const std::string& key, double& radians,
+                              std::optional<double> min_deg, std::optional<double> max_deg) const {
+  if (!has(key)) return;
+  double degrees = radians * 180.0 / M_PI;
+  read(key, degrees, min_deg, max_deg);
+  radians = degrees * M_PI / 180.0;
+}
+
+void requireOption(bool ok, const std::string& field, const std::string& what, double value) {
+  if (ok) return;
+  std::ostringstream message;
+  message << field << ": expected " << what << ", got " << value;
+  throw ConfigError(message.str());
+}
+
 void YamlSection::rejectUnknownKeys(const std::vector<std::string>& known) const {
   if (!node_.IsMap()) return;
   for (const auto& entry : node_) {

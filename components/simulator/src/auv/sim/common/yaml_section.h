@@ -45,6 +45,9 @@ class YamlSection {
             std::optional<double> max = {}) const;
   /// A sequence of numbers of any length.
   void read(const std::string& key, std::vector<double>& value) const;
+  /// An angle written in degrees under `key` (e.g. `step_deg`) into a field kept in radians.
+  void readDegrees(const std::string& key, double& radians, std::optional<double> min_deg = {},
+                   std::optional<double> max_deg = {}) const;
 
   /// Throws ConfigError for any key not in `known`, suggesting the closest known key.
   void rejectUnknownKeys(const std::vector<std::string>& known) const;
@@ -64,6 +67,10 @@ class YamlSection {
   std::string path_;
   std::string file_;
 };
+
+/// Throws ConfigError "<field>: expected <what>, got <value>" unless `ok` (for options'
+/// check(): `field` is the dotted name, e.g. "sonar.max_range").
+void requireOption(bool ok, const std::string& field, const std::string& what, double value);
 
 /// Loads a YAML file whose root is a map; errors (missing file, syntax with line) name it.
 YamlSection loadYamlFile(const std::string& file);

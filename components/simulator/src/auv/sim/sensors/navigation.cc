@@ -8,27 +8,12 @@
 namespace auv::sim {
 namespace {
 
-constexpr double kDegToRad = M_PI / 180.0;
-
-// Throws ConfigError "navigation.<field>: expected <what>, got <value>" unless `ok`.
 void require(bool ok, const char* field, const char* what, double value) {
-  if (ok) return;
-  std::ostringstream message;
-  message << "navigation." << field << ": expected " << what << ", got " << value;
-  throw ConfigError(message.str());
+  requireOption(ok, std::string("navigation.") + field, what, value);
 }
 
 bool positive(double x) { return std::isfinite(x) && x > 0.0; }
 bool nonNegative(double x) { return std::isfinite(x) && x >= 0.0; }
-
-// Reads an angle given in degrees under `key` into a field kept in radians.
-void readDegrees(const YamlSection& section, const std::string& key, double& radians,
-                 std::optional<double> min_deg = {}, std::optional<double> max_deg = {}) {
-  if (!section.has(key)) return;
-  double degrees = radians / kDegToRad;
-  section.read(key, degrees, min_deg, max_deg);
-  radians = degrees * kDegToRad;
-}
 
 }  // namespace
 
@@ -108,10 +93,10 @@ NavigationOptions NavigationOptions::fromYaml(const YamlSection& section) {
   section.read("dropout_velocity_decay", o.dropout_velocity_decay, 0.0);
   section.read("dropout_velocity_random_walk", o.dropout_velocity_random_walk, 0.0);
   section.read("ahrs_rate", o.ahrs_rate, 1e-3);
-  readDegrees(section, "heading_bias_deg", o.heading_bias, -28.6, 28.6);
-  readDegrees(section, "heading_random_walk_deg", o.heading_random_walk, 0.0);
-  readDegrees(section, "heading_noise_deg", o.heading_noise, 0.0);
-  readDegrees(section, "attitude_noise_deg", o.attitude_noise, 0.0);
+  section.readDegrees("heading_bias_deg", o.heading_bias, -28.6, 28.6);
+  section.readDegrees("heading_random_walk_deg", o.heading_random_walk, 0.0);
+  section.readDegrees("heading_noise_deg", o.heading_noise, 0.0);
+  section.readDegrees("attitude_noise_deg", o.attitude_noise, 0.0);
   section.read("gyro_noise", o.gyro_noise, 0.0);
   section.read("depth_noise", o.depth_noise, 0.0);
   section.read("gps_rate", o.gps_rate, 1e-3);

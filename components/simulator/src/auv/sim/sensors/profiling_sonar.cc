@@ -18,22 +18,11 @@ constexpr int kOversampling = 8;
 constexpr double kPingOverhead = 0.013;
 
 void require(bool ok, const char* field, const char* what, double value) {
-  if (ok) return;
-  std::ostringstream message;
-  message << "sonar." << field << ": expected " << what << ", got " << value;
-  throw ConfigError(message.str());
+  requireOption(ok, std::string("sonar.") + field, what, value);
 }
 
 bool positive(double x) { return std::isfinite(x) && x > 0.0; }
 bool nonNegative(double x) { return std::isfinite(x) && x >= 0.0; }
-
-void readDegrees(const YamlSection& section, const std::string& key, double& radians,
-                 std::optional<double> min_deg = {}, std::optional<double> max_deg = {}) {
-  if (!section.has(key)) return;
-  double degrees = radians / kDegToRad;
-  section.read(key, degrees, min_deg, max_deg);
-  radians = degrees * kDegToRad;
-}
 
 // Adds a rectangular echo of `amplitude` over [start, start + length) (m from the first sample)
 // to an envelope sampled every `spacing` m, weighting partly covered samples by their overlap.
@@ -114,10 +103,10 @@ SonarOptions SonarOptions::fromYaml(const YamlSection& section) {
        "noise_level", "pulse_length", "sound_speed"});
   SonarOptions o;
   section.read("position", o.mount_position);
-  readDegrees(section, "yaw_deg", o.mount_yaw, -360.0, 360.0);
+  section.readDegrees("yaw_deg", o.mount_yaw, -360.0, 360.0);
   section.read("max_range", o.max_range, 0.01);
   section.read("min_range", o.min_range, 0.0);
-  readDegrees(section, "step_deg", o.step_angle, 0.001, 180.0);
+  section.readDegrees("step_deg", o.step_angle, 0.001, 180.0);
   if (section.has("sector_deg")) {
     std::vector<double> sector;
     section.read("sector_deg", sector);
@@ -130,8 +119,8 @@ SonarOptions SonarOptions::fromYaml(const YamlSection& section) {
     o.sector_right = sector[1] * kDegToRad;
   }
   section.read("ping_rate", o.ping_rate, 0.0);
-  readDegrees(section, "horizontal_beam_width_deg", o.horizontal_beam_width, 0.01, 179.0);
-  readDegrees(section, "vertical_beam_width_deg", o.vertical_beam_width, 0.01, 179.0);
+  section.readDegrees("horizontal_beam_width_deg", o.horizontal_beam_width, 0.01, 179.0);
+  section.readDegrees("vertical_beam_width_deg", o.vertical_beam_width, 0.01, 179.0);
   section.read("rays_horizontal", o.rays_horizontal, 1, 64);
   section.read("rays_vertical", o.rays_vertical, 1, 64);
   section.read("range_noise", o.range_noise, 0.0);

@@ -7,6 +7,7 @@
 
 #include "auv/sim/camera/calibration_sequence.h"
 #include "auv/sim/camera/camera_rig.h"
+#include "auv/sim/tools/cli_args.h"
 #include "auv/sim/tools/commands.h"
 #include "auv/sim/world/scenario.h"
 
@@ -25,19 +26,6 @@ const char* kCalibrationUsage =
     "  --seed N        board poses (default 1)\n"
     "  --threads N     rendering threads (default: every core)\n"
     "  --quiet         no progress output\n";
-
-struct UsageError : std::invalid_argument {
-  using std::invalid_argument::invalid_argument;
-};
-
-double parseNumber(const std::string& option, const std::string& text) {
-  char* end = nullptr;
-  const double value = std::strtod(text.c_str(), &end);
-  if (text.empty() || *end != '\0' || !std::isfinite(value)) {
-    throw UsageError(option + ": expected a number, got '" + text + "'");
-  }
-  return value;
-}
 
 int64_t parseCount(const std::string& option, const std::string& text, int64_t min, int64_t max) {
   const double value = parseNumber(option, text);

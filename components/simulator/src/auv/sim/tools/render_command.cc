@@ -7,6 +7,7 @@
 
 #include "auv/sim/camera/render_run.h"
 #include "auv/sim/common/yaml_section.h"
+#include "auv/sim/tools/cli_args.h"
 #include "auv/sim/tools/commands.h"
 
 namespace auv::sim {
@@ -24,19 +25,6 @@ const char* kRenderUsage =
     "  --max-frames N   at most N frames per camera (default: the whole run)\n"
     "  --start S, --end S   only this span of simulation time (s)\n"
     "  --quiet          no progress output\n";
-
-struct UsageError : std::invalid_argument {
-  using std::invalid_argument::invalid_argument;
-};
-
-double parseNumber(const std::string& option, const std::string& text) {
-  char* end = nullptr;
-  const double value = std::strtod(text.c_str(), &end);
-  if (text.empty() || *end != '\0' || !std::isfinite(value)) {
-    throw UsageError(option + ": expected a number, got '" + text + "'");
-  }
-  return value;
-}
 
 int64_t parseCount(const std::string& option, const std::string& text) {
   const double value = parseNumber(option, text);
