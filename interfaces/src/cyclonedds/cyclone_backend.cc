@@ -1,6 +1,7 @@
 // Cyclone DDS backend: plain C API plus the custom sertype of cyclone_sertype.cc.
 #include <dds/dds.h>
 
+#include <atomic>
 #include <cstdlib>
 #include <cstring>
 #include <map>
@@ -152,15 +153,18 @@ class CycloneReader : public DataReader {
     }
     return guid;
   }
-  static void onDataAvailable(dds_entity_t, void* arg) {
+  static void onDataAvailable(dds_entity_t reader, void* arg) {
     auto* self = static_cast<CycloneReader*>(arg);
+    // Cyclone may call this before dds_create_reader returns (history of a local writer):
+    // take() then needs the handle already. Same value as attach() stores.
+    if (self->reader_.load(std::memory_order_relaxed) <= 0) self->reader_ = reader;
     if (self->on_data_) self->on_data_(*self);
   }
 
  private:
   DataCallback on_data_;
   std::map<dds_instance_handle_t, Guid> publication_guids_;  // take() is called by one thread
-  dds_entity_t reader_ = 0;
+  std::atomic<dds_entity_t> reader_{0};
 };
 
 class CycloneParticipant : public Participant {

@@ -153,9 +153,13 @@ class FastddsReader : public DataReader, public dds::DataReaderListener {
                : 0;
   }
   Guid guid() const override { return toGuid(reader_->guid()); }
-  void on_data_available(dds::DataReader*) override {
+  void on_data_available(dds::DataReader* reader) override {
     std::lock_guard<std::mutex> lock(callback_mutex_);
-    if (!closed_ && reader_ != nullptr && on_data_) on_data_(*this);
+    if (closed_ || !on_data_) return;
+    // Fast DDS may call this before create_datareader returns (history of a writer in the
+    // same participant): take() then needs the reader already. attach() stores the same.
+    if (reader_ == nullptr) reader_ = reader;
+    on_data_(*this);
   }
 
  private:
