@@ -44,7 +44,7 @@ constexpr const char* kLoopbackConfig =
     "<CycloneDDS><Domain Id=\"any\"><General><Interfaces>"
     "<NetworkInterface name=\"lo\" multicast=\"true\"/>"
     "</Interfaces><AllowMulticast>true</AllowMulticast></General>"
-    "<Internal><SocketReceiveBufferSize min=\"default\"/></Internal>"
+    "<Internal><SocketReceiveBufferSize min=\"default\" max=\"4MB\"/></Internal>"
     "</Domain></CycloneDDS>";
 
 char kEmpty[] = "";

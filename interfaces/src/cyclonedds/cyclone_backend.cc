@@ -16,12 +16,16 @@ namespace auv::interfaces::detail {
 namespace {
 
 // Binds Cyclone to loopback unless the user configured it (CYCLONEDDS_URI). Multicast is
-// forced on `lo` so discovery works without peers lists (DDS_NOTES.md).
+// forced on `lo` so discovery works without peers lists (DDS_NOTES.md). The receive buffer
+// asks for 4 MiB (Cyclone's default asks 1 MiB) so a burst of fragments of a large sample
+// is not dropped and repaired a heartbeat later; the kernel caps it at net.core.rmem_max,
+// and min="default" accepts whatever is granted (a `min` above rmem_max would make Cyclone
+// refuse to start). Measured in docs/performance.md.
 constexpr const char* kLoopbackConfig =
     "<CycloneDDS><Domain Id=\"any\"><General><Interfaces>"
     "<NetworkInterface name=\"lo\" multicast=\"true\"/>"
     "</Interfaces><AllowMulticast>true</AllowMulticast></General>"
-    "<Internal><SocketReceiveBufferSize min=\"default\"/></Internal>"
+    "<Internal><SocketReceiveBufferSize min=\"default\" max=\"4MB\"/></Internal>"
     "</Domain></CycloneDDS>";
 
 void check(dds_return_t rc, const std::string& what) {
