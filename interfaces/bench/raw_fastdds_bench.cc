@@ -376,9 +376,10 @@ int runSub(RawParticipant& participant, const BenchOptions& options) {
 int main(int argc, char** argv) {
   BenchOptions options;
   try {
-    options = auv::bench::parseOptions(argc, argv, "raw_fastdds_bench", false, true);
+    options = auv::bench::parseOptions(argc, argv, "raw_fastdds_bench", auv::bench::Program::RAW);
   } catch (const std::invalid_argument& e) {
-    std::cerr << e.what() << "\n" << auv::bench::usage("raw_fastdds_bench", false, true);
+    std::cerr << e.what() << "\n"
+              << auv::bench::usage("raw_fastdds_bench", auv::bench::Program::RAW);
     return 2;
   }
   try {
