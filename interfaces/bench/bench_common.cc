@@ -93,15 +93,28 @@ std::string toString(Role role) {
 }
 
 std::string toString(Dispatch dispatch) {
-  return dispatch == Dispatch::LISTENER ? "listener" : "thread";
+  switch (dispatch) {
+    case Dispatch::LISTENER:
+      return "listener";
+    case Dispatch::THREAD:
+      return "thread";
+    case Dispatch::EXECUTOR:
+      return "executor";
+    case Dispatch::MIDDLEWARE:
+      return "middleware";
+  }
+  return "?";
 }
 
-std::string usage(const std::string& program, bool has_vendor, bool has_dispatch) {
+std::string usage(const std::string& name, Program program) {
   std::ostringstream out;
-  out << "usage: " << program << " --role ping|pong|pub|sub [options]\n"
+  out << "usage: " << name << " --role ping|pong|pub|sub [options]\n"
       << "  Pairs: run `pong` (or `sub`) and `ping` (or `pub`) in two processes on one domain.\n";
-  if (has_vendor) out << "  --vendor cyclonedds|fastdds  DDS vendor of this process (cyclonedds)\n";
-  if (has_dispatch)
+  if (program == Program::OURS)
+    out << "  --vendor cyclonedds|fastdds  DDS vendor of this process (cyclonedds)\n"
+        << "  --dispatch executor|middleware  callbacks on the executor thread, or in the\n"
+        << "                               vendor's listener thread (executor)\n";
+  else
     out << "  --dispatch listener|thread   answer in the vendor listener, or wake an\n"
         << "                               application thread that takes (listener)\n";
   out << "  --qos command|sensor_data    QoS profile: reliable keep-last 10, or best effort\n"
@@ -120,13 +133,14 @@ std::string usage(const std::string& program, bool has_vendor, bool has_dispatch
   return out.str();
 }
 
-BenchOptions parseOptions(int argc, char** argv, const std::string& program, bool has_vendor,
-                          bool has_dispatch) {
+BenchOptions parseOptions(int argc, char** argv, const std::string& name, Program program) {
   BenchOptions o;
+  const bool ours = program == Program::OURS;
+  o.dispatch = ours ? Dispatch::EXECUTOR : Dispatch::LISTENER;
   for (int i = 1; i < argc; ++i) {
     const std::string flag = argv[i];
     if (flag == "-h" || flag == "--help") {
-      std::cout << usage(program, has_vendor, has_dispatch);
+      std::cout << usage(name, program);
       std::exit(0);
     }
     if (i + 1 >= argc) bad(flag, "", "needs a value (see --help)");
@@ -142,9 +156,16 @@ BenchOptions parseOptions(int argc, char** argv, const std::string& program, boo
         o.role = Role::SUB;
       else
         bad(flag, value, "must be ping, pong, pub or sub");
-    } else if (flag == "--vendor" && has_vendor) {
+    } else if (flag == "--vendor" && ours) {
       o.vendor = value;
-    } else if (flag == "--dispatch" && has_dispatch) {
+    } else if (flag == "--dispatch" && ours) {
+      if (value == "executor")
+        o.dispatch = Dispatch::EXECUTOR;
+      else if (value == "middleware")
+        o.dispatch = Dispatch::MIDDLEWARE;
+      else
+        bad(flag, value, "must be executor or middleware");
+    } else if (flag == "--dispatch") {
       if (value == "listener")
         o.dispatch = Dispatch::LISTENER;
       else if (value == "thread")

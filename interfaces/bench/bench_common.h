@@ -22,10 +22,20 @@ enum class Role {
   SUB,   ///< Counts what arrives and reports the steady-state rate.
 };
 
-/// How the raw programs handle arrivals (our layer always uses its executor).
+/// Where arrivals are handled. Raw programs: LISTENER or THREAD; ours: EXECUTOR or
+/// MIDDLEWARE (the subscription's CallbackThread). Like for like: THREAD ~ EXECUTOR (a
+/// listener wakes another thread), LISTENER ~ MIDDLEWARE (answered in the vendor's thread).
 enum class Dispatch {
-  LISTENER,  ///< Take and answer inside the vendor's listener (ddsperf's default).
-  THREAD,    ///< Listener only wakes an application thread that takes and answers (like ours).
+  LISTENER,    ///< Raw: take and answer inside the vendor's listener (ddsperf's default).
+  THREAD,      ///< Raw: listener only wakes an application thread that takes and answers.
+  EXECUTOR,    ///< Ours: callbacks on the executor thread (the layer's default).
+  MIDDLEWARE,  ///< Ours: CallbackThread::MIDDLEWARE, callbacks in the vendor's listener.
+};
+
+/// Which program parses the options: decides the flags and dispatch modes accepted.
+enum class Program {
+  OURS,  ///< auv_dds_bench: --vendor, --dispatch executor|middleware.
+  RAW,   ///< raw_*_bench: --dispatch listener|thread.
 };
 
 /// Sequence number of the stop marker: tells the pong/sub to report and exit.
@@ -39,7 +49,7 @@ struct BenchOptions {
   Role role = Role::PING;
   std::string vendor = "cyclonedds";       ///< auv_dds_bench only: cyclonedds | fastdds.
   std::string qos = "command";             ///< command (reliable) | sensor_data (best effort).
-  Dispatch dispatch = Dispatch::LISTENER;  ///< Raw programs only.
+  Dispatch dispatch = Dispatch::LISTENER;  ///< Raw default LISTENER, ours default EXECUTOR.
   uint32_t size = 1024;                    ///< Bytes in the message's `data` sequence.
   int count = 1000;                        ///< Ping: measured round trips.
   int warmup = 100;             ///< Ping: unmeasured round trips first (at most kMaxWarmupS).
@@ -56,12 +66,11 @@ struct BenchOptions {
 };
 
 /// Parses `--role ping --size 1024 ...`; throws std::invalid_argument naming the flag.
-/// `program` and the accepted extras only shape the help text and which flags are allowed.
-BenchOptions parseOptions(int argc, char** argv, const std::string& program, bool has_vendor,
-                          bool has_dispatch);
+/// `name` only shapes the help text; `program` decides which flags are allowed.
+BenchOptions parseOptions(int argc, char** argv, const std::string& name, Program program);
 
-/// Usage text for `program`.
-std::string usage(const std::string& program, bool has_vendor, bool has_dispatch);
+/// Usage text for the program `name`.
+std::string usage(const std::string& name, Program program);
 
 std::string toString(Role role);
 std::string toString(Dispatch dispatch);

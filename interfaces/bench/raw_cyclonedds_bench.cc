@@ -44,7 +44,7 @@ constexpr const char* kLoopbackConfig =
     "<CycloneDDS><Domain Id=\"any\"><General><Interfaces>"
     "<NetworkInterface name=\"lo\" multicast=\"true\"/>"
     "</Interfaces><AllowMulticast>true</AllowMulticast></General>"
-    "<Internal><SocketReceiveBufferSize min=\"default\"/></Internal>"
+    "<Internal><SocketReceiveBufferSize min=\"default\" max=\"4MB\"/></Internal>"
     "</Domain></CycloneDDS>";
 
 char kEmpty[] = "";
@@ -354,9 +354,11 @@ int runSub(RawParticipant& participant, const BenchOptions& options) {
 int main(int argc, char** argv) {
   BenchOptions options;
   try {
-    options = auv::bench::parseOptions(argc, argv, "raw_cyclonedds_bench", false, true);
+    options =
+        auv::bench::parseOptions(argc, argv, "raw_cyclonedds_bench", auv::bench::Program::RAW);
   } catch (const std::invalid_argument& e) {
-    std::cerr << e.what() << "\n" << auv::bench::usage("raw_cyclonedds_bench", false, true);
+    std::cerr << e.what() << "\n"
+              << auv::bench::usage("raw_cyclonedds_bench", auv::bench::Program::RAW);
     return 2;
   }
   try {

@@ -2,10 +2,10 @@
 // (auv::msg::FileChunkReply through its fastddsgen PubSubType), QoS and transport as
 // auv_dds_bench on Fast DDS, written directly against the Fast DDS 2.9 DCPS API, so the
 // difference between the two is the cost of our layer. Settings mirrored from
-// src/fastdds/fastdds_backend.cc: one UDPv4 transport whitelisted to 127.0.0.1 with the
-// builtin transports off, data sharing off, PREALLOCATED_WITH_REALLOC history memory,
-// unlimited resource limits, max_blocking_time 0.1 s, synchronous publish mode (the default),
-// type information and type object not sent.
+// src/fastdds/fastdds_backend.cc: one UDPv4 transport whitelisted to 127.0.0.1 with 4 MiB
+// socket buffers and the builtin transports off, data sharing off, PREALLOCATED_WITH_REALLOC
+// history memory, unlimited resource limits, max_blocking_time 0.1 s, synchronous publish mode (the
+// default), type information and type object not sent.
 //
 // --dispatch listener (default): take and answer inside on_data_available, the fastest a
 //   Fast DDS application can react (like ddsperf's default for Cyclone).
@@ -90,6 +90,8 @@ class RawParticipant {
     dds::DomainParticipantQos qos;
     auto udp = std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>();
     udp->interfaceWhiteList.emplace_back("127.0.0.1");
+    udp->receiveBufferSize = 4 * 1024 * 1024;  // as our layer
+    udp->sendBufferSize = 4 * 1024 * 1024;
     qos.transport().user_transports.push_back(udp);
     qos.transport().use_builtin_transports = false;
     qos.name("raw_fastdds_bench");
@@ -374,9 +376,10 @@ int runSub(RawParticipant& participant, const BenchOptions& options) {
 int main(int argc, char** argv) {
   BenchOptions options;
   try {
-    options = auv::bench::parseOptions(argc, argv, "raw_fastdds_bench", false, true);
+    options = auv::bench::parseOptions(argc, argv, "raw_fastdds_bench", auv::bench::Program::RAW);
   } catch (const std::invalid_argument& e) {
-    std::cerr << e.what() << "\n" << auv::bench::usage("raw_fastdds_bench", false, true);
+    std::cerr << e.what() << "\n"
+              << auv::bench::usage("raw_fastdds_bench", auv::bench::Program::RAW);
     return 2;
   }
   try {

@@ -2,14 +2,17 @@
 # Middleware benchmark: round-trip latency and throughput through our layer (auv_dds_bench) on
 # each vendor and across vendors, each figure printed beside anchors measured in the same run:
 # ddsperf (Cyclone's own tool), raw_cyclonedds_bench and raw_fastdds_bench (the vendors' plain
-# APIs on our message type, QoS and transport). All traffic stays on loopback: our layer and
-# the raw programs bind 127.0.0.1/lo by default, ddsperf gets cyclonedds_loopback.xml.
-# To prove it, wrap the run:
+# APIs on our message type, QoS and transport). Both dispatch modes of our layer, each beside
+# its like-for-like anchor: executor (default) vs raw thread, middleware vs raw listener.
+# All traffic stays on loopback: our layer and the raw programs bind 127.0.0.1/lo by default,
+# ddsperf gets cyclonedds_loopback.xml. To prove it, wrap the run:
 #   ../shared/tools/no-external-traffic interfaces/bench/run_bench.sh
 #
 # Usage: run_bench.sh [--full] [--sizes "64 1k 16k 256k 4M"] [--only latency|throughput]
-#                     [--build-dir DIR] [--out DIR] [--skip-build] [--no-pin]
-# Default: a short run (about 6 minutes on 2 cores); --full: 10x the samples and durations.
+#                     [--modes both|executor|middleware] [--build-dir DIR] [--out DIR]
+#                     [--skip-build] [--no-pin]
+# Default: a short run of both modes (about 11 minutes on 2 cores; one mode about 6);
+# --full: 10x the samples and durations.
 # The two processes of a pair are pinned to CPUs 0 and 1 (taskset) unless --no-pin: on a
 # 2-core machine this cuts the run-to-run spread of the throughput figures from about +-50 %
 # to about +-10 %.
@@ -26,14 +29,16 @@ SKIP_BUILD=0
 PIN=1
 ONLY=""
 SIZES_ARG="64 1k 16k 256k 4M"
+MODES="both"
 
-usage() { sed -n '2,17p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; }
+usage() { sed -n '2,20p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; }
 
 while [ $# -gt 0 ]; do
   case "$1" in
     --full) FULL=1 ;;
     --sizes) SIZES_ARG="$2"; shift ;;
     --only) ONLY="$2"; shift ;;
+    --modes) MODES="$2"; shift ;;
     --build-dir) BUILD_DIR="$2"; shift ;;
     --out) OUT_DIR="$2"; shift ;;
     --skip-build) SKIP_BUILD=1 ;;
@@ -44,6 +49,7 @@ while [ $# -gt 0 ]; do
   shift
 done
 case "$ONLY" in ""|latency|throughput) ;; *) echo "run_bench: --only '$ONLY': latency or throughput" >&2; exit 2 ;; esac
+case "$MODES" in both|executor|middleware) ;; *) echo "run_bench: --modes '$MODES': both, executor or middleware" >&2; exit 2 ;; esac
 
 to_bytes() {  # 64 | 1k | 16KiB | 4M -> bytes
   local s="$1" n unit
@@ -123,7 +129,7 @@ MD="$OUT_DIR/dds_bench_$STAMP.md"
   echo "# host: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//'), Linux $(uname -r)"
   echo "# versions: Fast DDS $(dpkg-query -W -f='${Version}' libfastrtps2.9 2>/dev/null || echo '?'), Cyclone DDS $(dpkg-query -W -f='${Version}' libddsc0debian 2>/dev/null || echo '?')"
   echo "# workspace commit: $(git -C "$WS" rev-parse --short HEAD 2>/dev/null || echo '?')$(git -C "$WS" diff --quiet 2>/dev/null || echo ' (modified)')"
-  echo "# mode: $([ $FULL -eq 1 ] && echo full || echo default) (ping cap ${PING_CAP} s, pub ${PUB_SECS} s, ddsperf ping ${DDSPERF_PING_SECS} s), $([ $PIN -eq 1 ] && echo 'pinned: client CPU 0, server CPU 1' || echo 'not pinned')"
+  echo "# mode: $([ $FULL -eq 1 ] && echo full || echo default) (ping cap ${PING_CAP} s, pub ${PUB_SECS} s, ddsperf ping ${DDSPERF_PING_SECS} s), $([ $PIN -eq 1 ] && echo 'pinned: client CPU 0, server CPU 1' || echo 'not pinned'), dispatch modes: $MODES"
   echo "# load average at start: $(cut -d' ' -f1-3 /proc/loadavg)"
 } >"$RAW"
 
@@ -202,28 +208,29 @@ run_ddsperf_throughput() {  # SIZE DOMAIN QOS
     "$(python3 "$BENCH_DIR/bench_report.py" ddsperf-throughput "$log.server.out" "$size" "$qos")" ""
 }
 
-bin_of() {  # IMPL VENDOR -> command words
-  if [ "$1" = ours ]; then echo "$OURS --vendor $2"
-  elif [ "$2" = fastdds ]; then echo "$RAW_FASTDDS"
-  else echo "$RAW_CYCLONE"; fi
+bin_of() {  # IMPL VENDOR DISPATCH -> command words
+  if [ "$1" = ours ]; then echo "$OURS --vendor $2 --dispatch $3"
+  elif [ "$2" = fastdds ]; then echo "$RAW_FASTDDS --dispatch $3"
+  else echo "$RAW_CYCLONE --dispatch $3"; fi
 }
 
 # ---------------------------------------------------------------------------------------
-# Latency: command profile (reliable). Every pair on its own domain.
-CONFIGS=(  # impl ping-vendor pong-vendor dispatch
-  "ours cyclonedds cyclonedds -"
-  "ours fastdds fastdds -"
-  "ours fastdds cyclonedds -"
-  "ours cyclonedds fastdds -"
-  "raw cyclonedds cyclonedds listener"
-  "raw fastdds fastdds listener"
-  "raw fastdds cyclonedds listener"
-  "raw cyclonedds fastdds listener"
-  "raw cyclonedds cyclonedds thread"
-  "raw fastdds fastdds thread"
-)
-TP_CONFIGS=("${CONFIGS[@]:0:8}")
+# Every vendor pair in both modes of our layer, each next to its like-for-like anchor so the
+# two are measured seconds apart: ours executor / raw thread, ours middleware / raw listener.
+PAIRS=("cyclonedds cyclonedds" "fastdds fastdds" "fastdds cyclonedds" "cyclonedds fastdds")
+CONFIGS=()  # impl client-vendor server-vendor dispatch
+for p in "${PAIRS[@]}"; do
+  if [ "$MODES" != middleware ]; then CONFIGS+=("ours $p executor" "raw $p thread"); fi
+  if [ "$MODES" != executor ]; then CONFIGS+=("ours $p middleware" "raw $p listener"); fi
+done
+# ddsperf answers in its listener: it belongs to the middleware comparison.
+RUN_DDSPERF=$HAVE_DDSPERF
+[ "$MODES" = executor ] && RUN_DDSPERF=0
 
+# Pairs run strictly one after another (both processes have exited before the next starts);
+# within one size each pair still gets its own domain: latency 200-216, throughput 212-228.
+
+# Latency: command profile (reliable).
 if [ "$ONLY" != throughput ]; then
   for size in "${SIZES[@]}"; do
     count=$(ping_count "$size")
@@ -232,39 +239,34 @@ if [ "$ONLY" != throughput ]; then
     for c in "${CONFIGS[@]}"; do
       read -r impl a b dispatch <<<"$c"
       domain=$((200 + i)); i=$((i + 1))
-      extra=()
-      [ "$dispatch" != - ] && extra=(--dispatch "$dispatch")
       common=(--qos command --size "$size" --domain "$domain" --timeout $((PROC_TIMEOUT - 5)))
-      read -r -a SERVER <<<"$(bin_of "$impl" "$b")"
-      SERVER+=(--role pong "${common[@]}" "${extra[@]}")
-      read -r -a CLIENT <<<"$(bin_of "$impl" "$a")"
-      CLIENT+=(--role ping "${common[@]}" "${extra[@]}" --count "$count" --warmup "$warmup"
+      read -r -a SERVER <<<"$(bin_of "$impl" "$b" "$dispatch")"
+      SERVER+=(--role pong "${common[@]}")
+      read -r -a CLIENT <<<"$(bin_of "$impl" "$a" "$dispatch")"
+      CLIENT+=(--role ping "${common[@]}" --count "$count" --warmup "$warmup"
                --duration "$PING_CAP")
-      run_pair latency "$impl" "$a->$b" "${dispatch/-/executor}" command "$size"
+      run_pair latency "$impl" "$a->$b" "$dispatch" command "$size"
     done
-    [ $HAVE_DDSPERF -eq 1 ] && run_ddsperf_latency "$size" $((200 + i))
+    [ $RUN_DDSPERF -eq 1 ] && run_ddsperf_latency "$size" 216
   done
 fi
 
-# ---------------------------------------------------------------------------------------
 # Throughput: command (reliable) and sensor_data (best effort), publisher unthrottled.
 if [ "$ONLY" != latency ]; then
   for size in "${SIZES[@]}"; do
-    q=0
     for qos in command sensor_data; do
       i=0
-      for c in "${TP_CONFIGS[@]}"; do
+      for c in "${CONFIGS[@]}"; do
         read -r impl a b dispatch <<<"$c"
-        domain=$((211 + 9 * q + i)); i=$((i + 1))
+        domain=$((212 + i)); i=$((i + 1))
         common=(--qos "$qos" --size "$size" --domain "$domain" --timeout $((PROC_TIMEOUT - 5)))
-        read -r -a SERVER <<<"$(bin_of "$impl" "$b")"
+        read -r -a SERVER <<<"$(bin_of "$impl" "$b" "$dispatch")"
         SERVER+=(--role sub "${common[@]}")
-        read -r -a CLIENT <<<"$(bin_of "$impl" "$a")"
+        read -r -a CLIENT <<<"$(bin_of "$impl" "$a" "$dispatch")"
         CLIENT+=(--role pub "${common[@]}" --duration "$PUB_SECS")
-        run_pair throughput "$impl" "$a->$b" "${dispatch/-/executor}" "$qos" "$size"
+        run_pair throughput "$impl" "$a->$b" "$dispatch" "$qos" "$size"
       done
-      [ $HAVE_DDSPERF -eq 1 ] && run_ddsperf_throughput "$size" $((211 + 9 * q + i)) "$qos"
-      q=$((q + 1))
+      [ $RUN_DDSPERF -eq 1 ] && run_ddsperf_throughput "$size" 228 "$qos"
     done
   done
 fi

@@ -2,28 +2,40 @@
 
 #include "auv/interfaces/timer.h"
 
+#include <utility>
+
 namespace auv::interfaces {
 
 void Waker::notify() {
-  std::shared_ptr<Waker> forward;
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    pending_ = true;
-    forward = forward_;
+  std::unique_lock<std::mutex> lock(mutex_);
+  if (forward_) {
+    // Forwarding: nobody waits here, so there is no edge to detect; the target decides.
+    std::shared_ptr<Waker> target = forward_;
+    lock.unlock();
+    target->notify();
+    return;
   }
+  if (pending_) return;  // the waiter has not consumed the last wake-up and will re-check
+  pending_ = true;
+  lock.unlock();
   cv_.notify_all();
-  if (forward) forward->notify();
 }
 
-void Waker::waitUntil(std::chrono::steady_clock::time_point deadline) {
+bool Waker::waitUntil(std::chrono::steady_clock::time_point deadline) {
   std::unique_lock<std::mutex> lock(mutex_);
-  cv_.wait_until(lock, deadline, [this] { return pending_; });
+  const bool notified = cv_.wait_until(lock, deadline, [this] { return pending_; });
   pending_ = false;
+  return notified;
 }
 
 void Waker::forwardTo(std::shared_ptr<Waker> target) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  forward_ = std::move(target);
+  bool was_pending = false;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    forward_ = target;
+    was_pending = std::exchange(pending_, false);
+  }
+  if (was_pending && target) target->notify();
 }
 
 Timer::Timer(const Clock& clock, int64_t period_ns, std::function<void()> callback)

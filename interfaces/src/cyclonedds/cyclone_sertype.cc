@@ -3,10 +3,11 @@
 
 #include "cyclone_sertype.h"
 
+#include <algorithm>
 #include <cstring>
+#include <memory>
 #include <mutex>
 #include <string>
-#include <vector>
 
 #include <dds/dds.h>
 #include <dds/ddsi/ddsi_serdata.h>
@@ -28,7 +29,7 @@ struct Sertype : ddsi_sertype {
 };
 
 struct Serdata : ddsi_serdata {
-  std::vector<unsigned char> cdr;           // encapsulation header + XCDR1 body, padded to 4 bytes
+  std::unique_ptr<unsigned char[]> cdr;     // encapsulation header + XCDR1 body, padded to 4 bytes
   uint32_t size = 0;                        // serialized size without the padding
   std::array<unsigned char, 16> key{};      // keyhash as computed without forcing MD5
   std::array<unsigned char, 16> key_md5{};  // keyhash with MD5 forced
@@ -57,6 +58,17 @@ Serdata* newSerdata(const ddsi_sertype* type, ddsi_serdata_kind kind) {
   return d;
 }
 
+// Room for `size` bytes rounded up to 4, left uninitialised: the caller writes every byte
+// up to `size` right after, so large payloads get no zero-fill pass (a std::vector resize
+// would add one, and a second allocation and copy when padding afterwards). Only the
+// padding is zeroed.
+void allocate(Serdata* d, size_t size) {
+  const size_t padded = (size + 3) & ~size_t(3);
+  d->cdr.reset(new unsigned char[padded]);
+  std::memset(d->cdr.get() + size, 0, padded - size);
+  d->size = static_cast<uint32_t>(size);
+}
+
 void computeKey(const ddsi_sertype* type, const void* sample, Serdata* d) {
   Sertype* st = mutableSertype(type);
   if (!st->support.keyed) {
@@ -74,11 +86,9 @@ void computeKey(const ddsi_sertype* type, const void* sample, Serdata* d) {
 
 // Received bytes: keep them; keyed types are deserialized once to find their key.
 Serdata* finishFromSer(const ddsi_sertype* type, Serdata* d) {
-  d->size = static_cast<uint32_t>(d->cdr.size());
-  d->cdr.resize((d->cdr.size() + 3) & ~size_t(3), 0);
   if (sertypeOf(type)->support.keyed) {
     auto sample = sertypeOf(type)->support.create_sample();
-    BorrowedPayload payload(d->cdr.data(), d->size);
+    BorrowedPayload payload(d->cdr.get(), d->size);
     bool ok = false;
     try {
       ok = sertypeOf(type)->topic_type->deserialize(&payload, sample.get());
@@ -98,29 +108,32 @@ Serdata* finishFromSer(const ddsi_sertype* type, Serdata* d) {
 ddsi_serdata* fromSer(const ddsi_sertype* type, ddsi_serdata_kind kind, const nn_rdata* fragchain,
                       size_t size) {
   Serdata* d = newSerdata(type, kind);
-  d->cdr.resize(size);
+  allocate(d, size);
   uint32_t off = 0;
   for (; fragchain != nullptr; fragchain = fragchain->nextfrag) {
     if (fragchain->maxp1 > off) {
       const unsigned char* payload =
           NN_RMSG_PAYLOADOFF(fragchain->rmsg, NN_RDATA_PAYLOAD_OFF(fragchain));
       const uint32_t end = std::min<uint32_t>(fragchain->maxp1, static_cast<uint32_t>(size));
-      if (end > off) std::memcpy(d->cdr.data() + off, payload + (off - fragchain->min), end - off);
+      if (end > off) std::memcpy(d->cdr.get() + off, payload + (off - fragchain->min), end - off);
       off = fragchain->maxp1;
     }
   }
+  if (off < size) std::memset(d->cdr.get() + off, 0, size - off);  // never for a whole sample
   return finishFromSer(type, d);
 }
 
 ddsi_serdata* fromSerIov(const ddsi_sertype* type, ddsi_serdata_kind kind, ddsrt_msg_iovlen_t niov,
                          const ddsrt_iovec_t* iov, size_t size) {
   Serdata* d = newSerdata(type, kind);
-  d->cdr.reserve(size);
-  for (ddsrt_msg_iovlen_t i = 0; i < niov; ++i) {
-    const auto* base = static_cast<const unsigned char*>(iov[i].iov_base);
-    d->cdr.insert(d->cdr.end(), base, base + iov[i].iov_len);
+  allocate(d, size);
+  size_t off = 0;
+  for (ddsrt_msg_iovlen_t i = 0; i < niov && off < size; ++i) {
+    const size_t n = std::min<size_t>(iov[i].iov_len, size - off);
+    std::memcpy(d->cdr.get() + off, iov[i].iov_base, n);
+    off += n;
   }
-  d->cdr.resize(size);
+  std::memset(d->cdr.get() + off, 0, size - off);  // only if the iovecs were short
   return finishFromSer(type, d);
 }
 
@@ -137,13 +150,15 @@ ddsi_serdata* fromSample(const ddsi_sertype* type, ddsi_serdata_kind kind, const
   void* data = const_cast<void*>(sample);
   const uint32_t max_size = st->topic_type->getSerializedSizeProvider(data)();
   Serdata* d = newSerdata(type, kind);
-  d->cdr.resize((max_size + 3) & ~uint32_t(3), 0);
-  BorrowedPayload payload(d->cdr.data(), 0);
-  payload.max_size = static_cast<uint32_t>(d->cdr.size());
+  allocate(d, max_size);
+  BorrowedPayload payload(d->cdr.get(), 0);
+  payload.max_size = max_size;
   if (!st->topic_type->serialize(data, &payload)) {
     delete d;
     return nullptr;
   }
+  // Normally exactly max_size; if less, zero the tail so the padding stays zero.
+  std::memset(d->cdr.get() + payload.length, 0, max_size - payload.length);
   d->size = payload.length;
   computeKey(type, sample, d);
   return d;
@@ -151,12 +166,12 @@ ddsi_serdata* fromSample(const ddsi_sertype* type, ddsi_serdata_kind kind, const
 
 void toSer(const ddsi_serdata* dcmn, size_t off, size_t sz, void* buf) {
   const auto* d = static_cast<const Serdata*>(dcmn);
-  std::memcpy(buf, d->cdr.data() + off, sz);
+  std::memcpy(buf, d->cdr.get() + off, sz);
 }
 
 ddsi_serdata* toSerRef(const ddsi_serdata* dcmn, size_t off, size_t sz, ddsrt_iovec_t* ref) {
   const auto* d = static_cast<const Serdata*>(dcmn);
-  ref->iov_base = const_cast<unsigned char*>(d->cdr.data() + off);
+  ref->iov_base = d->cdr.get() + off;
   ref->iov_len = static_cast<ddsrt_iov_len_t>(sz);
   return ddsi_serdata_ref(dcmn);
 }
@@ -166,7 +181,7 @@ void toSerUnref(ddsi_serdata* d, const ddsrt_iovec_t*) { ddsi_serdata_unref(d); 
 bool toSample(const ddsi_serdata* dcmn, void* sample, void**, void*) {
   const auto* d = static_cast<const Serdata*>(dcmn);
   if (d->kind != SDK_DATA || d->size == 0) return false;
-  BorrowedPayload payload(const_cast<unsigned char*>(d->cdr.data()), d->size);
+  BorrowedPayload payload(d->cdr.get(), d->size);
   try {
     return sertypeOf(d->type)->topic_type->deserialize(&payload, sample);
   } catch (...) {

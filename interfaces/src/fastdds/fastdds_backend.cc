@@ -30,6 +30,8 @@ void check(bool ok, const std::string& what) {
   if (!ok) throw std::runtime_error("fastdds: " + what + " failed");
 }
 
+constexpr uint32_t kSocketBufferBytes = 4 * 1024 * 1024;  // loopback transport, see below
+
 eprosima::fastrtps::Duration_t toDuration(double seconds) {
   if (seconds <= 0) return eprosima::fastrtps::c_TimeInfinite;
   return eprosima::fastrtps::Duration_t(seconds);
@@ -153,9 +155,13 @@ class FastddsReader : public DataReader, public dds::DataReaderListener {
                : 0;
   }
   Guid guid() const override { return toGuid(reader_->guid()); }
-  void on_data_available(dds::DataReader*) override {
+  void on_data_available(dds::DataReader* reader) override {
     std::lock_guard<std::mutex> lock(callback_mutex_);
-    if (!closed_ && reader_ != nullptr && on_data_) on_data_(*this);
+    if (closed_ || !on_data_) return;
+    // Fast DDS may call this before create_datareader returns (history of a writer in the
+    // same participant): take() then needs the reader already. attach() stores the same.
+    if (reader_ == nullptr) reader_ = reader;
+    on_data_(*this);
   }
 
  private:
@@ -181,6 +187,11 @@ dds::DomainParticipantQos fastddsParticipantQos(const ParticipantOptions& option
     // Loopback only: one UDPv4 transport on 127.0.0.1, no shared memory, no other interface.
     auto udp = std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>();
     udp->interfaceWhiteList.emplace_back("127.0.0.1");
+    // 4 MiB socket buffers instead of the system default (~208 KiB): a large sample's 64 KB
+    // datagrams then fit without drops and repair rounds. The kernel silently caps them at
+    // net.core.rmem_max / wmem_max. Measured in docs/performance.md.
+    udp->receiveBufferSize = kSocketBufferBytes;
+    udp->sendBufferSize = kSocketBufferBytes;
     qos.transport().user_transports.push_back(udp);
     qos.transport().use_builtin_transports = false;
   }

@@ -53,15 +53,33 @@ class Node {
   template <class T>
   std::shared_ptr<Publisher<T>> createPublisher(const std::string& topic, const QosProfile& qos);
 
-  /// Subscription of T; `callback` runs on the executor spinning this node.
+  /// Subscription of T. By default `callback` runs on the executor spinning this node, one
+  /// callback at a time with the node's other callbacks.
+  ///
+  /// With `options.callback_thread = CallbackThread::MIDDLEWARE` it runs instead in the DDS
+  /// vendor's thread that delivers the data, with no executor involved (the node need not be
+  /// spun at all): for latency-critical relays that do their own locking. Threading contract
+  /// of such a callback:
+  ///  * it runs concurrently with this node's executor callbacks and with other middleware
+  ///    callbacks, on threads the vendor owns; for a publisher in the same process it may run
+  ///    inside that publisher's publish() call, on the publishing thread. Calls for one
+  ///    subscription never overlap (both vendors serialize listener calls per reader).
+  ///  * it must be thread-safe: guard any state it shares with other callbacks yourself.
+  ///  * it must not block (no waiting on locks held for long, no sleeps, no blocking service
+  ///    calls): while it runs, that vendor thread delivers nothing else.
+  ///  * it must never destroy its own subscription (deleting a reader waits for its running
+  ///    callbacks: a deadlock). Destroy it from another thread; once the destructor returns
+  ///    no callback runs any more.
   template <class T>
   std::shared_ptr<Subscription<T>> createSubscription(const std::string& topic,
                                                       const QosProfile& qos,
-                                                      std::function<void(const T&)> callback);
+                                                      std::function<void(const T&)> callback,
+                                                      const SubscriptionOptions& options = {});
   template <class T>
   std::shared_ptr<Subscription<T>> createSubscription(const std::string& topic,
                                                       const QosProfile& qos,
-                                                      typename Subscription<T>::Callback callback);
+                                                      typename Subscription<T>::Callback callback,
+                                                      const SubscriptionOptions& options = {});
 
   /// Timer on the node's clock; the first call is one period from now.
   std::shared_ptr<Timer> createTimer(double period_s, std::function<void()> callback);
@@ -123,30 +141,45 @@ std::shared_ptr<Publisher<T>> Node::createPublisher(const std::string& topic,
 
 template <class T>
 std::shared_ptr<Subscription<T>> Node::createSubscription(
-    const std::string& topic, const QosProfile& qos, typename Subscription<T>::Callback callback) {
+    const std::string& topic, const QosProfile& qos, typename Subscription<T>::Callback callback,
+    const SubscriptionOptions& options) {
   const QosProfile resolved = resolveQos(topic, qos);
-  auto subscription = std::make_shared<Subscription<T>>(topic, resolved, std::move(callback));
+  auto subscription = std::make_shared<Subscription<T>>(topic, resolved, std::move(callback),
+                                                        options.callback_thread);
   // Raw pointer, not a shared_ptr: the subscription owns the reader, whose deletion waits for
   // running callbacks; a callback holding a reference could end up deleting its own reader.
   Subscription<T>* raw = subscription.get();
-  std::shared_ptr<Waker> waker = waker_;
+  DataCallback on_data;
+  if (options.callback_thread == CallbackThread::MIDDLEWARE) {
+    on_data = [raw](DataReader& reader) { raw->onData(reader); };
+  } else {
+    std::shared_ptr<Waker> waker = waker_;
+    on_data = [raw, waker](DataReader&) {
+      if (raw->markReady()) waker->notify();  // a burst costs one wake-up, not one per sample
+    };
+  }
   subscription->attach(
-      participant_->createReader(topic, typeSupport<T>(), resolved, [raw, waker](DataReader&) {
-        raw->markReady();
-        waker->notify();
-      }));
-  addWaitable(subscription);
+      participant_->createReader(topic, typeSupport<T>(), resolved, std::move(on_data)));
+  // A middleware-thread subscription has nothing for the executor to do.
+  if (options.callback_thread == CallbackThread::EXECUTOR) {
+    addWaitable(subscription);
+    // It starts ready (history may be waiting), so arrivals skip the wake-up until it has
+    // run once: have the executor run it now.
+    waker_->notify();
+  }
   return subscription;
 }
 
 template <class T>
 std::shared_ptr<Subscription<T>> Node::createSubscription(const std::string& topic,
                                                           const QosProfile& qos,
-                                                          std::function<void(const T&)> callback) {
+                                                          std::function<void(const T&)> callback,
+                                                          const SubscriptionOptions& options) {
   return createSubscription<T>(
       topic, qos,
       typename Subscription<T>::Callback(
-          [cb = std::move(callback)](const T& message, const SampleInfo&) { cb(message); }));
+          [cb = std::move(callback)](const T& message, const SampleInfo&) { cb(message); }),
+      options);
 }
 
 template <class Req, class Rep>
