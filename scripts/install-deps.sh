@@ -17,6 +17,8 @@ PACKAGES=(
   libyaml-cpp-dev libgtest-dev libgmock-dev libbenchmark-dev
   # simulator: geometry, ray casting (Embree), meshes (Open3D), images and H.264 video
   libeigen3-dev libembree-dev libopen3d-dev libfmt-dev libopencv-dev ffmpeg
+  # vehicle autonomy: maps, distance fields, planning
+  liboctomap-dev libdynamicedt3d-dev octomap-tools libompl-dev
 )
 
 echo "install-deps: apt-get update"

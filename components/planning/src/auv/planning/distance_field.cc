@@ -1,0 +1,61 @@
+#include "auv/planning/distance_field.h"
+
+#include <algorithm>
+#include <string>
+
+#include <dynamicEDT3D/dynamicEDTOctomap.h>
+#include <octomap/OcTree.h>
+
+namespace auv::planning {
+
+void OctomapDistanceFieldOptions::check() const {
+  if (!(max_distance > 0.0)) {
+    throw PlanningConfigError("distance field: max_distance must be > 0, got " +
+                              std::to_string(max_distance));
+  }
+  for (int axis = 0; axis < 3; ++axis) {
+    if (!(min_corner[axis] < max_corner[axis])) {
+      throw PlanningConfigError("distance field: min_corner must be below max_corner on axis " +
+                                std::to_string(axis));
+    }
+  }
+}
+
+OctomapDistanceField::OctomapDistanceField(octomap::OcTree* tree,
+                                           const OctomapDistanceFieldOptions& options)
+    : tree_(tree), options_(options) {
+  if (tree_ == nullptr) throw PlanningConfigError("distance field: null OcTree");
+  options_.check();
+  const octomap::point3d min_corner(options_.min_corner.x(), options_.min_corner.y(),
+                                    options_.min_corner.z());
+  const octomap::point3d max_corner(options_.max_corner.x(), options_.max_corner.y(),
+                                    options_.max_corner.z());
+  constexpr bool kUnknownIsOccupied = false;  // delayed collision checking: unknown is free
+  edt_ = std::make_unique<DynamicEDTOctomap>(static_cast<float>(options_.max_distance), tree_,
+                                             min_corner, max_corner, kUnknownIsOccupied);
+  edt_->update();
+  ++revision_;
+}
+
+OctomapDistanceField::~OctomapDistanceField() = default;
+
+void OctomapDistanceField::update() {
+  edt_->update();
+  ++revision_;
+}
+
+double OctomapDistanceField::distance(const Eigen::Vector3d& position) const {
+  for (int axis = 0; axis < 3; ++axis) {
+    if (position[axis] < options_.min_corner[axis] || position[axis] > options_.max_corner[axis]) {
+      return options_.max_distance;
+    }
+  }
+  const float distance =
+      edt_->getDistance(octomap::point3d(position.x(), position.y(), position.z()));
+  if (distance < 0.0f) return options_.max_distance;  // outside the grid: unknown, free
+  return std::min<double>(distance, options_.max_distance);
+}
+
+double OctomapDistanceField::resolution() const { return tree_->getResolution(); }
+
+}  // namespace auv::planning

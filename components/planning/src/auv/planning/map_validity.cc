@@ -1,0 +1,121 @@
+#include "auv/planning/map_validity.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include <ompl/base/spaces/RealVectorStateSpace.h>
+
+#include "auv/planning/visibility_cost.h"
+
+namespace auv::planning {
+namespace ob = ompl::base;
+
+void ClearanceOptions::check() const {
+  if (!(hull_radius >= 0.0)) throw PlanningConfigError("clearance: hull_radius must be >= 0");
+  if (!(safety_margin >= 0.0)) throw PlanningConfigError("clearance: safety_margin must be >= 0");
+  if (!std::isfinite(motion_check_step)) {
+    throw PlanningConfigError("clearance: motion_check_step must be finite");
+  }
+}
+
+void PlanningSpaceOptions::check() const {
+  for (int axis = 0; axis < 3; ++axis) {
+    if (!(min_corner[axis] < max_corner[axis])) {
+      throw PlanningConfigError("planning space: min_corner must be below max_corner on axis " +
+                                std::to_string(axis));
+    }
+  }
+  if (fixed_depth && !(*fixed_depth >= min_corner.z() && *fixed_depth <= max_corner.z())) {
+    throw PlanningConfigError("planning space: fixed_depth " + std::to_string(*fixed_depth) +
+                              " outside [min_corner.z, max_corner.z]");
+  }
+}
+
+MapValidityChecker::MapValidityChecker(const ob::SpaceInformationPtr& si,
+                                       std::shared_ptr<const DistanceField> field,
+                                       const ClearanceOptions& options)
+    : ob::StateValidityChecker(si), field_(std::move(field)), options_(options) {
+  if (!field_) throw PlanningConfigError("validity checker: null distance field");
+  options_.check();
+  specs_.clearanceComputationType = ob::StateValidityCheckerSpecs::EXACT;
+}
+
+bool MapValidityChecker::isValid(const ob::State* state) const {
+  return si_->satisfiesBounds(state) && clearance(state) >= 0.0;
+}
+
+double MapValidityChecker::clearance(const ob::State* state) const {
+  return field_->distance(statePosition(state)) - options_.clearance();
+}
+
+MapMotionValidator::MapMotionValidator(const ob::SpaceInformationPtr& si, double step)
+    : ob::MotionValidator(si), step_(step) {
+  if (!(step_ > 0.0)) throw PlanningConfigError("motion validator: step must be > 0");
+}
+
+bool MapMotionValidator::checkMotion(const ob::State* from, const ob::State* to) const {
+  std::pair<ob::State*, double> unused(nullptr, 0.0);
+  return checkMotion(from, to, unused);
+}
+
+bool MapMotionValidator::checkMotion(const ob::State* from, const ob::State* to,
+                                     std::pair<ob::State*, double>& last_valid) const {
+  // The start state is assumed valid (OMPL convention); the end state is always checked.
+  const double length = si_->distance(from, to);
+  const int segments = std::max(1, static_cast<int>(std::ceil(length / step_)));
+  ob::State* probe = si_->allocState();
+  bool valid = true;
+  int i = 1;
+  for (; i <= segments; ++i) {
+    si_->getStateSpace()->interpolate(from, to, static_cast<double>(i) / segments, probe);
+    if (!si_->isValid(probe)) {
+      valid = false;
+      break;
+    }
+  }
+  if (valid) {
+    ++valid_;
+  } else {
+    ++invalid_;
+    last_valid.second = static_cast<double>(i - 1) / segments;
+    if (last_valid.first != nullptr) {
+      si_->getStateSpace()->interpolate(from, to, last_valid.second, last_valid.first);
+    }
+  }
+  si_->freeState(probe);
+  return valid;
+}
+
+ob::SpaceInformationPtr makeSpaceInformation(const PlanningSpaceOptions& space,
+                                             std::shared_ptr<const DistanceField> field,
+                                             const ClearanceOptions& clearance) {
+  space.check();
+  clearance.check();
+  if (!field) throw PlanningConfigError("space information: null distance field");
+  auto state_space = std::make_shared<ob::RealVectorStateSpace>(3);
+  ob::RealVectorBounds bounds(3);
+  for (int axis = 0; axis < 3; ++axis) {
+    bounds.setLow(axis, space.min_corner[axis]);
+    bounds.setHigh(axis, space.max_corner[axis]);
+  }
+  if (space.fixed_depth) {  // zero-width z interval: sampling and steering keep the depth
+    bounds.setLow(2, *space.fixed_depth);
+    bounds.setHigh(2, *space.fixed_depth);
+  }
+  state_space->setBounds(bounds);
+  auto si = std::make_shared<ob::SpaceInformation>(state_space);
+  const double half_resolution = 0.5 * field->resolution();
+  const double step = clearance.motion_check_step > 0.0
+                          ? std::min(clearance.motion_check_step, half_resolution)
+                          : half_resolution;
+  // Also for OMPL code that bypasses the motion validator (e.g. path simplification).
+  state_space->setLongestValidSegmentFraction(
+      std::min(1.0, step / std::max(step, state_space->getMaximumExtent())));
+  si->setStateValidityChecker(std::make_shared<MapValidityChecker>(si, field, clearance));
+  si->setMotionValidator(std::make_shared<MapMotionValidator>(si, step));
+  si->setup();
+  return si;
+}
+
+}  // namespace auv::planning

@@ -1,0 +1,77 @@
+// Collision checking against the current map: clearance from the distance field, unknown
+// space free (PAPER.md 2.2.2). Checks are lazy in the paper's sense: a state or motion is
+// judged on the map of the moment; OnlineRRTstar::updateTree re-checks the tree when the map
+// grows.
+#pragma once
+
+#include <memory>
+#include <optional>
+
+#include <ompl/base/MotionValidator.h>
+#include <ompl/base/SpaceInformation.h>
+#include <ompl/base/StateValidityChecker.h>
+
+#include "auv/planning/distance_field.h"
+
+namespace auv::planning {
+
+struct ClearanceOptions {
+  /// m, radius of the sphere enclosing the hull.
+  double hull_radius = 0.8;
+  /// m, extra distance kept on top of the hull radius (navigation error, map noise).
+  double safety_margin = 0.5;
+  /// m, motion check step; <= 0 means half the map resolution. Never above half of it.
+  double motion_check_step = 0.0;
+
+  void check() const;
+  double clearance() const { return hull_radius + safety_margin; }
+};
+
+/// Valid = inside the space bounds and at least clearance() from the nearest occupied cell.
+class MapValidityChecker : public ompl::base::StateValidityChecker {
+ public:
+  MapValidityChecker(const ompl::base::SpaceInformationPtr& si,
+                     std::shared_ptr<const DistanceField> field, const ClearanceOptions& options);
+
+  bool isValid(const ompl::base::State* state) const override;
+  /// Distance to the nearest occupied cell minus the required clearance (< 0: too close).
+  double clearance(const ompl::base::State* state) const override;
+
+ private:
+  std::shared_ptr<const DistanceField> field_;
+  ClearanceOptions options_;
+};
+
+/// Checks straight segments at a fixed metric step (<= half the map resolution), independent
+/// of OMPL's longest_valid_segment_fraction, so thin obstacles are never stepped over.
+class MapMotionValidator : public ompl::base::MotionValidator {
+ public:
+  MapMotionValidator(const ompl::base::SpaceInformationPtr& si, double step);
+
+  bool checkMotion(const ompl::base::State* from, const ompl::base::State* to) const override;
+  bool checkMotion(const ompl::base::State* from, const ompl::base::State* to,
+                   std::pair<ompl::base::State*, double>& last_valid) const override;
+  double step() const { return step_; }
+
+ private:
+  double step_;
+};
+
+struct PlanningSpaceOptions {
+  /// m, NED bounds of the planning volume.
+  Eigen::Vector3d min_corner{-50.0, -50.0, 0.5};
+  Eigen::Vector3d max_corner{50.0, 50.0, 30.0};
+  /// m, when set, every state has this depth (2-D planning as the paper did with a
+  /// horizontal profiler); it must lie within [min_corner.z, max_corner.z].
+  std::optional<double> fixed_depth;
+
+  void check() const;
+};
+
+/// A RealVectorStateSpace(3) (NED) with the bounds (z collapsed to fixed_depth if set), and a
+/// SpaceInformation using MapValidityChecker + MapMotionValidator; it is set up.
+ompl::base::SpaceInformationPtr makeSpaceInformation(const PlanningSpaceOptions& space,
+                                                     std::shared_ptr<const DistanceField> field,
+                                                     const ClearanceOptions& clearance);
+
+}  // namespace auv::planning

@@ -1,0 +1,116 @@
+// The paper's modified RRT* (PAPER.md 2.2, Algorithms 1 and 2): one tree grown anytime,
+// pruned to the next waypoint when the mission handler asks for it, and repaired by
+// updateTree() when the map changes (delayed collision checking).
+#pragma once
+
+#include <atomic>
+#include <limits>
+#include <memory>
+#include <vector>
+
+#include <ompl/base/OptimizationObjective.h>
+#include <ompl/base/Planner.h>
+#include <ompl/datastructures/NearestNeighbors.h>
+#include <ompl/util/RandomNumbers.h>
+
+namespace auv::planning {
+
+/// What updateTree() found.
+struct UpdateResult {
+  bool root_in_collision = false;        ///< the root (the active waypoint) is not valid
+  bool vehicle_to_root_blocked = false;  ///< the segment vehicle -> root is not valid
+  std::size_t removed_nodes = 0;         ///< nodes discarded with their colliding subtrees
+  /// The caller must cancel the active waypoint and reset() from the vehicle's position.
+  bool needsRestart() const { return root_in_collision || vehicle_to_root_blocked; }
+};
+
+/// Parameters (declareParam): range (δ, m), goal_bias, goal_tolerance (ε_goal, m),
+/// rewire_factor. Works with OMPL's SimpleSetup and Benchmark: solve() grows the tree from
+/// the problem's start (or the current root), keeps growing across calls (anytime) until
+/// clear() or reset(), and reports the best solution so far.
+class OnlineRRTstar : public ompl::base::Planner {
+ public:
+  /// A tree node. `cost` is the cost-to-come from the root; `incoming_cost` the edge cost.
+  struct Node {
+    ompl::base::State* state = nullptr;
+    Node* parent = nullptr;
+    std::vector<Node*> children;
+    ompl::base::Cost cost;
+    ompl::base::Cost incoming_cost;
+  };
+
+  explicit OnlineRRTstar(const ompl::base::SpaceInformationPtr& si);
+  ~OnlineRRTstar() override;
+
+  void setup() override;
+  void clear() override;
+  /// Algorithm 1 without the waypoint step: grows the tree until `ptc`, adding nodes within
+  /// ε_goal of the goal to the solution list; posts the best path to the problem definition.
+  ompl::base::PlannerStatus solve(const ompl::base::PlannerTerminationCondition& ptc) override;
+  void getPlannerData(ompl::base::PlannerData& data) const override;
+
+  /// Algorithm 1 lines 10-14: if a solution exists, writes the state after the root on the
+  /// best solution to `waypoint` and prunes the tree so it becomes the root (the other
+  /// subtrees are freed). False (tree untouched) when there is no solution or the root
+  /// itself is the best solution.
+  bool popWaypoint(ompl::base::State* waypoint);
+  /// DFS re-check of every node and edge on the current map; colliding subtrees are freed.
+  UpdateResult updateTree(const ompl::base::State* vehicle_state);
+  /// Drops the tree and restarts it with `root_state` as root (keeps the goal).
+  void reset(const ompl::base::State* root_state);
+
+  /// Best solution node (lowest cost-to-come + cost to the goal), or nullptr.
+  const Node* bestSolution() const;
+  /// Cost of bestSolution() up to the goal; infinite cost when there is none.
+  ompl::base::Cost bestCost() const;
+  /// States from the root to the best solution node (empty when there is none).
+  std::vector<const ompl::base::State*> bestPath() const;
+  const Node* root() const { return root_; }
+  std::size_t treeSize() const { return nn_ ? nn_->size() : 0; }
+  /// Checks parent/child links, costs and the nearest-neighbour structure; true if consistent.
+  bool checkConsistency() const;
+
+  void setRange(double range) { range_ = range; }
+  double getRange() const { return range_; }
+  void setGoalBias(double goal_bias) { goal_bias_ = goal_bias; }
+  double getGoalBias() const { return goal_bias_; }
+  void setGoalTolerance(double tolerance) { goal_tolerance_ = tolerance; }
+  double getGoalTolerance() const { return goal_tolerance_; }
+  void setRewireFactor(double factor) { rewire_factor_ = factor; }
+  double getRewireFactor() const { return rewire_factor_; }
+
+ private:
+  /// Algorithm 2: nearest, steer by δ, check, choose parent, add, rewire. Null if trapped.
+  Node* extend(const ompl::base::State* random_state);
+  Node* addRoot(const ompl::base::State* state);
+  bool initializeGoal();
+  double nearRadius() const;
+  ompl::base::Cost costToGoal(const Node* node) const;
+  bool reachesGoal(const Node* node) const;
+  void propagateCost(Node* node);
+  void detachFromParent(Node* node);
+  void freeSubtree(Node* node);
+  /// Rebuilds the nearest-neighbour structure and the solution list from the tree.
+  void reindex();
+  void freeTree();
+  void postSolution(bool approximate);
+
+  std::shared_ptr<ompl::NearestNeighbors<Node*>> nn_;
+  ompl::base::StateSamplerPtr sampler_;
+  ompl::RNG rng_;
+  ompl::base::OptimizationObjectivePtr objective_;
+  Node* root_ = nullptr;
+  std::vector<Node*> solutions_;
+  ompl::base::State* goal_state_ = nullptr;
+
+  double range_ = 0.0;  ///< 0: 0.2 × the space's maximum extent (OMPL default), set in setup()
+  double goal_bias_ = 0.05;
+  double goal_tolerance_ = 1.0;
+  double rewire_factor_ = 1.1;
+  /// bestCost() for the benchmark's progress thread (read without touching the tree).
+  std::atomic<double> published_best_cost_{std::numeric_limits<double>::infinity()};
+  double rrt_star_gamma_ = 0.0;  ///< RRT* radius constant, from the free-space measure
+  double effective_dimension_ = 3.0;
+};
+
+}  // namespace auv::planning

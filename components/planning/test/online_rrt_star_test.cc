@@ -1,0 +1,232 @@
+#include "auv/planning/online_rrt_star.h"
+
+#include <set>
+
+#include <gtest/gtest.h>
+#include <ompl/base/PlannerData.h>
+#include <ompl/base/PlannerTerminationCondition.h>
+#include <ompl/base/objectives/PathLengthOptimizationObjective.h>
+#include <ompl/base/terminationconditions/IterationTerminationCondition.h>
+#include <ompl/geometric/SimpleSetup.h>
+#include <ompl/util/RandomNumbers.h>
+
+#include "auv/planning/visibility_cost.h"
+#include "test_maps.h"
+
+namespace auv::planning {
+namespace {
+namespace ob = ompl::base;
+using Node = OnlineRRTstar::Node;
+
+/// Seeded before main(), so the first RNG is already deterministic (OMPL ignores later seeds).
+const bool kSeeded = (ompl::RNG::setSeed(7), true);
+
+std::size_t subtreeSize(const Node* node) {
+  std::size_t size = 1;
+  for (const Node* child : node->children) size += subtreeSize(child);
+  return size;
+}
+
+void collectSubtree(const Node* node, std::set<const Node*>& out) {
+  out.insert(node);
+  for (const Node* child : node->children) collectSubtree(child, out);
+}
+
+/// A planner on a FlatWorld with the problem start -> goal, path-length objective.
+class PlannerTest : public ::testing::Test {
+ protected:
+  void makePlanner(double start_x, double start_y, double goal_x, double goal_y) {
+    world_.build();
+    pdef_ = std::make_shared<ob::ProblemDefinition>(world_.si);
+    pdef_->setStartAndGoalStates(world_.state(start_x, start_y), world_.state(goal_x, goal_y), 1.0);
+    pdef_->setOptimizationObjective(
+        std::make_shared<ob::PathLengthOptimizationObjective>(world_.si));
+    planner_ = std::make_shared<OnlineRRTstar>(world_.si);
+    planner_->setRange(2.0);
+    planner_->setGoalTolerance(1.0);
+    planner_->setProblemDefinition(pdef_);
+    planner_->setup();
+  }
+  ob::PlannerStatus grow(unsigned iterations) {
+    ob::IterationTerminationCondition iteration_limit(iterations);  // deterministic, no clock
+    return planner_->solve(iteration_limit);
+  }
+  testing::FlatWorld world_;
+  ob::ProblemDefinitionPtr pdef_;
+  std::shared_ptr<OnlineRRTstar> planner_;
+};
+
+TEST_F(PlannerTest, FindsAPathAroundAWallAndImprovesItWithMoreIterations) {
+  testing::addOccupiedBox(*world_.tree, {10.0, -6.0, 0.0}, {10.5, 6.0, 10.0});
+  makePlanner(2.0, 0.0, 18.0, 0.0);
+  ASSERT_EQ(grow(3000), ob::PlannerStatus::EXACT_SOLUTION);
+  const double first_cost = planner_->bestCost().value();
+  EXPECT_GT(first_cost, 16.0 + 1.0);  // the straight line is blocked: it must go around
+  const auto path = planner_->bestPath();
+  for (std::size_t i = 1; i < path.size(); ++i) {
+    EXPECT_TRUE(world_.si->checkMotion(path[i - 1], path[i]));
+  }
+  ASSERT_EQ(grow(30000), ob::PlannerStatus::EXACT_SOLUTION);
+  EXPECT_LT(planner_->bestCost().value(), first_cost);
+  EXPECT_TRUE(planner_->checkConsistency());
+  EXPECT_TRUE(pdef_->hasExactSolution());
+}
+
+TEST_F(PlannerTest, PopWaypointKeepsOnlyTheRootChildSubtree) {
+  makePlanner(2.0, 0.0, 18.0, 5.0);
+  ASSERT_EQ(grow(2000), ob::PlannerStatus::EXACT_SOLUTION);
+  const auto path = planner_->bestPath();
+  ASSERT_GE(path.size(), 2u);
+  const Node* root = planner_->root();
+  const Node* next = nullptr;
+  for (const Node* child : root->children) {
+    if (child->state == path[1]) next = child;
+  }
+  ASSERT_NE(next, nullptr);
+  std::set<const Node*> kept;
+  collectSubtree(next, kept);
+  ASSERT_LT(kept.size(), planner_->treeSize());  // something must be discarded
+
+  ob::ScopedState<> waypoint(world_.si);
+  ASSERT_TRUE(planner_->popWaypoint(waypoint.get()));
+  EXPECT_EQ(planner_->root(), next);
+  EXPECT_TRUE(world_.si->equalStates(waypoint.get(), next->state));
+  EXPECT_EQ(planner_->treeSize(), kept.size());
+  std::set<const Node*> remaining;
+  collectSubtree(planner_->root(), remaining);
+  EXPECT_EQ(remaining, kept);
+  EXPECT_EQ(planner_->root()->parent, nullptr);
+  EXPECT_DOUBLE_EQ(planner_->root()->cost.value(), 0.0);
+  EXPECT_TRUE(planner_->checkConsistency());
+  // The tree keeps growing from the new root.
+  EXPECT_EQ(grow(500), ob::PlannerStatus::EXACT_SOLUTION);
+  EXPECT_TRUE(planner_->checkConsistency());
+}
+
+TEST_F(PlannerTest, TreeGrownThroughUnknownSpaceIsPrunedExactlyWhereTheMapFillsIn) {
+  makePlanner(2.0, 0.0, 18.0, 0.0);  // nothing mapped: everything is unknown, hence free
+  ASSERT_EQ(grow(2000), ob::PlannerStatus::EXACT_SOLUTION);
+  const auto vehicle = world_.state(1.5, 0.0);
+  UpdateResult unchanged = planner_->updateTree(vehicle.get());
+  EXPECT_EQ(unchanged.removed_nodes, 0u);
+  EXPECT_FALSE(unchanged.needsRestart());
+  const std::size_t size_before = planner_->treeSize();
+
+  testing::addOccupiedBox(*world_.tree, {10.0, -6.0, 0.0}, {10.5, 6.0, 10.0});
+  world_.field->update();
+  // Expected: every node whose state or incoming edge now collides, with its subtree.
+  std::set<const Node*> expected_removed;
+  std::vector<const Node*> stack{planner_->root()};
+  while (!stack.empty()) {
+    const Node* node = stack.back();
+    stack.pop_back();
+    for (const Node* child : node->children) {
+      if (!world_.si->isValid(child->state) || !world_.si->checkMotion(node->state, child->state)) {
+        collectSubtree(child, expected_removed);
+      } else {
+        stack.push_back(child);
+      }
+    }
+  }
+  ASSERT_GT(expected_removed.size(), 0u);
+
+  const UpdateResult result = planner_->updateTree(vehicle.get());
+  EXPECT_FALSE(result.needsRestart());
+  EXPECT_EQ(result.removed_nodes, expected_removed.size());
+  EXPECT_EQ(planner_->treeSize(), size_before - expected_removed.size());
+  EXPECT_TRUE(planner_->checkConsistency());
+  stack = {planner_->root()};
+  while (!stack.empty()) {
+    const Node* node = stack.back();
+    stack.pop_back();
+    for (const Node* child : node->children) {
+      EXPECT_TRUE(world_.si->isValid(child->state));
+      EXPECT_TRUE(world_.si->checkMotion(node->state, child->state));
+      stack.push_back(child);
+    }
+  }
+}
+
+TEST_F(PlannerTest, ReportsACollidingRootAndABlockedVehicleToRootSegment) {
+  makePlanner(2.0, 0.0, 18.0, 0.0);
+  planner_->reset(world_.state(12.0, 0.0).get());
+  const auto vehicle = world_.state(8.0, 0.0);
+  EXPECT_FALSE(planner_->updateTree(vehicle.get()).needsRestart());
+
+  testing::addOccupiedBox(*world_.tree, {10.0, -3.0, 0.0}, {10.5, 3.0, 10.0});
+  world_.field->update();
+  UpdateResult blocked = planner_->updateTree(vehicle.get());
+  EXPECT_FALSE(blocked.root_in_collision);
+  EXPECT_TRUE(blocked.vehicle_to_root_blocked);
+  EXPECT_TRUE(blocked.needsRestart());
+
+  testing::addOccupiedBox(*world_.tree, {11.5, -1.0, 0.0}, {12.5, 1.0, 10.0});
+  world_.field->update();
+  EXPECT_TRUE(planner_->updateTree(vehicle.get()).root_in_collision);
+}
+
+TEST(PlannerWithVisibility, PlansThroughTheOnlyNarrowPassageDespiteItsCost) {
+  testing::FlatWorld world;
+  // Wall across the whole world but a 4 m gap at |y| < 2, far closer than d_e to the wall.
+  testing::addOccupiedBox(*world.tree, {10.0, -12.0, 0.0}, {10.5, -2.0, 10.0});
+  testing::addOccupiedBox(*world.tree, {10.0, 2.0, 0.0}, {10.5, 12.0, 10.0});
+  world.build();
+  auto pdef = std::make_shared<ob::ProblemDefinition>(world.si);
+  pdef->setStartAndGoalStates(world.state(2.0, 6.0), world.state(18.0, 6.0), 1.0);
+  VisibilityObjectiveOptions options;
+  options.cost.expected_distance = 6.0;
+  options.cost.admissible_range = 1.0;
+  options.visibility_weight = 10.0;
+  pdef->setOptimizationObjective(
+      std::make_shared<VisibilityObjective>(world.si, world.field, options));
+  OnlineRRTstar planner(world.si);
+  planner.setRange(2.0);
+  planner.setProblemDefinition(pdef);
+  planner.setup();
+  ob::IterationTerminationCondition iteration_limit(5000);
+  ASSERT_EQ(planner.solve(iteration_limit), ob::PlannerStatus::EXACT_SOLUTION);
+  bool crosses_gap = false;
+  const auto path = planner.bestPath();
+  for (std::size_t i = 1; i < path.size(); ++i) {
+    EXPECT_TRUE(world.si->checkMotion(path[i - 1], path[i]));
+    const double x0 = statePosition(path[i - 1]).x(), x1 = statePosition(path[i]).x();
+    if ((x0 - 10.25) * (x1 - 10.25) <= 0.0) {
+      const double t = (10.25 - x0) / (x1 - x0);
+      const double y = statePosition(path[i - 1]).y() +
+                       t * (statePosition(path[i]).y() - statePosition(path[i - 1]).y());
+      crosses_gap = crosses_gap || std::abs(y) < 2.0;
+    }
+  }
+  EXPECT_TRUE(crosses_gap);
+}
+
+TEST(PlannerInOmplTools, SolvesClearsAndReportsPlannerData) {
+  testing::FlatWorld world;
+  testing::addOccupiedBox(*world.tree, {10.0, -6.0, 0.0}, {10.5, 6.0, 10.0});
+  world.build();
+  ompl::geometric::SimpleSetup setup(world.si);
+  setup.setStartAndGoalStates(world.state(2.0, 0.0), world.state(18.0, 0.0), 1.0);
+  VisibilityObjectiveOptions objective_options;
+  setup.setOptimizationObjective(
+      std::make_shared<VisibilityObjective>(world.si, world.field, objective_options));
+  auto planner = std::make_shared<OnlineRRTstar>(world.si);
+  ASSERT_TRUE(planner->params().setParam("range", "2.0"));
+  ASSERT_TRUE(planner->params().setParam("goal_tolerance", "1.0"));
+  setup.setPlanner(planner);
+  setup.setup();
+  for (int run = 0; run < 2; ++run) {
+    setup.clear();
+    ob::IterationTerminationCondition iteration_limit(3000);
+    ASSERT_EQ(setup.solve(iteration_limit), ob::PlannerStatus::EXACT_SOLUTION);
+    EXPECT_TRUE(setup.haveExactSolutionPath());
+    ob::PlannerData data(world.si);
+    setup.getPlannerData(data);
+    EXPECT_EQ(data.numVertices(), planner->treeSize());
+    EXPECT_EQ(data.numEdges(), planner->treeSize() - 1);
+    EXPECT_EQ(data.numStartVertices(), 1u);
+    EXPECT_GE(data.numGoalVertices(), 1u);
+  }
+}
+
+}  // namespace
+}  // namespace auv::planning
