@@ -1,0 +1,335 @@
+#include "auv/mapping/components/mapping_component.h"
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace auv::mapping {
+namespace {
+
+int64_t toNs(const msg::Time& stamp) {
+  return static_cast<int64_t>(stamp.sec()) * 1000000000 + static_cast<int64_t>(stamp.nanosec());
+}
+
+Eigen::Isometry3d toIsometry(const msg::Pose& pose) {
+  Eigen::Isometry3d result = Eigen::Isometry3d::Identity();
+  result.translation() =
+      Eigen::Vector3d(pose.position().x(), pose.position().y(), pose.position().z());
+  Eigen::Quaterniond q(pose.orientation().w(), pose.orientation().x(), pose.orientation().y(),
+                       pose.orientation().z());
+  if (q.norm() < 1e-9) q = Eigen::Quaterniond::Identity();  // unset orientation
+  result.linear() = q.normalized().toRotationMatrix();
+  return result;
+}
+
+Eigen::Isometry3d toIsometry(const StampedPose& pose) {
+  Eigen::Isometry3d result = Eigen::Isometry3d::Identity();
+  result.translation() = pose.position;
+  result.linear() = pose.orientation.toRotationMatrix();
+  return result;
+}
+
+msg::Point toPoint(const Eigen::Vector3d& v) {
+  msg::Point p;
+  p.x(v.x());
+  p.y(v.y());
+  p.z(v.z());
+  return p;
+}
+
+/// Beam geometry in the sonar head frame: the first echo within [min_range, max_range] is the
+/// return (later echoes lie behind the first surface: multipath or weaker targets).
+BeamGeometry toGeometry(const msg::SonarBeam& beam) {
+  BeamGeometry geometry;
+  geometry.direction = beamDirection(beam.beam_angle());
+  geometry.min_range = beam.min_range();
+  geometry.max_range = beam.max_range();
+  for (float range : beam.ranges()) {
+    if (range >= beam.min_range() && range <= beam.max_range()) {
+      geometry.return_range = range;
+      break;
+    }
+  }
+  return geometry;
+}
+
+}  // namespace
+
+void MappingComponent::configure(interfaces::Node& node) {
+  node_ = &node;
+  auto& p = node.parameters();
+  auto& m = options_.map;
+  m.resolution =
+      p.declare<double>("resolution", m.resolution, {"map leaf size", "m", 0.01, 10.0, {}, true});
+  m.prob_hit = p.declare<double>(
+      "prob_hit", m.prob_hit,
+      {"occupancy probability of a cell with a return", "", 0.501, 0.999, {}, true});
+  m.prob_miss = p.declare<double>(
+      "prob_miss", m.prob_miss,
+      {"occupancy probability of a cell a beam passed through", "", 0.001, 0.499, {}, true});
+  m.clamping_min = p.declare<double>(
+      "clamping_min", m.clamping_min,
+      {"lower occupancy probability clamp (<= prob_miss)", "", 0.001, 0.499, {}, true});
+  m.clamping_max = p.declare<double>(
+      "clamping_max", m.clamping_max,
+      {"upper occupancy probability clamp (>= prob_hit)", "", 0.501, 0.999, {}, true});
+  m.occupancy_threshold =
+      p.declare<double>("occupancy_threshold", m.occupancy_threshold,
+                        {"probability above which a cell is occupied", "", 0.001, 0.999, {}, true});
+  auto& b = options_.poses;
+  b.capacity = static_cast<std::size_t>(
+      p.declare<int64_t>("pose_buffer_length", static_cast<int64_t>(b.capacity),
+                         {"odometry poses kept for interpolation", "", 2.0, 1e6, {}, true}));
+  b.max_gap_s = p.declare<double>(
+      "pose_max_gap", b.max_gap_s,
+      {"largest odometry gap bridged by interpolation", "s", 1e-3, 60.0, {}, true});
+  b.max_extrapolation_s = p.declare<double>(
+      "pose_max_extrapolation", b.max_extrapolation_s,
+      {"how far past the newest odometry a beam still gets that pose", "s", 0.0, 10.0, {}, true});
+  options_.update_rate =
+      p.declare<double>("update_rate", options_.update_rate,
+                        {"rate of incremental map updates", "Hz", 0.01, 100.0, {}, true});
+  options_.full_map_period =
+      p.declare<double>("full_map_period", options_.full_map_period,
+                        {"period of full map updates", "s", 0.1, 3600.0, {}, true});
+  options_.late_joiner_hold =
+      p.declare<double>("late_joiner_hold", options_.late_joiner_hold,
+                        {"increments held back after a new map reader appears (see header)",
+                         "s",
+                         0.0,
+                         60.0,
+                         {},
+                         true});
+  options_.map_id = p.declare<std::string>(
+      "map_id", options_.map_id, {"map instance key on map/update", "", {}, {}, {}, true});
+  options_.world_frame = p.declare<std::string>(
+      "world_frame", options_.world_frame, {"map and odometry frame (NED)", "", {}, {}, {}, true});
+  options_.map_directory =
+      p.declare<std::string>("map_directory", options_.map_directory,
+                             {"directory map/save writes into", "", {}, {}, {}, true});
+  options_.beam_queue_length =
+      p.declare<int64_t>("beam_queue_length", options_.beam_queue_length,
+                         {"beams kept waiting for newer odometry", "", 0.0, 100000.0, {}, true});
+
+  builder_ = std::make_unique<MapBuilder>(options_.map);  // checks cross-field constraints
+  builder_->enableChangeTracking(true);
+  poses_ = std::make_unique<PoseBuffer>(options_.poses);
+
+  update_pub_ = node.createPublisher<msg::OctomapUpdate>("map/update", interfaces::mapQos());
+  odometry_sub_ = node.createSubscription<msg::Odometry>(
+      "nav/odometry", interfaces::stateQos(),
+      std::function<void(const msg::Odometry&)>([this](const msg::Odometry& o) { onOdometry(o); }));
+  beam_sub_ = node.createSubscription<msg::SonarBeam>(
+      "sonar/beam", interfaces::sensorDataQos(),
+      std::function<void(const msg::SonarBeam&)>([this](const msg::SonarBeam& b) { onBeam(b); }));
+  cloud_sub_ = node.createSubscription<msg::PointCloud>(
+      "sonar/scan", interfaces::sensorDataQos(),
+      std::function<void(const msg::PointCloud&)>(
+          [this](const msg::PointCloud& c) { onCloud(c); }));
+
+  save_srv_ = node.createService<msg::SaveMapRequest, msg::SaveMapReply>(
+      "map/save", [this](const msg::SaveMapRequest& request, msg::SaveMapReply& reply) {
+        const std::filesystem::path relative(request.file_path());
+        const bool probabilities = request.encoding() == msg::OCTOMAP_ENCODING_FULL;
+        std::filesystem::path name =
+            relative.empty() ? std::filesystem::path("map_" + std::to_string(sequence_number_) +
+                                                     (probabilities ? ".ot" : ".bt"))
+                             : relative;
+        for (const auto& part : name) {
+          if (part == "..") throw std::invalid_argument("file_path must not contain '..'");
+        }
+        if (name.is_absolute()) throw std::invalid_argument("file_path must be relative");
+        const std::filesystem::path full = std::filesystem::path(options_.map_directory) / name;
+        std::error_code error;
+        if (full.has_parent_path()) std::filesystem::create_directories(full.parent_path(), error);
+        std::ofstream file(full, std::ios::binary);
+        const std::string data =
+            probabilities ? builder_->fullWithProbabilities() : builder_->fullBinary();
+        file.write(data.data(), static_cast<std::streamsize>(data.size()));
+        file.close();
+        if (!file) {
+          throw interfaces::ServiceError(msg::REPLY_CODE_IO_ERROR, "cannot write " + full.string());
+        }
+        reply.file_path(name.string());
+        reply.size_bytes(data.size());
+        reply.sequence_number(sequence_number_);
+        AUV_INFO(node_->logger(),
+                 "saved map to " << full.string() << " (" << data.size() << " bytes)");
+      });
+  clear_srv_ = node.createService<msg::TriggerRequest, msg::TriggerReply>(
+      "map/clear", [this](const msg::TriggerRequest&, msg::TriggerReply& reply) {
+        const std::size_t leaves = builder_->tree().getNumLeafNodes();
+        builder_->clear();
+        builder_->takeSnapshot();
+        full_due_ = true;  // an increment cannot express deletions
+        reply.message("cleared " + std::to_string(leaves) + " leaves");
+      });
+  full_srv_ = node.createService<msg::TriggerRequest, msg::TriggerReply>(
+      "map/request_full", [this](const msg::TriggerRequest&, msg::TriggerReply& reply) {
+        full_due_ = true;
+        reply.message("full map on the next update");
+      });
+}
+
+void MappingComponent::activate() {
+  full_due_ = true;
+  timer_ = node_->createTimer(1.0 / options_.update_rate, [this] { tick(); });
+  AUV_INFO(node_->logger(), "mapping at " << options_.map.resolution << " m, updates at "
+                                          << options_.update_rate << " Hz, full every "
+                                          << options_.full_map_period << " s");
+}
+
+void MappingComponent::deactivate() {
+  if (timer_) timer_->cancel();
+  timer_.reset();
+}
+
+void MappingComponent::cleanup() {
+  beam_sub_.reset();
+  cloud_sub_.reset();
+  odometry_sub_.reset();
+  update_pub_.reset();
+  save_srv_.reset();
+  clear_srv_.reset();
+  full_srv_.reset();
+}
+
+void MappingComponent::onOdometry(const msg::Odometry& odometry) {
+  StampedPose pose;
+  pose.stamp_ns = toNs(odometry.header().stamp());
+  const Eigen::Isometry3d world_T_body = toIsometry(odometry.pose().pose());
+  pose.position = world_T_body.translation();
+  pose.orientation = Eigen::Quaterniond(world_T_body.linear());
+  poses_->add(pose);
+  // Beams that arrived before the odometry covering them.
+  while (!waiting_beams_.empty() && tryInsertBeam(waiting_beams_.front())) {
+    waiting_beams_.pop_front();
+  }
+}
+
+void MappingComponent::onBeam(const msg::SonarBeam& beam) {
+  if (!waiting_beams_.empty() || !tryInsertBeam(beam)) {  // keep beams in stamp order
+    waiting_beams_.push_back(beam);
+    while (static_cast<int64_t>(waiting_beams_.size()) > options_.beam_queue_length) {
+      waiting_beams_.pop_front();
+      ++beams_dropped_;
+    }
+  }
+}
+
+bool MappingComponent::tryInsertBeam(const msg::SonarBeam& beam) {
+  const int64_t stamp_ns = toNs(beam.header().stamp());
+  PoseLookupStatus status;
+  const auto pose = poses_->lookUp(stamp_ns, &status);
+  if (!pose) {
+    if (status == PoseLookupStatus::AFTER_END || status == PoseLookupStatus::EMPTY) return false;
+    ++beams_dropped_;  // can never be placed
+    AUV_DEBUG(node_->logger(), "dropped beam: " << toString(status));
+    return true;
+  }
+  builder_->insertBeam(toGeometry(beam), toIsometry(*pose) * toIsometry(beam.mounting()));
+  ++beams_inserted_;
+  newest_stamp_ns_ = std::max(newest_stamp_ns_, stamp_ns);
+  return true;
+}
+
+void MappingComponent::onCloud(const msg::PointCloud& cloud) {
+  const int64_t stamp_ns = toNs(cloud.header().stamp());
+  // Points in the world frame are used as they are; any other frame is taken as the body
+  // frame and placed with the odometry pose at the cloud's stamp.
+  Eigen::Isometry3d world_T_cloud = Eigen::Isometry3d::Identity();
+  if (cloud.header().frame_id() != options_.world_frame) {
+    PoseLookupStatus status;
+    const auto pose = poses_->lookUp(stamp_ns, &status);
+    if (!pose) {
+      AUV_DEBUG(node_->logger(), "dropped cloud: " << toString(status));
+      return;
+    }
+    world_T_cloud = toIsometry(*pose);
+  }
+  std::vector<Eigen::Vector3d> points;
+  points.reserve(cloud.points().size());
+  for (const auto& point : cloud.points()) {
+    points.push_back(world_T_cloud * Eigen::Vector3d(point.x(), point.y(), point.z()));
+  }
+  const Eigen::Vector3d origin = world_T_cloud * toIsometry(cloud.sensor_origin()).translation();
+  builder_->insertCloud(points, origin, cloud.max_range());
+  newest_stamp_ns_ = std::max(newest_stamp_ns_, stamp_ns);
+}
+
+void MappingComponent::tick() {
+  const int readers = update_pub_->matchedSubscriptions();
+  const int64_t now_ns = node_->clock().nowNs();
+  if (readers > matched_readers_) {
+    // A late joiner needs the whole map. The writer may see the reader before the reader sees
+    // the writer; the reader then gets only the newest sample of the transient-local history,
+    // so keep the FULL the newest sample for late_joiner_hold.
+    full_due_ = true;
+    hold_increments_until_ns_ = now_ns + static_cast<int64_t>(options_.late_joiner_hold * 1e9);
+  }
+  matched_readers_ = readers;
+  if (1e-9 * static_cast<double>(now_ns - last_full_ns_) >= options_.full_map_period) {
+    full_due_ = true;
+  }
+  if (full_due_) {
+    publishFull();
+    full_due_ = false;
+    last_full_ns_ = now_ns;
+  } else if (builder_->pendingChangeCount() > 0 && now_ns >= hold_increments_until_ns_) {
+    publishIncrement();
+  } else {
+    return;
+  }
+  builder_->takeSnapshot();
+}
+
+void MappingComponent::fillCommon(msg::OctomapUpdate& update) const {
+  update.header().stamp().sec(static_cast<int32_t>(newest_stamp_ns_ / 1000000000));
+  update.header().stamp().nanosec(static_cast<uint32_t>(newest_stamp_ns_ % 1000000000));
+  update.header().frame_id(options_.world_frame);
+  update.map_id(options_.map_id);
+  update.tree_type(builder_->tree().getTreeType());
+  update.resolution(builder_->tree().getResolution());
+  // Log-odds are needed for increments to reproduce the map exactly: .ot streams.
+  update.encoding(msg::OCTOMAP_ENCODING_FULL);
+}
+
+void MappingComponent::publishFull() {
+  builder_->takeDiff();  // the full map includes every pending change
+  msg::OctomapUpdate update;
+  fillCommon(update);
+  update.sequence_number(++sequence_number_);
+  update.base_sequence(0);
+  update.kind(msg::OCTOMAP_UPDATE_FULL);
+  double x0, y0, z0, x1, y1, z1;
+  builder_->tree().getMetricMin(x0, y0, z0);
+  builder_->tree().getMetricMax(x1, y1, z1);
+  if (builder_->tree().size() == 0) {
+    update.changed_min(toPoint(Eigen::Vector3d::Constant(1.0)));
+    update.changed_max(toPoint(Eigen::Vector3d::Constant(-1.0)));
+  } else {
+    update.changed_min(toPoint({x0, y0, z0}));
+    update.changed_max(toPoint({x1, y1, z1}));
+  }
+  const std::string data = builder_->fullWithProbabilities();
+  update.data(std::vector<uint8_t>(data.begin(), data.end()));
+  update_pub_->publish(update);
+}
+
+void MappingComponent::publishIncrement() {
+  const MapBuilder::Diff diff = builder_->takeDiff();
+  msg::OctomapUpdate update;
+  fillCommon(update);
+  update.base_sequence(sequence_number_);
+  update.sequence_number(++sequence_number_);
+  update.kind(msg::OCTOMAP_UPDATE_INCREMENTAL);
+  update.changed_min(toPoint(diff.changed_min));
+  update.changed_max(toPoint(diff.changed_max));
+  update.data(std::vector<uint8_t>(diff.data.begin(), diff.data.end()));
+  update_pub_->publish(update);
+}
+
+}  // namespace auv::mapping
+
+AUV_REGISTER_COMPONENT(auv::mapping::MappingComponent, "mapping",
+                       "OctoMap occupancy map from sonar/beam + nav/odometry on map/update")

@@ -1,0 +1,87 @@
+#pragma once
+// The `mapping` component: builds the occupancy map from sonar beams (and point clouds) placed
+// with the odometry pose interpolated at each measurement's stamp, and publishes it on
+// `map/update` as FULL maps and exact INCREMENTAL diffs (formats in map_builder.h, README.md).
+
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <string>
+
+#include "auv/interfaces/component.h"
+#include "auv/mapping/map_builder.h"
+#include "auv/mapping/pose_buffer.h"
+
+namespace auv::mapping {
+
+/// Subscribes `sonar/beam`, `sonar/scan` (sensor data) and `nav/odometry` (state); publishes
+/// `map/update` (map profile: reliable, transient local); serves `map/save` (SaveMapRequest),
+/// `map/clear` and `map/request_full` (Trigger).
+///
+/// Late joiners: the transient-local history (keep last 1) holds only the latest update, which
+/// may be an increment they cannot apply; so a FULL also goes out on the first tick after the
+/// number of matched readers grows, and stays the latest sample for late_joiner_hold. FULLs
+/// also go out at start, every full_map_period, after map/clear and on map/request_full.
+class MappingComponent : public interfaces::Component {
+ public:
+  struct Options {
+    MapBuilder::Options map;
+    PoseBuffer::Options poses;
+    double update_rate = 2.0;       ///< Hz, rate of map/update increments, in [0.01, 100].
+    double full_map_period = 10.0;  ///< s, period of FULL maps, in [0.1, 3600].
+    /// s, after a new reader matches, how long the FULL sent for it stays the newest sample of
+    /// the transient-local history (increments wait, changes accumulate), in [0, 60]. Covers
+    /// the reader discovering the writer after the writer discovered the reader.
+    double late_joiner_hold = 2.0;
+    std::string map_id = "octomap";     ///< OctomapUpdate.map_id (DDS key).
+    std::string world_frame = "world";  ///< frame of odometry and of the map (NED).
+    std::string map_directory = ".";    ///< where map/save writes (relative names only).
+    /// Beams newer than the latest odometry wait for it; at most this many, in [0, 100000].
+    int64_t beam_queue_length = 500;
+  };
+
+  void configure(interfaces::Node& node) override;
+  void activate() override;
+  void deactivate() override;
+  void cleanup() override;
+
+  const MapBuilder& builder() const { return *builder_; }
+  uint64_t beamsInserted() const { return beams_inserted_; }
+  uint64_t beamsDropped() const { return beams_dropped_; }
+  uint64_t sequenceNumber() const { return sequence_number_; }
+
+ private:
+  void onBeam(const msg::SonarBeam& beam);
+  void onCloud(const msg::PointCloud& cloud);
+  void onOdometry(const msg::Odometry& odometry);
+  /// Inserts the beam if its pose is known; false if it must wait for newer odometry.
+  bool tryInsertBeam(const msg::SonarBeam& beam);
+  void tick();
+  void publishFull();
+  void publishIncrement();
+  void fillCommon(msg::OctomapUpdate& update) const;
+
+  interfaces::Node* node_ = nullptr;
+  Options options_;
+  std::unique_ptr<MapBuilder> builder_;
+  std::unique_ptr<PoseBuffer> poses_;
+  std::deque<msg::SonarBeam> waiting_beams_;
+  std::shared_ptr<interfaces::Subscription<msg::SonarBeam>> beam_sub_;
+  std::shared_ptr<interfaces::Subscription<msg::PointCloud>> cloud_sub_;
+  std::shared_ptr<interfaces::Subscription<msg::Odometry>> odometry_sub_;
+  std::shared_ptr<interfaces::Publisher<msg::OctomapUpdate>> update_pub_;
+  std::shared_ptr<interfaces::Service<msg::SaveMapRequest, msg::SaveMapReply>> save_srv_;
+  std::shared_ptr<interfaces::Service<msg::TriggerRequest, msg::TriggerReply>> clear_srv_;
+  std::shared_ptr<interfaces::Service<msg::TriggerRequest, msg::TriggerReply>> full_srv_;
+  std::shared_ptr<interfaces::Timer> timer_;
+  uint64_t sequence_number_ = 0;
+  int64_t newest_stamp_ns_ = 0;           // newest measurement in the map
+  int64_t last_full_ns_ = 0;              // node clock at the last FULL
+  int64_t hold_increments_until_ns_ = 0;  // node clock; see Options::late_joiner_hold
+  bool full_due_ = true;  // FULL on the next tick (start, clear, request, new reader)
+  int matched_readers_ = 0;
+  uint64_t beams_inserted_ = 0;
+  uint64_t beams_dropped_ = 0;
+};
+
+}  // namespace auv::mapping

@@ -1,0 +1,232 @@
+#include "auv/mapping/map_builder.h"
+
+#include <atomic>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace auv::mapping {
+namespace {
+
+octomap::point3d toPoint(const Eigen::Vector3d& v) {
+  return octomap::point3d(static_cast<float>(v.x()), static_cast<float>(v.y()),
+                          static_cast<float>(v.z()));
+}
+
+void requireRange(bool ok, const char* message) {
+  if (!ok) throw std::invalid_argument(std::string("MapBuilder: ") + message);
+}
+
+}  // namespace
+
+Eigen::Vector3d beamDirection(double beam_angle_rad) {
+  return Eigen::Vector3d(std::cos(beam_angle_rad), std::sin(beam_angle_rad), 0.0);
+}
+
+void MapBuilder::Options::check() const {
+  requireRange(resolution >= 0.01 && resolution <= 10.0, "resolution must be in [0.01, 10] m");
+  requireRange(prob_hit > 0.5 && prob_hit < 1.0, "prob_hit must be in (0.5, 1)");
+  requireRange(prob_miss > 0.0 && prob_miss < 0.5, "prob_miss must be in (0, 0.5)");
+  requireRange(clamping_min > 0.0 && clamping_min <= prob_miss,
+               "clamping_min must be in (0, prob_miss]");
+  requireRange(clamping_max >= prob_hit && clamping_max < 1.0,
+               "clamping_max must be in [prob_hit, 1)");
+  requireRange(occupancy_threshold > clamping_min && occupancy_threshold < clamping_max,
+               "occupancy_threshold must be in (clamping_min, clamping_max)");
+}
+
+MapBuilder::MapBuilder(const Options& options) : options_(options), tree_(options.resolution) {
+  options_.check();
+  configureTree(tree_);
+  snapshot_ = std::make_shared<const octomap::OcTree>(tree_);
+}
+
+void MapBuilder::configureTree(octomap::OcTree& tree) const {
+  tree.setProbHit(options_.prob_hit);
+  tree.setProbMiss(options_.prob_miss);
+  tree.setClampingThresMin(options_.clamping_min);
+  tree.setClampingThresMax(options_.clamping_max);
+  tree.setOccupancyThres(options_.occupancy_threshold);
+}
+
+InsertStats MapBuilder::integrate(const octomap::KeySet& free_keys,
+                                  const octomap::KeySet& occupied_keys) {
+  InsertStats stats;
+  for (const octomap::OcTreeKey& key : free_keys) {
+    if (occupied_keys.count(key)) continue;  // a return in the cell outweighs rays through it
+    tree_.updateNode(key, false);
+    if (track_changes_) changed_keys_.insert(key);
+    ++stats.free_cells;
+  }
+  for (const octomap::OcTreeKey& key : occupied_keys) {
+    tree_.updateNode(key, true);
+    if (track_changes_) changed_keys_.insert(key);
+    ++stats.occupied_cells;
+  }
+  cell_updates_ += stats.free_cells + stats.occupied_cells;
+  return stats;
+}
+
+InsertStats MapBuilder::insertBeam(const BeamGeometry& beam,
+                                   const Eigen::Isometry3d& world_T_sensor) {
+  const Eigen::Vector3d origin = world_T_sensor.translation();
+  const Eigen::Vector3d direction = (world_T_sensor.linear() * beam.direction).normalized();
+  const double min_range = std::max(0.0, beam.min_range);
+  const bool has_return =
+      beam.return_range && *beam.return_range >= min_range && *beam.return_range <= beam.max_range;
+  // No return: free up to max_range, nothing occupied (the end cell itself stays unknown, as
+  // for the truncated rays of OcTree::insertPointCloud).
+  const double free_until = has_return ? *beam.return_range : beam.max_range;
+  const Eigen::Vector3d start = origin + min_range * direction;
+  const Eigen::Vector3d end = origin + free_until * direction;
+  octomap::OcTreeKey hit;
+  const bool hit_valid = has_return && tree_.coordToKeyChecked(toPoint(end), hit);
+  ray_scratch_.reset();
+  if (free_until > min_range) tree_.computeRayKeys(toPoint(start), toPoint(end), ray_scratch_);
+  // One ray visits each cell once, so no key set is needed (unlike insertCloud).
+  InsertStats stats;
+  for (const octomap::OcTreeKey& key : ray_scratch_) {
+    if (hit_valid && key == hit) continue;  // a return in the cell outweighs the ray through it
+    tree_.updateNode(key, false);
+    if (track_changes_) changed_keys_.insert(key);
+    ++stats.free_cells;
+  }
+  if (hit_valid) {
+    tree_.updateNode(hit, true);
+    if (track_changes_) changed_keys_.insert(hit);
+    ++stats.occupied_cells;
+  }
+  cell_updates_ += stats.free_cells + stats.occupied_cells;
+  ++beams_inserted_;
+  return stats;
+}
+
+InsertStats MapBuilder::insertCloud(const std::vector<Eigen::Vector3d>& points_world,
+                                    const Eigen::Vector3d& origin_world, double max_range) {
+  free_scratch_.clear();
+  occupied_scratch_.clear();
+  const octomap::point3d origin = toPoint(origin_world);
+  for (const Eigen::Vector3d& point : points_world) {
+    const double distance = (point - origin_world).norm();
+    if (max_range <= 0.0 || distance <= max_range) {
+      if (tree_.computeRayKeys(origin, toPoint(point), ray_scratch_)) {
+        free_scratch_.insert(ray_scratch_.begin(), ray_scratch_.end());
+      }
+      octomap::OcTreeKey key;
+      if (tree_.coordToKeyChecked(toPoint(point), key)) occupied_scratch_.insert(key);
+    } else {
+      const Eigen::Vector3d end = origin_world + (point - origin_world) * (max_range / distance);
+      if (tree_.computeRayKeys(origin, toPoint(end), ray_scratch_)) {
+        free_scratch_.insert(ray_scratch_.begin(), ray_scratch_.end());
+      }
+    }
+  }
+  return integrate(free_scratch_, occupied_scratch_);
+}
+
+void MapBuilder::enableChangeTracking(bool enable) {
+  track_changes_ = enable;
+  if (!enable) changed_keys_.clear();
+}
+
+MapBuilder::Diff MapBuilder::takeDiff() {
+  Diff diff;
+  octomap::OcTree changes(options_.resolution);
+  configureTree(changes);
+  const double half = 0.5 * options_.resolution;
+  for (const octomap::OcTreeKey& key : changed_keys_) {
+    const octomap::OcTreeNode* node = tree_.search(key);
+    if (node == nullptr) continue;  // cannot happen between clears; be safe
+    // Lazy: keep every cell at the finest depth, inner values are set once below.
+    changes.setNodeValue(key, node->getLogOdds(), true);
+    const octomap::point3d c = tree_.keyToCoord(key);
+    const Eigen::Vector3d center(c.x(), c.y(), c.z());
+    if (diff.cell_count == 0) {
+      diff.changed_min = center.array() - half;
+      diff.changed_max = center.array() + half;
+    } else {
+      diff.changed_min = diff.changed_min.cwiseMin((center.array() - half).matrix());
+      diff.changed_max = diff.changed_max.cwiseMax((center.array() + half).matrix());
+    }
+    ++diff.cell_count;
+  }
+  changes.updateInnerOccupancy();
+  std::ostringstream stream;
+  changes.write(stream);
+  diff.data = stream.str();
+  changed_keys_.clear();
+  return diff;
+}
+
+void MapBuilder::applyDiff(const std::string& data, octomap::OcTree& replica) {
+  std::istringstream stream(data);
+  std::unique_ptr<octomap::AbstractOcTree> read(octomap::AbstractOcTree::read(stream));
+  auto* changes = dynamic_cast<octomap::OcTree*>(read.get());
+  if (changes == nullptr) throw std::runtime_error("map diff is not an OcTree .ot stream");
+  if (std::abs(changes->getResolution() - replica.getResolution()) > 1e-9) {
+    throw std::runtime_error("map diff resolution " + std::to_string(changes->getResolution()) +
+                             " differs from the replica's " +
+                             std::to_string(replica.getResolution()));
+  }
+  const unsigned max_depth = changes->getTreeDepth();
+  for (auto it = changes->begin_leafs(), end = changes->end_leafs(); it != end; ++it) {
+    const float log_odds = it->getLogOdds();
+    const octomap::OcTreeKey key = it.getKey();
+    if (it.getDepth() == max_depth) {
+      replica.setNodeValue(key, log_odds);
+      continue;
+    }
+    // A coarser leaf stands for all finest cells it covers; its key is the cell's centre key.
+    const int half = 1 << (max_depth - it.getDepth() - 1);
+    octomap::OcTreeKey cell;
+    for (int dx = -half; dx < half; ++dx) {
+      for (int dy = -half; dy < half; ++dy) {
+        for (int dz = -half; dz < half; ++dz) {
+          cell[0] = static_cast<octomap::key_type>(key[0] + dx);
+          cell[1] = static_cast<octomap::key_type>(key[1] + dy);
+          cell[2] = static_cast<octomap::key_type>(key[2] + dz);
+          replica.setNodeValue(cell, log_odds);
+        }
+      }
+    }
+  }
+}
+
+std::string MapBuilder::fullBinary() const {
+  std::ostringstream stream;
+  tree_.writeBinaryConst(stream);
+  return stream.str();
+}
+
+std::string MapBuilder::fullWithProbabilities() const {
+  std::ostringstream stream;
+  tree_.write(stream);
+  return stream.str();
+}
+
+bool MapBuilder::save(const std::string& path) const {
+  // Not OcTree::writeBinary(path): that one converts the live tree to maximum likelihood.
+  std::ofstream file(path, std::ios::binary);
+  if (!file) return false;
+  tree_.writeBinaryConst(file);
+  file.close();
+  return static_cast<bool>(file);
+}
+
+void MapBuilder::clear() {
+  tree_.clear();
+  changed_keys_.clear();
+}
+
+std::shared_ptr<const octomap::OcTree> MapBuilder::takeSnapshot() {
+  auto copy = std::make_shared<const octomap::OcTree>(tree_);
+  std::atomic_store(&snapshot_, copy);
+  return copy;
+}
+
+std::shared_ptr<const octomap::OcTree> MapBuilder::snapshot() const {
+  return std::atomic_load(&snapshot_);
+}
+
+}  // namespace auv::mapping

@@ -1,0 +1,141 @@
+#pragma once
+// Occupancy mapping from sonar beams and point clouds into an octomap::OcTree, with exact
+// incremental diffs for replicas (other processes) and immutable snapshots for in-process
+// readers.
+//
+// Diff format (OctomapUpdate INCREMENTAL, encoding OCTOMAP_ENCODING_FULL): an OctoMap `.ot`
+// stream (AbstractOcTree::write) of an OcTree with the builder's resolution holding only the
+// cells whose log-odds changed since the previous diff, each at its current log-odds value in
+// the builder. Cells are stored at the finest depth; eight sibling cells with equal values may
+// be stored as one coarser leaf, which stands for all eight. To apply: for each leaf of the diff,
+// set every finest-depth cell it covers in the replica to the leaf's log-odds (applyDiff()).
+// The replica then holds exactly the builder's log-odds. Deleting cells is not expressible:
+// after clear() the next update must be FULL.
+//
+// Snapshot design: OctoMap is not thread-safe, so readers never touch the live tree. The
+// builder (one writer thread) copies the tree into a `std::shared_ptr<const OcTree>` when
+// takeSnapshot() is called (the component does it at update_rate) and swaps it in atomically;
+// readers call snapshot() from any thread and keep a complete, immutable version for as long
+// as they hold the pointer. A copy costs O(tree size) once per period, never a lock on the
+// reader's side, and the planner can iterate a snapshot for as long as it likes.
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <octomap/OcTree.h>
+
+namespace auv::mapping {
+
+/// One sonar beam in its sensor frame: a ray along `direction` from the sensor origin.
+struct BeamGeometry {
+  Eigen::Vector3d direction = Eigen::Vector3d::UnitX();  ///< unit vector, sensor frame
+  double min_range = 0.0;   ///< m, blanking distance: no information closer than this
+  double max_range = 20.0;  ///< m, farthest range measured
+  /// m, range of the (first) return; nullopt: no echo, the beam is free up to max_range.
+  std::optional<double> return_range;
+};
+
+/// Sonar beam direction in the sonar head frame for head angle `beam_angle_rad` about its
+/// z axis (0 = x axis, positive turns x towards y).
+Eigen::Vector3d beamDirection(double beam_angle_rad);
+
+/// Counts of one insertion.
+struct InsertStats {
+  std::size_t free_cells = 0;      ///< cells updated as free (miss)
+  std::size_t occupied_cells = 0;  ///< cells updated as occupied (hit)
+};
+
+class MapBuilder {
+ public:
+  /// Probability defaults are OctoMap's own, so a replica built as a plain OcTree (e.g. from a
+  /// FULL update) clamps the same way as the builder.
+  struct Options {
+    double resolution = 0.5;  ///< m, leaf size, in [0.01, 10]; 0.5 suits a 20 m sonar.
+    double prob_hit = 0.7;    ///< probability a cell with a return is occupied, in (0.5, 1).
+    double prob_miss = 0.4;   ///< probability a cell a beam passed through is occupied, (0, 0.5).
+    double clamping_min = 0.1192;      ///< lower probability clamp, in (0, prob_miss]; keeps cells
+                                       ///< able to become occupied again after long free evidence.
+    double clamping_max = 0.971;       ///< upper probability clamp, in [prob_hit, 1).
+    double occupancy_threshold = 0.5;  ///< probability above which a cell counts as occupied.
+    void check() const;                ///< Throws std::invalid_argument naming the bad field.
+  };
+
+  MapBuilder() : MapBuilder(Options{}) {}
+  explicit MapBuilder(const Options& options);
+
+  /// Integrates one beam seen from `world_T_sensor` (sensor frame -> world): cells from the
+  /// beam's min_range up to the return get a miss, the cell at the return a hit; with no
+  /// return, cells up to max_range get a miss only. The return's cell is never also updated as
+  /// free (occupied wins, as in OcTree::insertPointCloud). Keys come from computeRayKeys and
+  /// are updated with updateNode rather than through insertPointCloud so that the builder knows
+  /// every cell it touched (OctoMap's own change detection only reports occupancy flips, not
+  /// log-odds changes, which exact diffs need); the cell updates are the same.
+  InsertStats insertBeam(const BeamGeometry& beam, const Eigen::Isometry3d& world_T_sensor);
+
+  /// Integrates returns `points_world` (world frame) seen from `origin_world`, like
+  /// OcTree::insertPointCloud(cloud, origin, max_range): rays longer than `max_range` (> 0)
+  /// clear free space only up to max_range; max_range <= 0 means unlimited. Each cell is updated
+  /// at most once per cloud, occupied winning over free.
+  InsertStats insertCloud(const std::vector<Eigen::Vector3d>& points_world,
+                          const Eigen::Vector3d& origin_world, double max_range);
+
+  /// Starts (or stops) recording which cells change, for takeDiff(). Off by default.
+  void enableChangeTracking(bool enable);
+  bool changeTrackingEnabled() const { return track_changes_; }
+  /// Cells changed since the last takeDiff()/clear().
+  std::size_t pendingChangeCount() const { return changed_keys_.size(); }
+  /// Serializes the pending changes (format above) into `data`, returns the number of cells
+  /// and the world box holding them (min > max when none); forgets the pending changes.
+  struct Diff {
+    std::string data;
+    std::size_t cell_count = 0;
+    Eigen::Vector3d changed_min = Eigen::Vector3d::Constant(1.0);
+    Eigen::Vector3d changed_max = Eigen::Vector3d::Constant(-1.0);
+  };
+  Diff takeDiff();
+  /// Applies a diff written by takeDiff() to `replica` (same resolution). Throws
+  /// std::runtime_error when the data is not an OcTree stream or the resolution differs.
+  static void applyDiff(const std::string& data, octomap::OcTree& replica);
+
+  /// The whole map as OcTree::writeBinaryConst writes it (.bt: maximum-likelihood only).
+  std::string fullBinary() const;
+  /// The whole map as AbstractOcTree::write writes it (.ot: with log-odds).
+  std::string fullWithProbabilities() const;
+  /// Writes the map as a .bt file; false on an I/O error.
+  bool save(const std::string& path) const;
+  /// Empties the map and the pending changes.
+  void clear();
+
+  /// Copies the live tree into a new immutable snapshot and publishes it (writer thread only).
+  std::shared_ptr<const octomap::OcTree> takeSnapshot();
+  /// The latest published snapshot (never null); callable from any thread.
+  std::shared_ptr<const octomap::OcTree> snapshot() const;
+
+  /// The live tree: only for the writer thread.
+  const octomap::OcTree& tree() const { return tree_; }
+  const Options& options() const { return options_; }
+  /// Integration counters since construction.
+  uint64_t beamsInserted() const { return beams_inserted_; }
+  uint64_t cellUpdates() const { return cell_updates_; }
+
+ private:
+  InsertStats integrate(const octomap::KeySet& free_keys, const octomap::KeySet& occupied_keys);
+  void configureTree(octomap::OcTree& tree) const;
+
+  Options options_;
+  octomap::OcTree tree_;
+  bool track_changes_ = false;
+  octomap::KeySet changed_keys_;
+  octomap::KeyRay ray_scratch_;
+  octomap::KeySet free_scratch_;
+  octomap::KeySet occupied_scratch_;
+  std::shared_ptr<const octomap::OcTree> snapshot_;  // accessed with std::atomic_load/store
+  uint64_t beams_inserted_ = 0;
+  uint64_t cell_updates_ = 0;
+};
+
+}  // namespace auv::mapping

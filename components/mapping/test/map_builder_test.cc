@@ -1,0 +1,241 @@
+// MapBuilder against analytic expectations: a beam at a wall at known range, a no-return beam,
+// exact replication through incremental diffs, .bt round trip and snapshots.
+#include "auv/mapping/map_builder.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <random>
+#include <sstream>
+
+namespace auv::mapping {
+namespace {
+
+// Cell centres are at multiples of the resolution plus half: keep test points well inside cells.
+constexpr double kResolution = 0.5;
+
+bool isOccupied(const octomap::OcTree& tree, double x, double y, double z) {
+  const octomap::OcTreeNode* node = tree.search(x, y, z);
+  return node != nullptr && tree.isNodeOccupied(node);
+}
+bool isFree(const octomap::OcTree& tree, double x, double y, double z) {
+  const octomap::OcTreeNode* node = tree.search(x, y, z);
+  return node != nullptr && !tree.isNodeOccupied(node);
+}
+bool isUnknown(const octomap::OcTree& tree, double x, double y, double z) {
+  return tree.search(x, y, z) == nullptr;
+}
+
+Eigen::Isometry3d sensorAt(const Eigen::Vector3d& position, double yaw) {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.translation() = position;
+  pose.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  return pose;
+}
+
+TEST(MapBuilderTest, BeamAtWallMarksReturnOccupiedAndCellsBeforeFree) {
+  MapBuilder builder;
+  BeamGeometry beam;
+  beam.direction = beamDirection(0.0);
+  beam.min_range = 0.0;
+  beam.max_range = 20.0;
+  beam.return_range = 8.2;  // wall at x = 0.1 + 8.2 = 8.3 -> cell [8, 8.5)
+  const InsertStats stats = builder.insertBeam(beam, sensorAt({0.1, 0.2, 0.2}, 0.0));
+  EXPECT_EQ(stats.occupied_cells, 1u);
+  EXPECT_EQ(stats.free_cells, 16u);  // cells [0, 0.5) .. [7.5, 8)
+  const auto& tree = builder.tree();
+  EXPECT_TRUE(isOccupied(tree, 8.25, 0.25, 0.25));
+  for (double x = 0.25; x < 8.0; x += kResolution) {
+    EXPECT_TRUE(isFree(tree, x, 0.25, 0.25)) << "x = " << x;
+  }
+  EXPECT_TRUE(isUnknown(tree, 8.75, 0.25, 0.25));  // behind the wall: not seen
+  EXPECT_TRUE(isUnknown(tree, 4.25, 0.75, 0.25));  // beside the beam
+}
+
+TEST(MapBuilderTest, BeamDirectionFollowsSensorPoseAndHeadAngle) {
+  MapBuilder builder;
+  BeamGeometry beam;
+  beam.direction = beamDirection(M_PI / 2);  // head turned to the sensor's y axis
+  beam.return_range = 5.0;
+  // Sensor yawed +90 deg: its y axis points along world -x.
+  builder.insertBeam(beam, sensorAt({10.1, 0.2, 0.2}, M_PI / 2));
+  EXPECT_TRUE(isOccupied(builder.tree(), 5.25, 0.25, 0.25));
+  EXPECT_TRUE(isFree(builder.tree(), 7.25, 0.25, 0.25));
+}
+
+TEST(MapBuilderTest, NoReturnBeamMarksOnlyFreeCellsUpToMaxRange) {
+  MapBuilder builder;
+  BeamGeometry beam;
+  beam.direction = beamDirection(0.0);
+  beam.min_range = 1.0;
+  beam.max_range = 6.1;  // ends in cell [6, 6.5) at x = 6.2
+  const InsertStats stats = builder.insertBeam(beam, sensorAt({0.1, 0.2, 0.2}, 0.0));
+  EXPECT_EQ(stats.occupied_cells, 0u);
+  EXPECT_GT(stats.free_cells, 0u);
+  const auto& tree = builder.tree();
+  for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) {
+    EXPECT_FALSE(tree.isNodeOccupied(*it)) << it.getCoordinate();
+  }
+  EXPECT_TRUE(isUnknown(tree, 0.25, 0.25, 0.25));  // inside the blanking distance
+  EXPECT_TRUE(isFree(tree, 1.25, 0.25, 0.25));
+  EXPECT_TRUE(isFree(tree, 5.75, 0.25, 0.25));
+  EXPECT_TRUE(isUnknown(tree, 6.75, 0.25, 0.25));  // beyond max range
+}
+
+TEST(MapBuilderTest, CloudMatchesRawInsertPointCloud) {
+  MapBuilder builder;
+  octomap::OcTree raw(kResolution);
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> coordinate(-15.0, 15.0);
+  std::vector<Eigen::Vector3d> points;
+  octomap::Pointcloud cloud;
+  for (int i = 0; i < 300; ++i) {
+    points.emplace_back(coordinate(random), coordinate(random), coordinate(random) / 5);
+    cloud.push_back(points.back().x(), points.back().y(), points.back().z());
+  }
+  const Eigen::Vector3d origin(0.3, -0.2, 1.1);
+  builder.insertCloud(points, origin, 12.0);
+  raw.insertPointCloud(cloud, octomap::point3d(0.3f, -0.2f, 1.1f), 12.0);
+  std::ostringstream ours, theirs;
+  builder.tree().writeBinaryConst(ours);
+  raw.writeBinaryConst(theirs);
+  EXPECT_EQ(builder.tree().size(), raw.size());
+  EXPECT_EQ(ours.str(), theirs.str());
+}
+
+// Every finest cell of `a` has the same log-odds in `b`, and both know the same volume.
+void expectSameLogOdds(const octomap::OcTree& a, const octomap::OcTree& b) {
+  double known_volume = 0.0;
+  for (auto it = a.begin_leafs(); it != a.end_leafs(); ++it) {
+    const octomap::OcTreeNode* other = b.search(it.getKey());
+    ASSERT_NE(other, nullptr) << it.getCoordinate();
+    EXPECT_EQ(other->getLogOdds(), it->getLogOdds()) << it.getCoordinate();
+    known_volume += std::pow(it.getSize(), 3);
+  }
+  double other_volume = 0.0;
+  for (auto it = b.begin_leafs(); it != b.end_leafs(); ++it)
+    other_volume += std::pow(it.getSize(), 3);
+  EXPECT_DOUBLE_EQ(known_volume, other_volume);
+}
+
+TEST(MapBuilderTest, IncrementalDiffsReproduceTheMapExactly) {
+  MapBuilder builder;
+  builder.enableChangeTracking(true);
+  octomap::OcTree replica(kResolution);
+  std::mt19937 random(3);
+  std::uniform_real_distribution<double> angle(-M_PI, M_PI);
+  std::uniform_real_distribution<double> range(2.0, 25.0);
+  std::size_t diffs = 0;
+  for (int round = 0; round < 20; ++round) {
+    for (int i = 0; i < 60; ++i) {
+      BeamGeometry beam;
+      beam.direction = beamDirection(angle(random));
+      beam.min_range = 0.5;
+      beam.max_range = 20.0;
+      const double r = range(random);
+      if (r <= 20.0) beam.return_range = r;
+      builder.insertBeam(beam, sensorAt({0.1 * round, 0.05 * i, 0.3}, 0.01 * round));
+    }
+    const MapBuilder::Diff diff = builder.takeDiff();
+    EXPECT_GT(diff.cell_count, 0u);
+    EXPECT_LE(diff.changed_min.x(), diff.changed_max.x());
+    EXPECT_EQ(builder.pendingChangeCount(), 0u);
+    MapBuilder::applyDiff(diff.data, replica);
+    ++diffs;
+    // Later diffs carry only what changed, not the map.
+    if (round > 0) EXPECT_LT(diff.cell_count, builder.tree().getNumLeafNodes());
+  }
+  EXPECT_EQ(diffs, 20u);
+  expectSameLogOdds(builder.tree(), replica);
+  expectSameLogOdds(replica, builder.tree());
+  std::ostringstream ours, theirs;
+  builder.tree().writeBinaryConst(ours);
+  replica.writeBinaryConst(theirs);
+  EXPECT_EQ(ours.str(), theirs.str());
+}
+
+TEST(MapBuilderTest, ApplyDiffExpandsCoarseLeaves) {
+  // A diff whose eight sibling cells share a value is pruned to one leaf one level up.
+  octomap::OcTree changes(kResolution);
+  for (double x : {0.25, 0.75})
+    for (double y : {0.25, 0.75})
+      for (double z : {0.25, 0.75}) changes.updateNode(x, y, z, true);
+  changes.prune();
+  ASSERT_EQ(changes.getNumLeafNodes(), 1u);
+  std::ostringstream stream;
+  changes.write(stream);
+  octomap::OcTree replica(kResolution);
+  MapBuilder::applyDiff(stream.str(), replica);
+  expectSameLogOdds(changes, replica);
+  EXPECT_TRUE(isOccupied(replica, 0.75, 0.25, 0.75));
+}
+
+TEST(MapBuilderTest, ApplyDiffRejectsOtherResolutionAndGarbage) {
+  MapBuilder builder;
+  builder.enableChangeTracking(true);
+  BeamGeometry beam;
+  beam.return_range = 3.0;
+  builder.insertBeam(beam, sensorAt({0, 0, 0}, 0));
+  const std::string data = builder.takeDiff().data;
+  octomap::OcTree fine(0.1);
+  EXPECT_THROW(MapBuilder::applyDiff(data, fine), std::runtime_error);
+  EXPECT_THROW(MapBuilder::applyDiff("not a tree", fine), std::runtime_error);
+}
+
+TEST(MapBuilderTest, SavedBtLoadsBackWithTheSameOccupancy) {
+  MapBuilder builder;
+  BeamGeometry beam;
+  for (int i = 0; i < 36; ++i) {
+    beam.direction = beamDirection(i * M_PI / 18);
+    beam.return_range = 7.0 + 0.1 * i;
+    builder.insertBeam(beam, sensorAt({0.1, 0.1, 0.1}, 0));
+  }
+  const std::string path = testing::TempDir() + "map_builder_test.bt";
+  ASSERT_TRUE(builder.save(path));
+  octomap::OcTree loaded(0.1);
+  ASSERT_TRUE(loaded.readBinary(path));
+  EXPECT_DOUBLE_EQ(loaded.getResolution(), kResolution);
+  std::size_t occupied = 0;
+  for (auto it = builder.tree().begin_leafs(); it != builder.tree().end_leafs(); ++it) {
+    const octomap::OcTreeNode* node = loaded.search(it.getKey());
+    ASSERT_NE(node, nullptr);
+    EXPECT_EQ(loaded.isNodeOccupied(node), builder.tree().isNodeOccupied(*it));
+    occupied += builder.tree().isNodeOccupied(*it);
+  }
+  EXPECT_GT(occupied, 10u);
+  // The in-memory stream equals the file.
+  std::ostringstream copy;
+  loaded.writeBinaryConst(copy);
+  EXPECT_EQ(copy.str(), builder.fullBinary());
+  EXPECT_FALSE(builder.save("/nonexistent-dir/x.bt"));
+  std::remove(path.c_str());
+}
+
+TEST(MapBuilderTest, SnapshotsAreImmutableCopies) {
+  MapBuilder builder;
+  const auto empty = builder.snapshot();
+  ASSERT_NE(empty, nullptr);
+  EXPECT_EQ(empty->size(), 0u);
+  BeamGeometry beam;
+  beam.return_range = 4.0;
+  builder.insertBeam(beam, sensorAt({0.1, 0.1, 0.1}, 0));
+  EXPECT_EQ(builder.snapshot()->size(), 0u);  // not published yet
+  const auto taken = builder.takeSnapshot();
+  EXPECT_EQ(builder.snapshot(), taken);
+  EXPECT_EQ(taken->size(), builder.tree().size());
+  builder.clear();
+  EXPECT_EQ(builder.tree().size(), 0u);
+  EXPECT_TRUE(isOccupied(*taken, 4.25, 0.25, 0.25));  // readers keep their version
+}
+
+TEST(MapBuilderTest, RejectsBadOptions) {
+  MapBuilder::Options options;
+  options.prob_hit = 0.4;
+  EXPECT_THROW(MapBuilder{options}, std::invalid_argument);
+  options = {};
+  options.resolution = 0.0;
+  EXPECT_THROW(MapBuilder{options}, std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace auv::mapping

@@ -1,0 +1,245 @@
+// The mapping component on real DDS: the component on Fast DDS fed with odometry and beams at a
+// wall; a late-joining map reader on Cyclone DDS gets a FULL map with the wall cell occupied and
+// keeps an exact replica from the increments; map/save and map/clear answer across vendors.
+// Each test on its own domain id (80..89).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <memory>
+#include <sstream>
+#include <thread>
+
+#include "auv/interfaces/executor.h"
+#include "auv/mapping/components/mapping_component.h"
+
+namespace auv::mapping {
+namespace {
+
+using namespace std::chrono_literals;
+using interfaces::Node;
+using interfaces::NodeOptions;
+using interfaces::Vendor;
+
+NodeOptions on(Vendor vendor, int domain, std::vector<std::string> overrides = {}) {
+  NodeOptions o;
+  o.vendor = vendor;
+  o.domain_id = domain;
+  o.overrides = std::move(overrides);
+  return o;
+}
+
+void setStamp(msg::Header& header, int64_t ns) {
+  header.stamp().sec(static_cast<int32_t>(ns / 1000000000));
+  header.stamp().nanosec(static_cast<uint32_t>(ns % 1000000000));
+}
+
+// Wall at x = 8.3 m (cell [8, 8.5)), vehicle parked at (0.1, 0.2, 0.2) heading north (+x).
+constexpr double kWallX = 8.3;
+const Eigen::Vector3d kVehicle(0.1, 0.2, 0.2);
+
+/// Publishes odometry at each tick and a beam stamped half-way between the last two, sweeping
+/// the head over +-0.3 rad with every fourth beam straight ahead.
+class Feeder {
+ public:
+  Feeder(Node& node) : node_(node) {
+    odometry_ = node.createPublisher<msg::Odometry>("nav/odometry", interfaces::stateQos());
+    beams_ = node.createPublisher<msg::SonarBeam>("sonar/beam", interfaces::sensorDataQos());
+    timer_ = node.createTimer(0.01, [this] { tick(); });
+  }
+  void stop() { timer_->cancel(); }
+
+ private:
+  void tick() {
+    const int64_t now = node_.clock().nowNs();
+    msg::Odometry odometry;
+    setStamp(odometry.header(), now);
+    odometry.header().frame_id("world");
+    odometry.pose().pose().position().x(kVehicle.x());
+    odometry.pose().pose().position().y(kVehicle.y());
+    odometry.pose().pose().position().z(kVehicle.z());
+    odometry.pose().pose().orientation().w(1.0);
+    odometry_->publish(odometry);
+    if (last_odometry_ns_ > 0) {
+      msg::SonarBeam beam;
+      setStamp(beam.header(), (now + last_odometry_ns_) / 2);
+      beam.header().frame_id("sonar");
+      beam.mounting().orientation().w(1.0);
+      const double angle = (count_ % 4 == 0) ? 0.0 : 0.3 * std::sin(0.1 * count_);
+      beam.beam_angle(static_cast<float>(angle));
+      beam.min_range(0.5f);
+      beam.max_range(20.0f);
+      beam.ranges({static_cast<float>((kWallX - kVehicle.x()) / std::cos(angle))});
+      beam.flags(msg::SONAR_BEAM_ECHO_RETURNED);
+      beams_->publish(beam);
+      ++count_;
+    }
+    last_odometry_ns_ = now;
+  }
+
+  Node& node_;
+  std::shared_ptr<interfaces::Publisher<msg::Odometry>> odometry_;
+  std::shared_ptr<interfaces::Publisher<msg::SonarBeam>> beams_;
+  std::shared_ptr<interfaces::Timer> timer_;
+  int64_t last_odometry_ns_ = 0;
+  int count_ = 0;
+};
+
+/// A map reader like the planner's: FULL replaces, INCREMENTAL applies on an unbroken chain.
+struct MapReader {
+  std::unique_ptr<octomap::OcTree> tree;
+  uint64_t applied_sequence = 0;
+  int fulls = 0;
+  int increments = 0;
+  int dropped = 0;  // increments that did not continue the chain
+  bool wall_occupied_in_first_full = false;
+
+  void onUpdate(const msg::OctomapUpdate& update) {
+    const std::string data(update.data().begin(), update.data().end());
+    if (update.kind() == msg::OCTOMAP_UPDATE_FULL) {
+      std::istringstream stream(data);
+      std::unique_ptr<octomap::AbstractOcTree> read(octomap::AbstractOcTree::read(stream));
+      auto* full = dynamic_cast<octomap::OcTree*>(read.get());
+      ASSERT_NE(full, nullptr);
+      read.release();
+      tree.reset(full);
+      applied_sequence = update.sequence_number();
+      if (fulls++ == 0) {
+        const octomap::OcTreeNode* wall = tree->search(8.25, 0.25, 0.25);
+        wall_occupied_in_first_full = wall != nullptr && tree->isNodeOccupied(wall);
+      }
+    } else if (update.kind() == msg::OCTOMAP_UPDATE_INCREMENTAL && tree &&
+               update.base_sequence() == applied_sequence) {
+      MapBuilder::applyDiff(data, *tree);
+      applied_sequence = update.sequence_number();
+      ++increments;
+    } else {
+      ++dropped;
+    }
+  }
+};
+
+TEST(MappingComponentTest, LateJoinerOnOtherVendorGetsFullMapAndExactIncrements) {
+  constexpr int kDomain = 80;
+  Node mapping_node("mapping",
+                    on(Vendor::FASTDDS, kDomain, {"update_rate:=20.0", "full_map_period:=3600.0"}));
+  Node feeder_node("feeder", on(Vendor::FASTDDS, kDomain));
+  MappingComponent mapping;
+  mapping.configure(mapping_node);
+  Feeder feeder(feeder_node);
+  interfaces::Executor executor;
+  executor.add(mapping_node);
+  executor.add(feeder_node);
+  mapping.activate();
+  ASSERT_TRUE(executor.spinUntil([&] { return mapping.beamsInserted() >= 40; }, 20s));
+  // Increments have gone out before the reader exists.
+  ASSERT_TRUE(executor.spinUntil([&] { return mapping.sequenceNumber() >= 3; }, 20s));
+
+  Node reader_node("planner", on(Vendor::CYCLONEDDS, kDomain));
+  MapReader reader;
+  auto subscription = reader_node.createSubscription<msg::OctomapUpdate>(
+      "map/update", interfaces::mapQos(),
+      std::function<void(const msg::OctomapUpdate&)>(
+          [&](const msg::OctomapUpdate& u) { reader.onUpdate(u); }));
+  executor.add(reader_node);
+  ASSERT_TRUE(executor.spinUntil([&] { return reader.fulls >= 1 && reader.increments >= 2; }, 20s))
+      << "fulls " << reader.fulls << ", increments " << reader.increments << ", dropped "
+      << reader.dropped << ", map version " << mapping.sequenceNumber();
+  EXPECT_TRUE(reader.wall_occupied_in_first_full);
+
+  // Stop the input and let the last changes reach the reader.
+  feeder.stop();
+  ASSERT_TRUE(executor.spinUntil(
+      [&] {
+        return mapping.builder().pendingChangeCount() == 0 &&
+               reader.applied_sequence == mapping.sequenceNumber();
+      },
+      20s));
+  const octomap::OcTree& built = mapping.builder().tree();
+  ASSERT_NE(reader.tree, nullptr);
+  const octomap::OcTreeNode* wall = reader.tree->search(8.25, 0.25, 0.25);
+  ASSERT_NE(wall, nullptr);
+  EXPECT_TRUE(reader.tree->isNodeOccupied(wall));
+  const octomap::OcTreeNode* water = reader.tree->search(4.25, 0.25, 0.25);
+  ASSERT_NE(water, nullptr);
+  EXPECT_FALSE(reader.tree->isNodeOccupied(water));
+  std::size_t compared = 0;
+  for (auto it = built.begin_leafs(); it != built.end_leafs(); ++it, ++compared) {
+    const octomap::OcTreeNode* copy = reader.tree->search(it.getKey());
+    ASSERT_NE(copy, nullptr) << it.getCoordinate();
+    EXPECT_EQ(copy->getLogOdds(), it->getLogOdds()) << it.getCoordinate();
+  }
+  EXPECT_GT(compared, 10u);
+  EXPECT_EQ(reader.tree->getNumLeafNodes(), built.getNumLeafNodes());
+  // In-process readers see the same map through the snapshot.
+  EXPECT_EQ(mapping.builder().snapshot()->getNumLeafNodes(), built.getNumLeafNodes());
+  mapping.deactivate();
+}
+
+TEST(MappingComponentTest, SaveWritesLoadableBtAndClearEmptiesTheMap) {
+  constexpr int kDomain = 81;
+  const std::string directory = testing::TempDir() + "mapping_component_test_maps";
+  std::filesystem::remove_all(directory);
+  Node mapping_node("mapping", on(Vendor::FASTDDS, kDomain,
+                                  {"update_rate:=20.0", "map_directory:=" + directory}));
+  Node feeder_node("feeder", on(Vendor::FASTDDS, kDomain));
+  MappingComponent mapping;
+  mapping.configure(mapping_node);
+  Feeder feeder(feeder_node);
+  interfaces::Executor executor;
+  executor.add(mapping_node);
+  executor.add(feeder_node);
+  mapping.activate();
+  ASSERT_TRUE(executor.spinUntil([&] { return mapping.beamsInserted() >= 20; }, 20s));
+  feeder.stop();
+
+  Node operator_node("operator", on(Vendor::CYCLONEDDS, kDomain));
+  auto save = operator_node.createClient<msg::SaveMapRequest, msg::SaveMapReply>("map/save");
+  auto clear = operator_node.createClient<msg::TriggerRequest, msg::TriggerReply>("map/clear");
+  std::thread spinner([&] { executor.spin(); });
+  msg::SaveMapRequest request;
+  request.file_path("sub/wall.bt");
+  msg::SaveMapReply reply;
+  const auto save_status = save->call(request, &reply, 10s);
+  msg::SaveMapRequest escape;
+  escape.file_path("../outside.bt");
+  msg::SaveMapReply refused;
+  const auto escape_status = save->call(escape, &refused, 10s);
+  msg::TriggerReply cleared;
+  const auto clear_status = clear->call(msg::TriggerRequest(), &cleared, 10s);
+  executor.shutdown();
+  spinner.join();
+
+  ASSERT_EQ(save_status, interfaces::CallStatus::OK);
+  ASSERT_EQ(reply.status().code(), msg::REPLY_CODE_OK) << reply.status().error_text();
+  EXPECT_EQ(reply.file_path(), "sub/wall.bt");
+  EXPECT_EQ(reply.size_bytes(), std::filesystem::file_size(directory + "/sub/wall.bt"));
+  octomap::OcTree loaded(0.1);
+  ASSERT_TRUE(loaded.readBinary(directory + "/sub/wall.bt"));
+  const octomap::OcTreeNode* wall = loaded.search(8.25, 0.25, 0.25);
+  ASSERT_NE(wall, nullptr);
+  EXPECT_TRUE(loaded.isNodeOccupied(wall));
+
+  ASSERT_EQ(escape_status, interfaces::CallStatus::OK);
+  EXPECT_EQ(refused.status().code(), msg::REPLY_CODE_INVALID_ARGUMENT);
+  EXPECT_FALSE(std::filesystem::exists(directory + "/../outside.bt"));
+
+  ASSERT_EQ(clear_status, interfaces::CallStatus::OK);
+  EXPECT_EQ(cleared.status().code(), msg::REPLY_CODE_OK);
+  EXPECT_EQ(mapping.builder().tree().size(), 0u);
+  mapping.deactivate();
+  std::filesystem::remove_all(directory);
+}
+
+TEST(MappingComponentTest, InconsistentProbabilitiesAreRefused) {
+  Node node("mapping", on(Vendor::CYCLONEDDS, 82, {"prob_miss:=0.3", "clamping_min:=0.35"}));
+  MappingComponent mapping;
+  EXPECT_THROW(mapping.configure(node), std::invalid_argument);
+}
+
+TEST(MappingComponentTest, RegisteredAsMapping) {
+  EXPECT_NE(interfaces::ComponentRegistry::instance().find("mapping"), nullptr);
+}
+
+}  // namespace
+}  // namespace auv::mapping
