@@ -13,19 +13,12 @@ namespace {
 using namespace std::chrono_literals;
 using interfaces::Node;
 using interfaces::NodeOptions;
+using interfaces::nodeOptions;
 using interfaces::Vendor;
 
-NodeOptions on(Vendor vendor, int domain, std::vector<std::string> overrides = {}) {
-  NodeOptions o;
-  o.vendor = vendor;
-  o.domain_id = domain;
-  o.overrides = std::move(overrides);
-  return o;
-}
-
 TEST(DemoComponentsTest, ListenerOnCycloneHearsTalkerOnFastdds) {
-  Node talker_node("talker", on(Vendor::FASTDDS, 160, {"rate_hz:=50.0"}));
-  Node listener_node("listener", on(Vendor::CYCLONEDDS, 160));
+  Node talker_node("talker", nodeOptions(Vendor::FASTDDS, 160, {"rate_hz:=50.0"}));
+  Node listener_node("listener", nodeOptions(Vendor::CYCLONEDDS, 160));
   Talker talker;
   Listener listener;
   talker.configure(talker_node);
@@ -39,7 +32,7 @@ TEST(DemoComponentsTest, ListenerOnCycloneHearsTalkerOnFastdds) {
   EXPECT_GE(talker.count(), listener.heard());
 
   // The reset service answers across vendors and really resets.
-  Node client_node("operator", on(Vendor::CYCLONEDDS, 160));
+  Node client_node("operator", nodeOptions(Vendor::CYCLONEDDS, 160));
   auto client = client_node.createClient<msg::TriggerRequest, msg::TriggerReply>("talker/reset");
   msg::TriggerReply reply;
   std::thread spinner([&] { executor.spin(); });
@@ -54,7 +47,7 @@ TEST(DemoComponentsTest, ListenerOnCycloneHearsTalkerOnFastdds) {
 }
 
 TEST(DemoComponentsTest, BadParameterNamesParameterAndSource) {
-  Node node("talker", on(Vendor::CYCLONEDDS, 161, {"rate_hz:=-3"}));
+  Node node("talker", nodeOptions(Vendor::CYCLONEDDS, 161, {"rate_hz:=-3"}));
   Talker talker;
   try {
     talker.configure(node);
@@ -68,7 +61,7 @@ TEST(DemoComponentsTest, BadParameterNamesParameterAndSource) {
 TEST(DemoComponentsTest, BadParameterFileNamesTheFile) {
   const std::string path = testing::TempDir() + "demo_bad_params.yaml";
   std::ofstream(path) << "talker:\n  rate_hz: fast\n";
-  NodeOptions options = on(Vendor::CYCLONEDDS, 162);
+  NodeOptions options = nodeOptions(Vendor::CYCLONEDDS, 162);
   options.params_files = {path};
   Node node("talker", options);
   Talker talker;

@@ -19,15 +19,8 @@ namespace {
 using namespace std::chrono_literals;
 using interfaces::Node;
 using interfaces::NodeOptions;
+using interfaces::nodeOptions;
 using interfaces::Vendor;
-
-NodeOptions on(Vendor vendor, int domain, std::vector<std::string> overrides = {}) {
-  NodeOptions o;
-  o.vendor = vendor;
-  o.domain_id = domain;
-  o.overrides = std::move(overrides);
-  return o;
-}
 
 void setStamp(msg::Header& header, int64_t ns) {
   header.stamp().sec(static_cast<int32_t>(ns / 1000000000));
@@ -121,9 +114,9 @@ struct MapReader {
 
 TEST(MappingComponentTest, LateJoinerOnOtherVendorGetsFullMapAndExactIncrements) {
   constexpr int kDomain = 80;
-  Node mapping_node("mapping",
-                    on(Vendor::FASTDDS, kDomain, {"update_rate:=20.0", "full_map_period:=3600.0"}));
-  Node feeder_node("feeder", on(Vendor::FASTDDS, kDomain));
+  Node mapping_node("mapping", nodeOptions(Vendor::FASTDDS, kDomain,
+                                           {"update_rate:=20.0", "full_map_period:=3600.0"}));
+  Node feeder_node("feeder", nodeOptions(Vendor::FASTDDS, kDomain));
   MappingComponent mapping;
   mapping.configure(mapping_node);
   Feeder feeder(feeder_node);
@@ -135,7 +128,7 @@ TEST(MappingComponentTest, LateJoinerOnOtherVendorGetsFullMapAndExactIncrements)
   // Increments have gone out before the reader exists.
   ASSERT_TRUE(executor.spinUntil([&] { return mapping.sequenceNumber() >= 3; }, 20s));
 
-  Node reader_node("planner", on(Vendor::CYCLONEDDS, kDomain));
+  Node reader_node("planner", nodeOptions(Vendor::CYCLONEDDS, kDomain));
   MapReader reader;
   auto subscription = reader_node.createSubscription<msg::OctomapUpdate>(
       "map/update", interfaces::mapQos(),
@@ -180,9 +173,9 @@ TEST(MappingComponentTest, SaveWritesLoadableBtAndClearEmptiesTheMap) {
   constexpr int kDomain = 81;
   const std::string directory = testing::TempDir() + "mapping_component_test_maps";
   std::filesystem::remove_all(directory);
-  Node mapping_node("mapping", on(Vendor::FASTDDS, kDomain,
-                                  {"update_rate:=20.0", "map_directory:=" + directory}));
-  Node feeder_node("feeder", on(Vendor::FASTDDS, kDomain));
+  Node mapping_node("mapping", nodeOptions(Vendor::FASTDDS, kDomain,
+                                           {"update_rate:=20.0", "map_directory:=" + directory}));
+  Node feeder_node("feeder", nodeOptions(Vendor::FASTDDS, kDomain));
   MappingComponent mapping;
   mapping.configure(mapping_node);
   Feeder feeder(feeder_node);
@@ -193,7 +186,7 @@ TEST(MappingComponentTest, SaveWritesLoadableBtAndClearEmptiesTheMap) {
   ASSERT_TRUE(executor.spinUntil([&] { return mapping.beamsInserted() >= 20; }, 20s));
   feeder.stop();
 
-  Node operator_node("operator", on(Vendor::CYCLONEDDS, kDomain));
+  Node operator_node("operator", nodeOptions(Vendor::CYCLONEDDS, kDomain));
   auto save = operator_node.createClient<msg::SaveMapRequest, msg::SaveMapReply>("map/save");
   auto clear = operator_node.createClient<msg::TriggerRequest, msg::TriggerReply>("map/clear");
   std::thread spinner([&] { executor.spin(); });
@@ -232,7 +225,8 @@ TEST(MappingComponentTest, SaveWritesLoadableBtAndClearEmptiesTheMap) {
 }
 
 TEST(MappingComponentTest, InconsistentProbabilitiesAreRefused) {
-  Node node("mapping", on(Vendor::CYCLONEDDS, 82, {"prob_miss:=0.3", "clamping_min:=0.35"}));
+  Node node("mapping",
+            nodeOptions(Vendor::CYCLONEDDS, 82, {"prob_miss:=0.3", "clamping_min:=0.35"}));
   MappingComponent mapping;
   EXPECT_THROW(mapping.configure(node), std::invalid_argument);
 }

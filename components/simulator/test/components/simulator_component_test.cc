@@ -17,16 +17,9 @@ namespace {
 using namespace std::chrono_literals;
 using interfaces::Node;
 using interfaces::NodeOptions;
+using interfaces::nodeOptions;
 using interfaces::Vendor;
 namespace fs = std::filesystem;
-
-NodeOptions on(Vendor vendor, int domain, std::vector<std::string> overrides = {}) {
-  NodeOptions o;
-  o.vendor = vendor;
-  o.domain_id = domain;
-  o.overrides = std::move(overrides);
-  return o;
-}
 
 class SimulatorComponentTest : public ::testing::Test {
  protected:
@@ -55,8 +48,8 @@ class SimulatorComponentTest : public ::testing::Test {
 };
 
 TEST_F(SimulatorComponentTest, PublishesClockOdometryAndSonarAcrossVendors) {
-  Node sim_node("simulator", on(Vendor::CYCLONEDDS, 190, params()));
-  Node probe("probe", on(Vendor::FASTDDS, 190));
+  Node sim_node("simulator", nodeOptions(Vendor::CYCLONEDDS, 190, params()));
+  Node probe("probe", nodeOptions(Vendor::FASTDDS, 190));
   SimulatorComponent sim;
   sim.configure(sim_node);
   int clocks = 0, odometry = 0, echoes = 0, beams = 0;
@@ -104,8 +97,8 @@ TEST_F(SimulatorComponentTest, PublishesClockOdometryAndSonarAcrossVendors) {
 }
 
 TEST_F(SimulatorComponentTest, ThrustersDriveTheVehicleIntoTheWallAndTheCollisionIsReported) {
-  Node sim_node("simulator", on(Vendor::FASTDDS, 191, params(5.0)));
-  Node pilot("pilot", on(Vendor::CYCLONEDDS, 191));
+  Node sim_node("simulator", nodeOptions(Vendor::FASTDDS, 191, params(5.0)));
+  Node pilot("pilot", nodeOptions(Vendor::CYCLONEDDS, 191));
   SimulatorComponent sim;
   sim.configure(sim_node);
   auto thrusters = pilot.createPublisher<msg::ThrusterSetpoints>("control/thrusters",
@@ -143,7 +136,7 @@ TEST_F(SimulatorComponentTest, ThrustersDriveTheVehicleIntoTheWallAndTheCollisio
 TEST_F(SimulatorComponentTest, AStartInsideTheWorldIsRefusedNamingTheScenario) {
   std::ofstream(scenario_) << "world: {mesh: wall.ply}\n"
                               "vehicle: {start: {position: [6.5, 0, 3]}}\n";
-  Node node("simulator", on(Vendor::CYCLONEDDS, 192, params()));
+  Node node("simulator", nodeOptions(Vendor::CYCLONEDDS, 192, params()));
   SimulatorComponent sim;
   try {
     sim.configure(node);
@@ -155,7 +148,7 @@ TEST_F(SimulatorComponentTest, AStartInsideTheWorldIsRefusedNamingTheScenario) {
 }
 
 TEST_F(SimulatorComponentTest, AnUnknownWorldNameListsTheKnownWorlds) {
-  Node node("simulator", on(Vendor::CYCLONEDDS, 193, {"world:=canyn"}));
+  Node node("simulator", nodeOptions(Vendor::CYCLONEDDS, 193, {"world:=canyn"}));
   SimulatorComponent sim;
   try {
     sim.configure(node);

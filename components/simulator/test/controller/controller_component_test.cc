@@ -19,21 +19,14 @@ namespace {
 using namespace std::chrono_literals;
 using interfaces::Node;
 using interfaces::NodeOptions;
+using interfaces::nodeOptions;
 using interfaces::Vendor;
-
-NodeOptions on(Vendor vendor, int domain, std::vector<std::string> overrides = {}) {
-  NodeOptions o;
-  o.vendor = vendor;
-  o.domain_id = domain;
-  o.overrides = std::move(overrides);
-  return o;
-}
 
 // Publishes odometry (a vehicle at rest at `position`, heading north) and commands; records
 // what the controller publishes and logs.
 class Harness {
  public:
-  Harness(Vendor vendor, int domain) : node_("harness", on(vendor, domain)) {
+  Harness(Vendor vendor, int domain) : node_("harness", nodeOptions(vendor, domain)) {
     odometry_ = node_.createPublisher<msg::Odometry>("nav/odometry", interfaces::stateQos());
     commands_ =
         node_.createPublisher<msg::ControllerCommand>("control/waypoint", interfaces::commandQos());
@@ -131,7 +124,7 @@ class Harness {
 struct Rig {
   Rig(Vendor controller_vendor, Vendor harness_vendor, int domain,
       std::vector<std::string> overrides = {})
-      : controller_node("controller", on(controller_vendor, domain, std::move(overrides))),
+      : controller_node("controller", nodeOptions(controller_vendor, domain, std::move(overrides))),
         harness(harness_vendor, domain) {
     component.configure(controller_node);
     executor.add(controller_node);
@@ -304,7 +297,7 @@ TEST(ControllerComponentTest, MaxDepthManoeuvreInSimulationTimeOnFastdds) {
 
 TEST(ControllerComponentTest, BadParametersNameTheParameter) {
   auto configureError = [](const std::string& assignment) -> std::string {
-    Node node("controller_parameters", on(Vendor::CYCLONEDDS, 230, {assignment}));
+    Node node("controller_parameters", nodeOptions(Vendor::CYCLONEDDS, 230, {assignment}));
     ControllerComponent component;
     try {
       component.configure(node);

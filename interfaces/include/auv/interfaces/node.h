@@ -30,6 +30,17 @@ struct NodeOptions {
   std::vector<std::string> overrides;     ///< "name:=value" assignments (command line).
 };
 
+/// Options for a node on `vendor` and `domain_id` with "name:=value" overrides: the usual case
+/// in component tests (each on its own domain) and benchmarks.
+inline NodeOptions nodeOptions(Vendor vendor, int domain_id,
+                               std::vector<std::string> overrides = {}) {
+  NodeOptions options;
+  options.vendor = vendor;
+  options.domain_id = domain_id;
+  options.overrides = std::move(overrides);
+  return options;
+}
+
 class Node {
  public:
   /// Creates the participant and reads the node's built-in parameters: `use_sim_time`
