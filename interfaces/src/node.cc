@@ -1,4 +1,5 @@
 #include "auv/interfaces/node.h"
+#include "auv/interfaces/msg_time.h"
 
 #include <algorithm>
 #include <chrono>
@@ -62,9 +63,7 @@ Node::Node(const std::string& name, const NodeOptions& options)
   log_writer_ = participant_->createWriter("log", log_type, logQos());
   logger_.setSink([this](LogLevel lvl, const std::string& text) {
     msg::LogEntry entry;
-    const int64_t ns = clock_->nowNs();
-    entry.stamp().sec(static_cast<int32_t>(ns / 1000000000));
-    entry.stamp().nanosec(static_cast<uint32_t>(ns % 1000000000));
+    entry.stamp(toMsgTime(clock_->nowNs()));
     entry.level(toMsgLevel(lvl));
     entry.node_name(name_);
     entry.message(text);
@@ -83,8 +82,7 @@ Node::Node(const std::string& name, const NodeOptions& options)
           msg::Clock sample;
           bool advanced = false;
           while (reader.take(&sample, nullptr)) {
-            clock_->setSimulationTime(static_cast<int64_t>(sample.sim_time().sec()) * 1000000000LL +
-                                      sample.sim_time().nanosec());
+            clock_->setSimulationTime(toNanoseconds(sample.sim_time()));
             advanced = true;
           }
           if (advanced) waker_->notify();

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "auv/interfaces/msg_time.h"
+
 namespace auv::demo {
 
 void Talker::configure(interfaces::Node& node) {
@@ -53,9 +55,7 @@ void Talker::tick() {
   const double t = static_cast<double>(count_) / options_.rate_hz;
   const double w = options_.speed / options_.circle_radius;
   msg::Odometry odom;
-  const int64_t ns = node_->clock().nowNs();
-  odom.header().stamp().sec(static_cast<int32_t>(ns / 1000000000));
-  odom.header().stamp().nanosec(static_cast<uint32_t>(ns % 1000000000));
+  odom.header().stamp(interfaces::toMsgTime(node_->clock().nowNs()));
   odom.header().frame_id("world");
   odom.child_frame_id("base_link");
   auto& pose = odom.pose().pose();

@@ -1,4 +1,5 @@
 #include "auv/mapping/components/mapping_component.h"
+#include "auv/interfaces/msg_time.h"
 
 #include <filesystem>
 #include <fstream>
@@ -6,10 +7,6 @@
 
 namespace auv::mapping {
 namespace {
-
-int64_t toNs(const msg::Time& stamp) {
-  return static_cast<int64_t>(stamp.sec()) * 1000000000 + static_cast<int64_t>(stamp.nanosec());
-}
 
 Eigen::Isometry3d toIsometry(const msg::Pose& pose) {
   Eigen::Isometry3d result = Eigen::Isometry3d::Identity();
@@ -196,7 +193,7 @@ void MappingComponent::cleanup() {
 
 void MappingComponent::onOdometry(const msg::Odometry& odometry) {
   StampedPose pose;
-  pose.stamp_ns = toNs(odometry.header().stamp());
+  pose.stamp_ns = interfaces::toNanoseconds(odometry.header().stamp());
   const Eigen::Isometry3d world_T_body = toIsometry(odometry.pose().pose());
   pose.position = world_T_body.translation();
   pose.orientation = Eigen::Quaterniond(world_T_body.linear());
@@ -218,7 +215,7 @@ void MappingComponent::onBeam(const msg::SonarBeam& beam) {
 }
 
 bool MappingComponent::tryInsertBeam(const msg::SonarBeam& beam) {
-  const int64_t stamp_ns = toNs(beam.header().stamp());
+  const int64_t stamp_ns = interfaces::toNanoseconds(beam.header().stamp());
   PoseLookupStatus status;
   const auto pose = poses_->lookUp(stamp_ns, &status);
   if (!pose) {
@@ -234,7 +231,7 @@ bool MappingComponent::tryInsertBeam(const msg::SonarBeam& beam) {
 }
 
 void MappingComponent::onCloud(const msg::PointCloud& cloud) {
-  const int64_t stamp_ns = toNs(cloud.header().stamp());
+  const int64_t stamp_ns = interfaces::toNanoseconds(cloud.header().stamp());
   // Points in the world frame are used as they are; any other frame is taken as the body
   // frame and placed with the odometry pose at the cloud's stamp.
   Eigen::Isometry3d world_T_cloud = Eigen::Isometry3d::Identity();
@@ -284,8 +281,7 @@ void MappingComponent::tick() {
 }
 
 void MappingComponent::fillCommon(msg::OctomapUpdate& update) const {
-  update.header().stamp().sec(static_cast<int32_t>(newest_stamp_ns_ / 1000000000));
-  update.header().stamp().nanosec(static_cast<uint32_t>(newest_stamp_ns_ % 1000000000));
+  update.header().stamp(interfaces::toMsgTime(newest_stamp_ns_));
   update.header().frame_id(options_.world_frame);
   update.map_id(options_.map_id);
   update.tree_type(builder_->tree().getTreeType());

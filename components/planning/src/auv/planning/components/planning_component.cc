@@ -1,4 +1,5 @@
 #include "auv/planning/components/planning_component.h"
+#include "auv/interfaces/msg_time.h"
 
 #include <chrono>
 #include <cmath>
@@ -74,10 +75,7 @@ msg::Point toPoint(const Eigen::Vector3d& v) {
   return p;
 }
 
-void setStamp(msg::Header& header, int64_t ns) {
-  header.stamp().sec(static_cast<int32_t>(ns / 1000000000));
-  header.stamp().nanosec(static_cast<uint32_t>(ns % 1000000000));
-}
+void setStamp(msg::Header& header, int64_t ns) { header.stamp(interfaces::toMsgTime(ns)); }
 
 void setPosition(ob::State* state, const Eigen::Vector3d& position) {
   auto* values = state->as<ob::RealVectorStateSpace::StateType>()->values;

@@ -1,4 +1,5 @@
 #include "auv/sim/components/controller_component.h"
+#include "auv/interfaces/msg_time.h"
 
 #include <cmath>
 #include <optional>
@@ -109,9 +110,7 @@ void declareAll(interfaces::Parameters& p, const std::string& prefix,
 }
 
 void stamp(msg::Header& header, const interfaces::Clock& clock, const char* frame) {
-  const int64_t ns = clock.nowNs();
-  header.stamp().sec(static_cast<int32_t>(ns / 1000000000));
-  header.stamp().nanosec(static_cast<uint32_t>(ns % 1000000000));
+  header.stamp(interfaces::toMsgTime(clock.nowNs()));
   header.frame_id(frame);
 }
 

@@ -1,4 +1,5 @@
 #include "auv/sim/components/message_conversion.h"
+#include "auv/interfaces/msg_time.h"
 
 #include <cmath>
 
@@ -30,18 +31,9 @@ msg::Header header(double t, const char* frame) {
 
 }  // namespace
 
-msg::Time toTime(double seconds) {
-  msg::Time time;
-  const double whole = std::floor(seconds);
-  int64_t ns = std::llround((seconds - whole) * 1e9);
-  int64_t sec = static_cast<int64_t>(whole);
-  if (ns >= 1000000000) sec += 1, ns -= 1000000000;
-  time.sec(static_cast<int32_t>(sec));
-  time.nanosec(static_cast<uint32_t>(ns));
-  return time;
-}
+msg::Time toTime(double seconds) { return interfaces::toMsgTime(std::llround(seconds * 1e9)); }
 
-double toSeconds(const msg::Time& time) { return time.sec() + time.nanosec() * 1e-9; }
+double toSeconds(const msg::Time& time) { return interfaces::toNanoseconds(time) * 1e-9; }
 
 msg::Pose toPose(const Eigen::Isometry3d& pose) {
   msg::Pose out;
