@@ -103,6 +103,27 @@ TEST_F(PlannerTest, PopWaypointKeepsOnlyTheRootChildSubtree) {
   EXPECT_TRUE(planner_->checkConsistency());
 }
 
+TEST_F(PlannerTest, SmallRemovalsKeepTheIndexConsistentAndTheTreeGrowing) {
+  makePlanner(2.0, 0.0, 18.0, 0.0);
+  ASSERT_EQ(grow(4000), ob::PlannerStatus::EXACT_SOLUTION);
+  EXPECT_EQ(planner_->iterations(), 4000u);
+  const std::size_t size_before = planner_->treeSize();
+  // A small rock off the straight line: few nodes go, so they leave the index one by one.
+  testing::addOccupiedBox(*world_.tree, {12.0, 3.0, 0.0}, {13.0, 4.0, 10.0});
+  world_.field->update();
+  const UpdateResult result = planner_->updateTree(world_.state(1.5, 0.0).get());
+  ASSERT_GT(result.removed_nodes, 0u);
+  ASSERT_LT(result.removed_nodes * 8, size_before);  // below the re-index fraction
+  EXPECT_EQ(planner_->treeSize(), size_before - result.removed_nodes);
+  EXPECT_TRUE(planner_->checkConsistency());
+  // Nearest-neighbour queries on the thinned index must still only find live nodes.
+  EXPECT_EQ(grow(2000), ob::PlannerStatus::EXACT_SOLUTION);
+  EXPECT_TRUE(planner_->checkConsistency());
+  EXPECT_EQ(planner_->iterations(), 6000u);
+  planner_->reset(world_.state(2.0, 0.0).get());
+  EXPECT_EQ(planner_->iterations(), 0u);
+}
+
 TEST_F(PlannerTest, TreeGrownThroughUnknownSpaceIsPrunedExactlyWhereTheMapFillsIn) {
   makePlanner(2.0, 0.0, 18.0, 0.0);  // nothing mapped: everything is unknown, hence free
   ASSERT_EQ(grow(2000), ob::PlannerStatus::EXACT_SOLUTION);

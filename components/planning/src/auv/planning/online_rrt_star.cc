@@ -20,6 +20,9 @@ namespace {
 constexpr double kCostTolerance = 1e-6;
 /// Tree sizes between refreshes of the cost the progress thread reads.
 constexpr std::size_t kPublishCostEvery = 64;
+/// Removing nodes one by one from the GNAT costs about a nearest query each; past this
+/// fraction of the tree, rebuilding the index from the remaining nodes is cheaper.
+constexpr double kRebuildFraction = 0.125;
 }  // namespace
 
 OnlineRRTstar::OnlineRRTstar(const ob::SpaceInformationPtr& si) : ob::Planner(si, "OnlineRRTstar") {
@@ -87,6 +90,7 @@ void OnlineRRTstar::clear() {
 void OnlineRRTstar::freeTree() {
   if (root_) freeSubtree(root_);
   root_ = nullptr;
+  iterations_ = 0;
   solutions_.clear();
   if (nn_) nn_->clear();
 }
@@ -133,6 +137,7 @@ ob::PlannerStatus OnlineRRTstar::solve(const ob::PlannerTerminationCondition& pt
   if (!sampler_) sampler_ = si_->allocStateSampler();
   ob::State* random_state = si_->allocState();
   while (!ptc) {
+    ++iterations_;
     if (rng_.uniform01() < goal_bias_) {
       si_->copyState(random_state, goal_state_);
     } else {
@@ -298,12 +303,15 @@ bool OnlineRRTstar::popWaypoint(ob::State* waypoint) {
   Node* next = const_cast<Node*>(best);
   while (next->parent != root_) next = next->parent;
   si_->copyState(waypoint, next->state);
+  // The old root and every subtree but next's go.
+  Node* old_root = root_;
   detachFromParent(next);
-  freeSubtree(root_);  // the old root and every other subtree
   root_ = next;
   root_->incoming_cost = objective_->identityCost();
   propagateCost(root_);
-  reindex();
+  std::vector<Node*> removed;
+  detachSubtree(old_root, removed);
+  discard(removed);
   return true;
 }
 
@@ -317,6 +325,7 @@ UpdateResult OnlineRRTstar::updateTree(const ob::State* vehicle_state) {
   // Edge costs are recomputed on the way since the objective depends on the map too.
   std::vector<Node*> stack{root_};
   std::vector<Node*> colliding;
+  std::vector<Node*> removed;
   while (!stack.empty()) {
     Node* node = stack.back();
     stack.pop_back();
@@ -330,20 +339,44 @@ UpdateResult OnlineRRTstar::updateTree(const ob::State* vehicle_state) {
       child->cost = objective_->combineCosts(node->cost, child->incoming_cost);
       stack.push_back(child);
     }
-    for (Node* child : colliding) {
-      detachFromParent(child);
-      std::vector<Node*> subtree{child};
-      while (!subtree.empty()) {
-        Node* current = subtree.back();
-        subtree.pop_back();
-        ++result.removed_nodes;
-        subtree.insert(subtree.end(), current->children.begin(), current->children.end());
-      }
-      freeSubtree(child);
-    }
+    for (Node* child : colliding) detachSubtree(child, removed);
   }
-  if (result.removed_nodes > 0) reindex();
+  result.removed_nodes = removed.size();
+  discard(removed);
   return result;
+}
+
+void OnlineRRTstar::detachSubtree(Node* subtree_root, std::vector<Node*>& removed) {
+  detachFromParent(subtree_root);
+  std::vector<Node*> stack{subtree_root};
+  while (!stack.empty()) {
+    Node* node = stack.back();
+    stack.pop_back();
+    removed.push_back(node);
+    stack.insert(stack.end(), node->children.begin(), node->children.end());
+  }
+}
+
+void OnlineRRTstar::discard(const std::vector<Node*>& removed) {
+  if (removed.empty()) return;
+  // The GNAT measures distances to the nodes it removes: they are freed only afterwards.
+  bool indexed_one_by_one =
+      static_cast<double>(removed.size()) <= kRebuildFraction * static_cast<double>(nn_->size());
+  if (indexed_one_by_one) {
+    for (Node* node : removed) indexed_one_by_one &= nn_->remove(node);
+  }
+  if (indexed_one_by_one) {
+    std::unordered_set<const Node*> gone(removed.begin(), removed.end());
+    solutions_.erase(std::remove_if(solutions_.begin(), solutions_.end(),
+                                    [&gone](const Node* node) { return gone.count(node) > 0; }),
+                     solutions_.end());
+  } else {
+    reindex();  // walks the tree from root_, which no longer reaches the removed nodes
+  }
+  for (Node* node : removed) {
+    si_->freeState(node->state);
+    delete node;
+  }
 }
 
 void OnlineRRTstar::reset(const ob::State* root_state) {

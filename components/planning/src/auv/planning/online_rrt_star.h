@@ -4,6 +4,7 @@
 #pragma once
 
 #include <atomic>
+#include <cstdint>
 #include <limits>
 #include <memory>
 #include <vector>
@@ -67,6 +68,8 @@ class OnlineRRTstar : public ompl::base::Planner {
   std::vector<const ompl::base::State*> bestPath() const;
   const Node* root() const { return root_; }
   std::size_t treeSize() const { return nn_ ? nn_->size() : 0; }
+  /// Sampling iterations since the last clear() or reset().
+  uint64_t iterations() const { return iterations_; }
   /// Checks parent/child links, costs and the nearest-neighbour structure; true if consistent.
   bool checkConsistency() const;
 
@@ -90,6 +93,11 @@ class OnlineRRTstar : public ompl::base::Planner {
   void propagateCost(Node* node);
   void detachFromParent(Node* node);
   void freeSubtree(Node* node);
+  /// Detaches `subtree_root` from its parent and appends its nodes to `removed`.
+  void detachSubtree(Node* subtree_root, std::vector<Node*>& removed);
+  /// Drops the detached `removed` nodes from the nearest-neighbour structure and the solution
+  /// list (one by one when they are few, else by re-indexing the tree), then frees them.
+  void discard(const std::vector<Node*>& removed);
   /// Rebuilds the nearest-neighbour structure and the solution list from the tree.
   void reindex();
   void freeTree();
@@ -111,6 +119,7 @@ class OnlineRRTstar : public ompl::base::Planner {
   std::atomic<double> published_best_cost_{std::numeric_limits<double>::infinity()};
   double rrt_star_gamma_ = 0.0;  ///< RRT* radius constant, from the free-space measure
   double effective_dimension_ = 3.0;
+  uint64_t iterations_ = 0;
 };
 
 }  // namespace auv::planning
