@@ -1,0 +1,62 @@
+#include "auv/mapping/map_replica.h"
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "auv/mapping/map_builder.h"
+
+namespace auv::mapping {
+
+std::unique_ptr<octomap::OcTree> readFullMap(const msg::OctomapUpdate& update) {
+  std::istringstream stream(std::string(update.data().begin(), update.data().end()));
+  if (update.encoding() == msg::OCTOMAP_ENCODING_BINARY) {
+    auto tree = std::make_unique<octomap::OcTree>(update.resolution());
+    if (!tree->readBinary(stream)) throw std::runtime_error("unreadable .bt map");
+    return tree;
+  }
+  std::unique_ptr<octomap::AbstractOcTree> read(octomap::AbstractOcTree::read(stream));
+  auto* tree = dynamic_cast<octomap::OcTree*>(read.get());
+  if (tree == nullptr) throw std::runtime_error("map is not an OcTree .ot stream");
+  read.release();
+  return std::unique_ptr<octomap::OcTree>(tree);
+}
+
+MapReplica::MapReplica(std::string map_id, double resolution)
+    : map_id_(std::move(map_id)),
+      resolution_(resolution),
+      tree_(std::make_unique<octomap::OcTree>(resolution)) {}
+
+MapReplica::Outcome MapReplica::apply(const msg::OctomapUpdate& update) {
+  if (update.map_id() != map_id_) return Outcome::IGNORED;
+  if (std::abs(update.resolution() - resolution_) > 1e-9) {
+    error_ = "resolution " + std::to_string(update.resolution()) + " m, expected " +
+             std::to_string(resolution_) + " m";
+    return Outcome::REJECTED;
+  }
+  try {
+    if (update.kind() == msg::OCTOMAP_UPDATE_FULL) {
+      tree_ = readFullMap(update);
+      sequence_ = update.sequence_number();
+      needs_full_ = false;
+      return Outcome::APPLIED;
+    }
+    if (update.kind() != msg::OCTOMAP_UPDATE_INCREMENTAL ||
+        update.encoding() != msg::OCTOMAP_ENCODING_FULL) {
+      return Outcome::IGNORED;
+    }
+    if (sequence_ == 0 || update.base_sequence() != sequence_) {
+      needs_full_ = true;  // a gap in the chain: only a FULL map repairs the copy
+      return Outcome::GAP;
+    }
+    MapBuilder::applyDiff(std::string(update.data().begin(), update.data().end()), *tree_);
+    sequence_ = update.sequence_number();
+    return Outcome::APPLIED;
+  } catch (const std::exception& error) {
+    needs_full_ = true;
+    error_ = error.what();
+    return Outcome::REJECTED;
+  }
+}
+
+}  // namespace auv::mapping

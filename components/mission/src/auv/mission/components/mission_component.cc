@@ -1,0 +1,332 @@
+#include "auv/mission/components/mission_component.h"
+
+#include <cmath>
+
+#include "auv/interfaces/msg_time.h"
+
+namespace auv::mission {
+namespace {
+
+constexpr double kBig = 1e6;
+
+double yawOf(const msg::Quaternion& q) {
+  return std::atan2(2.0 * (q.w() * q.z() + q.x() * q.y()),
+                    1.0 - 2.0 * (q.y() * q.y() + q.z() * q.z()));
+}
+
+template <class T>
+std::function<void(const T&)> bind(void (MissionComponent::*method)(const T&),
+                                   MissionComponent* self) {
+  return [self, method](const T& message) { (self->*method)(message); };
+}
+
+}  // namespace
+
+void MissionComponent::configure(interfaces::Node& node) {
+  node_ = &node;
+  auto& p = node.parameters();
+  auto& o = options_;
+  auto& e = o.executive;
+  auto seconds = [&](const char* name, double& field, const char* description) {
+    field = p.declare<double>(name, field, {description, "s", 0.01, kBig, {}, false});
+  };
+  seconds("odometry_timeout", e.odometry_timeout,
+          "nav/odometry older than this is stale: not ready, or abort to hold while running");
+  seconds("controller_timeout", e.controller_timeout,
+          "control/status older than this counts as no controller (not ready)");
+  seconds("readiness_timeout", e.readiness_timeout,
+          "a started mission that is not ready within this long fails");
+  seconds("no_solution_timeout", e.no_solution_timeout,
+          "waiting this long for a waypoint (the planner finds nothing) aborts to hold");
+  seconds("request_period", e.request_period,
+          "an unanswered waypoint request is repeated this often");
+  seconds("waypoint_timeout_margin", e.waypoint_timeout_margin,
+          "controller command timeout = factor x distance / speed + this margin");
+  e.request_distance =
+      p.declare<double>("request_distance", e.request_distance,
+                        {"ask for the next waypoint this close to the current one (0: on arrival)",
+                         "m",
+                         0.0,
+                         100.0,
+                         {},
+                         false});
+  e.waypoint_timeout_factor = p.declare<double>(
+      "waypoint_timeout_factor", e.waypoint_timeout_factor,
+      {"controller command timeout = this x distance / speed + margin", "", 1.0, 100.0, {}, false});
+  o.limits.max_depth = p.declare<double>(
+      "max_depth", o.limits.max_depth,
+      {"deepest goal accepted (the controller's max_depth)", "m", 0.1, 11000.0, {}, false});
+  o.limits.goal_clearance = p.declare<double>(
+      "goal_clearance", o.limits.goal_clearance,
+      {"goals closer than this to a known occupied cell are refused (the planner's hull_radius + "
+       "safety_margin)",
+       "m",
+       0.0,
+       100.0,
+       {},
+       false});
+  o.tick_rate =
+      p.declare<double>("tick_rate", o.tick_rate,
+                        {"readiness and staleness checks per second", "Hz", 1.0, 1000.0, {}, true});
+  o.status_rate =
+      p.declare<double>("status_rate", o.status_rate,
+                        {"periodic mission/status messages per second (also sent on every change)",
+                         "Hz",
+                         0.01,
+                         100.0,
+                         {},
+                         true});
+  o.map_resolution =
+      p.declare<double>("map_resolution", o.map_resolution,
+                        {"leaf size of the map on map/update", "m", 0.01, 10.0, {}, true});
+  o.map_id = p.declare<std::string>("map_id", o.map_id,
+                                    {"OctomapUpdate.map_id followed", "", {}, {}, {}, true});
+  o.mission_file = p.declare<std::string>(
+      "mission_file", o.mission_file,
+      {"mission YAML loaded at configure (started on activate when autostart)",
+       "",
+       {},
+       {},
+       {},
+       true});
+  o.autostart =
+      p.declare<bool>("autostart", o.autostart,
+                      {"start mission_file when the component activates", "", {}, {}, {}, true});
+  o.log_dir = p.declare<std::string>(
+      "log_dir", o.log_dir,
+      {"folder of the mission log read by `auv mission report` (empty: no log)",
+       "",
+       {},
+       {},
+       {},
+       true});
+  executive_ = std::make_unique<MissionExecutive>(e);                               // check()s
+  if (!o.mission_file.empty()) configured_plan_ = loadMissionFile(o.mission_file);  // names it
+  if (o.autostart && !configured_plan_) {
+    throw std::invalid_argument("parameter autostart: true needs a mission_file");
+  }
+  map_ = std::make_unique<mapping::MapReplica>(o.map_id, o.map_resolution);
+
+  query_pub_ = node.createPublisher<msg::PlannerQuery>("mission/query", interfaces::commandQos());
+  request_pub_ = node.createPublisher<msg::WaypointRequest>("planner/waypoint_request",
+                                                            interfaces::commandQos());
+  command_pub_ =
+      node.createPublisher<msg::ControllerCommand>("control/waypoint", interfaces::commandQos());
+  status_pub_ =
+      node.createPublisher<msg::MissionStatus>("mission/status", interfaces::latchedStateQos());
+  odometry_sub_ = node.createSubscription<msg::Odometry>("nav/odometry", interfaces::stateQos(),
+                                                         bind(&MissionComponent::onOdometry, this));
+  controller_sub_ = node.createSubscription<msg::ControllerStatus>(
+      "control/status", interfaces::stateQos(),
+      std::function<void(const msg::ControllerStatus&)>([this](const msg::ControllerStatus& s) {
+        executive_->onControllerStatus(s, now());
+        flush("controller");
+      }));
+  waypoint_sub_ = node.createSubscription<msg::Waypoint>(
+      "planner/waypoint", interfaces::commandQos(),
+      std::function<void(const msg::Waypoint&)>([this](const msg::Waypoint& w) {
+        if (log_ && executive_->running()) log_->waypoint(now(), w);
+        executive_->onWaypoint(w, now());
+        flush("waypoint",
+              "waypoint " + std::to_string(w.waypoint_id()) + (w.is_final() ? " (final)" : ""));
+      }));
+  cancel_sub_ = node.createSubscription<msg::WaypointCancel>(
+      "planner/cancel", interfaces::commandQos(),
+      std::function<void(const msg::WaypointCancel&)>([this](const msg::WaypointCancel& c) {
+        executive_->onCancel(c, now());
+        flush("cancel", "waypoint " + std::to_string(c.waypoint_id()) + ": " + c.reason_text());
+      }));
+  map_sub_ = node.createSubscription<msg::OctomapUpdate>(
+      "map/update", interfaces::mapQos(),
+      std::function<void(const msg::OctomapUpdate&)>([this](const msg::OctomapUpdate& update) {
+        if (map_->apply(update) == mapping::MapReplica::Outcome::REJECTED) {
+          AUV_WARN(node_->logger(), "map update "
+                                        << update.sequence_number()
+                                        << " not used for goal checks: " << map_->error());
+        }
+      }));
+  path_sub_ = node.createSubscription<msg::Path>(
+      "planner/path", interfaces::viewingQos(),
+      std::function<void(const msg::Path&)>([this](const msg::Path& path) {
+        if (log_ && executive_->running()) log_->path(now(), path);
+      }));
+  tree_sub_ = node.createSubscription<msg::PlannerTree>(
+      "planner/tree", interfaces::viewingQos(),
+      std::function<void(const msg::PlannerTree&)>([this](const msg::PlannerTree& tree) {
+        if (log_ && executive_->running()) log_->tree(tree);
+      }));
+  start_service_ = node.createService<msg::StartMissionRequest, msg::StartMissionReply>(
+      "mission/start", [this](const msg::StartMissionRequest& request,
+                              msg::StartMissionReply& reply) { onStart(request, reply); });
+  abort_service_ = node.createService<msg::TriggerRequest, msg::TriggerReply>(
+      "mission/abort", [this](const msg::TriggerRequest& request, msg::TriggerReply& reply) {
+        onAbort(request, reply);
+      });
+}
+
+void MissionComponent::activate() {
+  tick_timer_ = node_->createTimer(1.0 / options_.tick_rate, [this] { tick(); });
+  status_timer_ = node_->createTimer(1.0 / options_.status_rate, [this] { publishStatus(); });
+  publishStatus();
+  if (options_.autostart) {
+    // Started from the first tick, once the clock runs (simulation time may not have begun).
+    AUV_INFO(node_->logger(), "mission " << options_.mission_file << " starts when the clock runs");
+  }
+}
+
+void MissionComponent::deactivate() {
+  if (executive_ && executive_->running()) {
+    executive_->abort("mission component deactivated", now());
+    flush("abort", "deactivated");
+  }
+  if (tick_timer_) tick_timer_->cancel();
+  if (status_timer_) status_timer_->cancel();
+  tick_timer_.reset();
+  status_timer_.reset();
+}
+
+void MissionComponent::cleanup() {
+  start_service_.reset();
+  abort_service_.reset();
+  odometry_sub_.reset();
+  controller_sub_.reset();
+  waypoint_sub_.reset();
+  cancel_sub_.reset();
+  map_sub_.reset();
+  path_sub_.reset();
+  tree_sub_.reset();
+  query_pub_.reset();
+  request_pub_.reset();
+  command_pub_.reset();
+  status_pub_.reset();
+  log_.reset();
+}
+
+double MissionComponent::now() const { return node_->clock().nowSeconds(); }
+
+std::string MissionComponent::startMission(const std::string& requested_id, const MissionPlan& plan,
+                                           const std::string& source) {
+  const auto& position = executive_->vehiclePosition();
+  try {
+    for (const MissionQuery& query : plan.queries) checkQuery(query, source);
+    checkAgainstVehicle(plan.queries, map_->sequence() > 0 ? &map_->tree() : nullptr,
+                        position ? position->z() : 0.0, options_.limits, source);
+  } catch (const MissionError& error) {
+    throw interfaces::ServiceError(msg::REPLY_CODE_INVALID_ARGUMENT, error.what());
+  }
+  const std::string mission_id =
+      requested_id.empty() ? plan.name + "-" + std::to_string(++missions_started_) : requested_id;
+  std::string why;
+  if (!executive_->start(mission_id, plan.queries, now(), &why)) {
+    throw interfaces::ServiceError(msg::REPLY_CODE_REJECTED, why);
+  }
+  if (!options_.log_dir.empty()) {
+    try {
+      log_ = std::make_unique<MissionLog>(options_.log_dir, plan);
+    } catch (const std::exception& error) {
+      AUV_ERROR(node_->logger(), "mission log disabled: " << error.what());
+      log_.reset();
+    }
+  }
+  AUV_INFO(node_->logger(),
+           "mission '" << mission_id << "' started: " << plan.queries.size() << " queries");
+  flush("start", source);
+  return mission_id;
+}
+
+void MissionComponent::onStart(const msg::StartMissionRequest& request,
+                               msg::StartMissionReply& reply) {
+  MissionPlan plan;
+  if (request.queries().empty()) {
+    if (!configured_plan_) {
+      throw interfaces::ServiceError(msg::REPLY_CODE_INVALID_ARGUMENT,
+                                     "no queries given and no mission_file configured");
+    }
+    plan = *configured_plan_;
+  } else {
+    plan.name = request.mission_id().empty() ? "mission" : request.mission_id();
+    for (std::size_t i = 0; i < request.queries().size(); ++i) {
+      plan.queries.push_back(fromPlannerQuery(request.queries()[i], i));
+    }
+  }
+  reply.mission_id(startMission(request.mission_id(), plan, "mission/start"));
+}
+
+void MissionComponent::onAbort(const msg::TriggerRequest& request, msg::TriggerReply& reply) {
+  const std::string reason =
+      "aborted by request" + (request.command().empty() ? "" : " (" + request.command() + ")");
+  if (!executive_->abort(reason, now())) {
+    throw interfaces::ServiceError(msg::REPLY_CODE_REJECTED, "no mission is running");
+  }
+  flush("abort", reason);
+  reply.message("mission '" + executive_->status().mission_id() + "' aborted; holding depth");
+}
+
+void MissionComponent::onOdometry(const msg::Odometry& odometry) {
+  const auto& pose = odometry.pose().pose();
+  const Eigen::Vector3d position(pose.position().x(), pose.position().y(), pose.position().z());
+  if (!position.allFinite()) return;  // a broken estimate is no navigation: staleness decides
+  executive_->onOdometry(position, yawOf(pose.orientation()), now());
+  flush("odometry");
+}
+
+void MissionComponent::tick() {
+  if (!node_->clock().valid()) return;  // simulation time has not started
+  if (options_.autostart && configured_plan_ && missions_started_ == 0) {
+    try {
+      startMission("", *configured_plan_, options_.mission_file);
+    } catch (const std::exception& error) {
+      AUV_ERROR(node_->logger(),
+                "mission " << options_.mission_file << " refused: " << error.what());
+      ++missions_started_;  // refused once, not retried every tick
+    }
+  }
+  executive_->setPlannerPresent(query_pub_->matchedSubscriptions() > 0);
+  executive_->tick(now());
+  flush("tick");
+}
+
+void MissionComponent::flush(const std::string& event, const std::string& detail) {
+  MissionExecutive::Outbox out = executive_->takeOutbox();
+  for (auto& query : out.queries) {
+    query.header().stamp(interfaces::toMsgTime(node_->clock().nowNs()));
+    query_pub_->publish(query);
+  }
+  for (auto& request : out.requests) {
+    request.header().stamp(interfaces::toMsgTime(node_->clock().nowNs()));
+    request_pub_->publish(request);
+  }
+  for (auto& command : out.commands) {
+    command.header().stamp(interfaces::toMsgTime(node_->clock().nowNs()));
+    command_pub_->publish(command);
+  }
+  if (!out.status_changed) return;
+  const msg::MissionStatus& status = executive_->status();
+  if (status.state() != logged_state_) {
+    AUV_INFO(node_->logger(), toString(status.state()) << ": " << status.message());
+    logged_state_ = status.state();
+  }
+  if (log_) {
+    const Eigen::Vector3d position =
+        executive_->vehiclePosition().value_or(Eigen::Vector3d::Constant(std::nan("")));
+    log_->event(now(), std::string(toString(status.state())) + "/" + event, status, position,
+                status.message() + (detail.empty() ? "" : " | " + detail));
+    if (!executive_->running() && status.state() != msg::MISSION_STATE_IDLE) {
+      log_->finish(status, map_->sequence() > 0 ? &map_->tree() : nullptr);
+      log_.reset();
+    }
+  }
+  publishStatus();
+}
+
+void MissionComponent::publishStatus() {
+  msg::MissionStatus status = executive_->status();
+  status.header().stamp(interfaces::toMsgTime(node_->clock().nowNs()));
+  if (status.mission_id().empty()) status.mission_id("none");
+  status_pub_->publish(status);
+}
+
+}  // namespace auv::mission
+
+AUV_REGISTER_COMPONENT(auv::mission::MissionComponent, "mission",
+                       "mission handler: queries -> planner, waypoints -> controller")

@@ -1,0 +1,56 @@
+#include "auv/mission/mission_check.h"
+
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+namespace auv::mission {
+
+double distanceToOccupied(const octomap::OcTree& map, const Eigen::Vector3d& point, double radius) {
+  double best = std::numeric_limits<double>::infinity();
+  const octomap::point3d lo(point.x() - radius, point.y() - radius, point.z() - radius);
+  const octomap::point3d hi(point.x() + radius, point.y() + radius, point.z() + radius);
+  for (auto it = map.begin_leafs_bbx(lo, hi), end = map.end_leafs_bbx(); it != end; ++it) {
+    if (!map.isNodeOccupied(*it)) continue;
+    const octomap::point3d c = it.getCoordinate();
+    // Distance to the cell's box, not its centre: a goal inside a coarse leaf is at 0.
+    const double half = it.getSize() / 2;
+    const Eigen::Vector3d centre(c.x(), c.y(), c.z());
+    const Eigen::Vector3d outside =
+        ((point - centre).cwiseAbs() - Eigen::Vector3d::Constant(half)).cwiseMax(0.0);
+    best = std::min(best, outside.norm());
+  }
+  return best;
+}
+
+void checkAgainstVehicle(const std::vector<MissionQuery>& queries, const octomap::OcTree* map,
+                         double vehicle_depth, const MissionLimits& limits,
+                         const std::string& source) {
+  for (const MissionQuery& q : queries) {
+    Eigen::Vector3d goal = q.goal;
+    if (q.fixed_depth) goal.z() = q.depth ? *q.depth : vehicle_depth;
+    const std::string context = source + ": query '" + q.name + "' goal";
+    std::ostringstream where;
+    where.precision(4);
+    where << " (" << goal.x() << ", " << goal.y() << ", " << goal.z() << ")";
+    if (goal.z() > limits.max_depth) {
+      std::ostringstream why;
+      why << context << where.str() << " is deeper than the vehicle's max_depth "
+          << limits.max_depth << " m: unreachable depth";
+      throw MissionError(why.str());
+    }
+    if (map == nullptr) continue;
+    const double distance = distanceToOccupied(*map, goal, limits.goal_clearance);
+    if (distance < limits.goal_clearance) {
+      std::ostringstream why;
+      why.precision(3);
+      why << context << where.str()
+          << (distance == 0.0 ? " is inside a known obstacle" : " is too close to a known obstacle")
+          << " (" << distance << " m from occupied space; the planner keeps "
+          << limits.goal_clearance << " m)";
+      throw MissionError(why.str());
+    }
+  }
+}
+
+}  // namespace auv::mission

@@ -1,0 +1,383 @@
+#include "auv/mission/mission_executive.h"
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace auv::mission {
+namespace {
+
+std::string formatSeconds(double seconds) {
+  std::ostringstream out;
+  out.precision(2);
+  out << std::fixed << seconds << " s";
+  return out.str();
+}
+
+Eigen::Vector3d toVector(const msg::Point& p) { return {p.x(), p.y(), p.z()}; }
+
+msg::Point toPoint(const Eigen::Vector3d& v) {
+  msg::Point p;
+  p.x(v.x());
+  p.y(v.y());
+  p.z(v.z());
+  return p;
+}
+
+}  // namespace
+
+const char* toString(msg::MissionState state) {
+  switch (state) {
+    case msg::MISSION_STATE_IDLE:
+      return "IDLE";
+    case msg::MISSION_STATE_CHECKING_READINESS:
+      return "CHECKING_READINESS";
+    case msg::MISSION_STATE_WAITING_FOR_WAYPOINT:
+      return "WAITING_FOR_WAYPOINT";
+    case msg::MISSION_STATE_EXECUTING:
+      return "EXECUTING";
+    case msg::MISSION_STATE_SUCCEEDED:
+      return "SUCCEEDED";
+    case msg::MISSION_STATE_FAILED:
+      return "FAILED";
+    case msg::MISSION_STATE_ABORTED:
+      return "ABORTED";
+    default:
+      return "UNKNOWN";
+  }
+}
+
+void ExecutiveOptions::check() const {
+  auto positive = [](double value, const char* name) {
+    if (!(value > 0.0) || !std::isfinite(value)) {
+      throw std::invalid_argument(std::string(name) + " must be > 0");
+    }
+  };
+  positive(odometry_timeout, "odometry_timeout");
+  positive(controller_timeout, "controller_timeout");
+  positive(readiness_timeout, "readiness_timeout");
+  positive(no_solution_timeout, "no_solution_timeout");
+  positive(request_period, "request_period");
+  positive(waypoint_timeout_factor, "waypoint_timeout_factor");
+  if (!(request_distance >= 0.0)) throw std::invalid_argument("request_distance must be >= 0");
+  if (!(waypoint_timeout_margin >= 0.0)) {
+    throw std::invalid_argument("waypoint_timeout_margin must be >= 0");
+  }
+}
+
+MissionExecutive::MissionExecutive(const ExecutiveOptions& options) : options_(options) {
+  options_.check();
+  status_.state(msg::MISSION_STATE_IDLE);
+  status_.current_query_index(-1);
+  status_.message("no mission");
+}
+
+bool MissionExecutive::running() const {
+  const auto state = status_.state();
+  return state == msg::MISSION_STATE_CHECKING_READINESS ||
+         state == msg::MISSION_STATE_WAITING_FOR_WAYPOINT || state == msg::MISSION_STATE_EXECUTING;
+}
+
+void MissionExecutive::setState(msg::MissionState state, const std::string& message) {
+  status_.state(state);
+  status_.message(message);
+  outbox_.status_changed = true;
+}
+
+MissionExecutive::Outbox MissionExecutive::takeOutbox() {
+  Outbox out;
+  std::swap(out, outbox_);
+  return out;
+}
+
+bool MissionExecutive::start(const std::string& mission_id,
+                             const std::vector<MissionQuery>& queries, double now,
+                             std::string* why) {
+  if (running()) {
+    *why = "mission '" + status_.mission_id() + "' is " + toString(status_.state());
+    return false;
+  }
+  if (queries.empty()) {
+    *why = "the mission has no queries";
+    return false;
+  }
+  queries_ = queries;
+  msg::MissionStatus fresh;
+  fresh.mission_id(mission_id);
+  fresh.start_time().sec(static_cast<int32_t>(std::floor(now)));
+  fresh.start_time().nanosec(static_cast<uint32_t>((now - std::floor(now)) * 1e9));
+  fresh.current_query_index(0);
+  fresh.query_count(static_cast<uint32_t>(queries.size()));
+  status_ = fresh;
+  current_.reset();
+  next_.reset();
+  readiness_since_ = now;
+  setState(msg::MISSION_STATE_CHECKING_READINESS, "checking readiness");
+  tick(now);
+  return true;
+}
+
+std::string MissionExecutive::notReadyReason(double now) const {
+  if (!position_) return "no navigation (nav/odometry) received";
+  if (now - odometry_time_ > options_.odometry_timeout) {
+    return "navigation stale: last nav/odometry " + formatSeconds(now - odometry_time_) + " ago";
+  }
+  if (!controller_ || now - controller_time_ > options_.controller_timeout) {
+    return "no controller status (control/status) within " +
+           formatSeconds(options_.controller_timeout);
+  }
+  if (controller_->safety_maneuver()) {
+    return "controller in a safety manoeuvre: " + controller_->safety_text();
+  }
+  if (!planner_present_) return "no planner subscribed to mission/query";
+  return "";
+}
+
+void MissionExecutive::tick(double now) {
+  const auto state = status_.state();
+  if (state == msg::MISSION_STATE_CHECKING_READINESS) {
+    const std::string reason = notReadyReason(now);
+    if (reason.empty()) {
+      startQuery(now);
+    } else if (now - readiness_since_ > options_.readiness_timeout) {
+      setState(msg::MISSION_STATE_FAILED,
+               "not ready after " + formatSeconds(options_.readiness_timeout) + ": " + reason);
+    } else if (status_.message() != "not ready: " + reason) {
+      setState(state, "not ready: " + reason);
+    }
+    return;
+  }
+  if (state != msg::MISSION_STATE_WAITING_FOR_WAYPOINT && state != msg::MISSION_STATE_EXECUTING) {
+    return;
+  }
+  if (now - odometry_time_ > options_.odometry_timeout) {
+    abortToHold("navigation stale: last nav/odometry " + formatSeconds(now - odometry_time_) +
+                " ago (odometry_timeout " + formatSeconds(options_.odometry_timeout) + ")");
+    return;
+  }
+  if (state == msg::MISSION_STATE_WAITING_FOR_WAYPOINT) {
+    if (now - waiting_since_ > options_.no_solution_timeout) {
+      abortToHold("no waypoint from the planner for " + formatSeconds(now - waiting_since_) +
+                  " (no_solution_timeout)");
+      return;
+    }
+    if (now - last_request_time_ >= options_.request_period) {
+      requestWaypoint(last_request_reached_id_, now);
+    }
+  }
+}
+
+void MissionExecutive::startQuery(double now) {
+  const std::size_t index = static_cast<std::size_t>(status_.current_query_index());
+  const MissionQuery& q = queries_[index];
+  msg::PlannerQuery query = toPlannerQuery(q);
+  query.query_id(next_query_id_++);
+  query.start().position(toPoint(*position_));
+  query.start().orientation().w(std::cos(yaw_ / 2));
+  query.start().orientation().z(std::sin(yaw_ / 2));
+  if (q.fixed_depth && !q.depth) query.depth(position_->z());  // the vehicle's depth
+  goal_ = q.goal;
+  if (query.fixed_depth()) goal_.z() = query.depth();
+  goal_tolerance_ = q.goal_tolerance;
+  outbox_.queries.push_back(query);
+  status_.current_query_id(query.query_id());
+  status_.current_waypoint_id(0);
+  current_.reset();
+  next_.reset();
+  next_requested_ = false;
+  waiting_since_ = now;
+  setState(msg::MISSION_STATE_WAITING_FOR_WAYPOINT,
+           "query " + std::to_string(index + 1) + "/" + std::to_string(queries_.size()) + " '" +
+               q.name + "': waiting for the first waypoint");
+  requestWaypoint(0, now);
+}
+
+void MissionExecutive::requestWaypoint(uint64_t reached_waypoint_id, double now) {
+  msg::WaypointRequest request;
+  request.query_id(status_.current_query_id());
+  request.reached_waypoint_id(reached_waypoint_id);
+  outbox_.requests.push_back(request);
+  last_request_time_ = now;
+  last_request_reached_id_ = reached_waypoint_id;
+}
+
+void MissionExecutive::onOdometry(const Eigen::Vector3d& position, double yaw, double now) {
+  position_ = position;
+  yaw_ = yaw;
+  odometry_time_ = now;
+  if (status_.state() != msg::MISSION_STATE_EXECUTING || !current_) return;
+  const double distance = (position - toVector(current_->position())).norm();
+  if (distance <= current_->tolerance()) {
+    waypointReached(now);
+  } else if (!next_requested_ && !current_->is_final() && distance <= options_.request_distance) {
+    next_requested_ = true;  // ask early so the next waypoint is there on arrival
+    requestWaypoint(current_->waypoint_id(), now);
+  }
+}
+
+void MissionExecutive::onControllerStatus(const msg::ControllerStatus& status, double now) {
+  controller_ = status;
+  controller_time_ = now;
+  if (!running()) return;
+  if (status.safety_maneuver() && status_.state() != msg::MISSION_STATE_CHECKING_READINESS) {
+    setState(msg::MISSION_STATE_ABORTED,
+             "controller safety manoeuvre: " + status.safety_text() +
+                 " (the controller keeps the vehicle safe; restart the mission when clear)");
+    return;
+  }
+  if (status_.state() == msg::MISSION_STATE_EXECUTING && status.reached() &&
+      status.active_command_id() == command_id_ && command_id_ != 0) {
+    waypointReached(now);
+  }
+}
+
+void MissionExecutive::onWaypoint(const msg::Waypoint& waypoint, double now) {
+  if (!running() || waypoint.query_id() != status_.current_query_id()) return;
+  if ((current_ && waypoint.waypoint_id() == current_->waypoint_id()) ||
+      (next_ && waypoint.waypoint_id() == next_->waypoint_id())) {
+    return;  // a repeat
+  }
+  status_.waypoints_received(status_.waypoints_received() + 1);
+  if (status_.state() == msg::MISSION_STATE_WAITING_FOR_WAYPOINT) {
+    command(waypoint);
+    setState(msg::MISSION_STATE_EXECUTING,
+             "query " + std::to_string(status_.current_query_index() + 1) + "/" +
+                 std::to_string(queries_.size()) + ": waypoint " +
+                 std::to_string(waypoint.waypoint_id()));
+    (void)now;
+  } else if (status_.state() == msg::MISSION_STATE_EXECUTING) {
+    next_ = waypoint;  // commanded when the current one is reached
+    outbox_.status_changed = true;
+  }
+}
+
+void MissionExecutive::command(const msg::Waypoint& waypoint) {
+  current_ = waypoint;
+  next_requested_ = false;
+  command_id_ = next_command_id_++;
+  status_.current_waypoint_id(waypoint.waypoint_id());
+  msg::ControllerCommand command;
+  command.header().frame_id("world");
+  command.command_id(command_id_);
+  command.mode(msg::CONTROL_MODE_WAYPOINT);
+  command.position(waypoint.position());
+  command.heading(waypoint.heading());
+  command.depth(waypoint.position().z());
+  command.surge_speed(waypoint.speed());
+  command.tolerance(waypoint.tolerance());
+  const double distance = position_ ? (toVector(waypoint.position()) - *position_).norm() : 0.0;
+  command.timeout(options_.waypoint_timeout_factor * distance / std::max(waypoint.speed(), 0.01) +
+                  options_.waypoint_timeout_margin);
+  outbox_.commands.push_back(command);
+}
+
+void MissionExecutive::waypointReached(double now) {
+  status_.waypoints_reached(status_.waypoints_reached() + 1);
+  const bool at_goal = position_ && (*position_ - goal_).norm() <= goal_tolerance_;
+  if (current_->is_final() || at_goal) {
+    finishQuery(true, now);
+    return;
+  }
+  const uint64_t reached = current_->waypoint_id();
+  if (next_) {
+    const msg::Waypoint next = *next_;
+    next_.reset();
+    command(next);
+    setState(msg::MISSION_STATE_EXECUTING, "query " +
+                                               std::to_string(status_.current_query_index() + 1) +
+                                               "/" + std::to_string(queries_.size()) +
+                                               ": waypoint " + std::to_string(next.waypoint_id()));
+    return;
+  }
+  current_.reset();
+  command_id_ = 0;
+  waiting_since_ = now;
+  setState(msg::MISSION_STATE_WAITING_FOR_WAYPOINT,
+           "waypoint " + std::to_string(reached) + " reached; waiting for the next");
+  // The controller keeps the reached waypoint; the early request may already be in flight.
+  if (!next_requested_) requestWaypoint(reached, now);
+  next_requested_ = false;
+}
+
+void MissionExecutive::finishQuery(bool succeeded, double now) {
+  if (succeeded) status_.queries_succeeded(status_.queries_succeeded() + 1);
+  current_.reset();
+  next_.reset();
+  command_id_ = 0;
+  const int32_t next_index = status_.current_query_index() + 1;
+  if (next_index >= static_cast<int32_t>(queries_.size())) {
+    status_.current_query_index(-1);
+    status_.current_query_id(0);
+    status_.current_waypoint_id(0);
+    hold(true);
+    setState(msg::MISSION_STATE_SUCCEEDED,
+             "all " + std::to_string(queries_.size()) + " queries reached their goals");
+    return;
+  }
+  status_.current_query_index(next_index);
+  startQuery(now);
+}
+
+void MissionExecutive::onCancel(const msg::WaypointCancel& cancel, double now) {
+  if (!running() || cancel.query_id() != status_.current_query_id()) return;
+  const uint64_t id = cancel.waypoint_id();
+  const bool ours = id == 0 || (current_ && id == current_->waypoint_id()) ||
+                    (next_ && id == next_->waypoint_id());
+  if (!ours) return;
+  status_.waypoints_cancelled(status_.waypoints_cancelled() + 1);
+  if (cancel.reason() == msg::CANCEL_REASON_NO_SOLUTION) {
+    abortToHold("planner found no solution: " + cancel.reason_text());
+    return;
+  }
+  if (cancel.reason() == msg::CANCEL_REASON_PLANNER_ERROR) {
+    hold(true);
+    status_.queries_failed(status_.queries_failed() + 1);
+    setState(msg::MISSION_STATE_FAILED, "planner refused the query: " + cancel.reason_text());
+    return;
+  }
+  // The way is blocked: stop where we are and wait for the planner's replan.
+  current_.reset();
+  next_.reset();
+  command_id_ = 0;
+  next_requested_ = false;
+  hold(true);
+  waiting_since_ = now;
+  setState(msg::MISSION_STATE_WAITING_FOR_WAYPOINT, "waypoint " + std::to_string(id) +
+                                                        " cancelled (" + cancel.reason_text() +
+                                                        "); waiting for the replan");
+  requestWaypoint(0, now);
+}
+
+bool MissionExecutive::abort(const std::string& reason, double now) {
+  (void)now;
+  if (!running()) return false;
+  abortToHold(reason);
+  return true;
+}
+
+void MissionExecutive::hold(bool keep_position) {
+  msg::ControllerCommand command;
+  command.header().frame_id("world");
+  command.command_id(next_command_id_++);
+  if (keep_position) {
+    command.mode(msg::CONTROL_MODE_HOLD);  // the controller holds where navigation says we are
+  } else {
+    // Stop and keep depth: a speed-0 setpoint on the current heading and depth needs no
+    // horizontal position, so it stays safe when navigation has gone stale.
+    command.mode(msg::CONTROL_MODE_SETPOINT);
+    command.heading(yaw_);
+    command.depth(position_ ? position_->z() : 0.0);
+    command.surge_speed(0.0);
+  }
+  outbox_.commands.push_back(command);
+}
+
+void MissionExecutive::abortToHold(const std::string& reason) {
+  hold(false);
+  current_.reset();
+  next_.reset();
+  command_id_ = 0;
+  setState(msg::MISSION_STATE_ABORTED, reason + "; holding depth");
+}
+
+}  // namespace auv::mission

@@ -1,0 +1,122 @@
+#pragma once
+// The mission handler's logic (PAPER.md 2.3), without DDS: a state machine fed with the
+// vehicle's navigation, the controller's status and the planner's waypoints and cancels, that
+// emits planner queries, waypoint requests and controller commands into an outbox. The
+// `mission` component wires it to topics; tests drive it directly with a clock of their own.
+//
+//   IDLE --start--> CHECKING_READINESS --ready--> WAITING_FOR_WAYPOINT <--cancel-- EXECUTING
+//                                                  --waypoint--> EXECUTING --goal--> next query
+//   any active state --stale navigation / no waypoint for too long / abort--> ABORTED (hold)
+//   a safety manoeuvre of the controller --> ABORTED (the controller keeps the vehicle safe)
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "auv/mission/mission_plan.h"
+#include "auv/msg/all.h"
+
+namespace auv::mission {
+
+struct ExecutiveOptions {
+  /// s, navigation older than this is stale: not ready, or abort to hold while running.
+  double odometry_timeout = 1.0;
+  /// s, a controller status older than this counts as no controller (not ready).
+  double controller_timeout = 5.0;
+  /// s, a started mission that is not ready within this long fails.
+  double readiness_timeout = 60.0;
+  /// s, waiting this long for a waypoint (the planner finds nothing) aborts to hold.
+  double no_solution_timeout = 60.0;
+  /// m, the next waypoint is requested when the vehicle is this close to the current one, so
+  /// it is ready on arrival (0: request on arrival only).
+  double request_distance = 1.5;
+  /// s, an unanswered waypoint request is repeated this often (a lost message, a restarted
+  /// planner).
+  double request_period = 2.0;
+  /// Controller command timeout = factor × distance / speed + waypoint_timeout_margin.
+  double waypoint_timeout_factor = 4.0;
+  double waypoint_timeout_margin = 30.0;  ///< s
+  /// Throws std::invalid_argument naming the field.
+  void check() const;
+};
+
+class MissionExecutive {
+ public:
+  /// What the component must send, in order.
+  struct Outbox {
+    std::vector<msg::PlannerQuery> queries;
+    std::vector<msg::WaypointRequest> requests;
+    std::vector<msg::ControllerCommand> commands;
+    bool status_changed = false;
+  };
+
+  explicit MissionExecutive(const ExecutiveOptions& options);
+
+  /// Starts `queries` as mission `mission_id` at time `now` (s). False, with the reason in
+  /// `why`, when a mission is already running.
+  bool start(const std::string& mission_id, const std::vector<MissionQuery>& queries, double now,
+             std::string* why);
+  /// Stops the running mission (ABORTED) and holds the vehicle. False when none is running.
+  bool abort(const std::string& reason, double now);
+
+  void onOdometry(const Eigen::Vector3d& position, double yaw, double now);
+  void onControllerStatus(const msg::ControllerStatus& status, double now);
+  void onWaypoint(const msg::Waypoint& waypoint, double now);
+  void onCancel(const msg::WaypointCancel& cancel, double now);
+  /// Whether a planner listens to the queries (checked for readiness).
+  void setPlannerPresent(bool present) { planner_present_ = present; }
+  /// Time-driven checks: readiness, stale navigation, waiting too long, repeated requests.
+  void tick(double now);
+
+  Outbox takeOutbox();
+  /// The status (stamp left to the caller).
+  const msg::MissionStatus& status() const { return status_; }
+  bool running() const;
+  /// Why the vehicle is not ready now (empty when it is).
+  std::string notReadyReason(double now) const;
+  const std::optional<Eigen::Vector3d>& vehiclePosition() const { return position_; }
+
+ private:
+  void setState(msg::MissionState state, const std::string& message);
+  void startQuery(double now);
+  void requestWaypoint(uint64_t reached_waypoint_id, double now);
+  void command(const msg::Waypoint& waypoint);
+  void waypointReached(double now);
+  void finishQuery(bool succeeded, double now);
+  /// HOLD at the current position, or (keep_position false) a speed-0 setpoint at the current
+  /// depth and heading.
+  void hold(bool keep_position);
+  void abortToHold(const std::string& reason);
+
+  ExecutiveOptions options_;
+  msg::MissionStatus status_;
+  Outbox outbox_;
+  std::vector<MissionQuery> queries_;
+  double readiness_since_ = 0.0;
+
+  std::optional<Eigen::Vector3d> position_;
+  double yaw_ = 0.0;
+  double odometry_time_ = -1e300;
+  std::optional<msg::ControllerStatus> controller_;
+  double controller_time_ = -1e300;
+  bool planner_present_ = false;
+
+  uint64_t next_query_id_ = 1;
+  uint64_t next_command_id_ = 1;
+  uint64_t command_id_ = 0;  // controller command following the current waypoint
+  std::optional<msg::Waypoint> current_;
+  std::optional<msg::Waypoint> next_;
+  Eigen::Vector3d goal_{0, 0, 0};
+  double goal_tolerance_ = 0.0;
+  bool next_requested_ = false;
+  double waiting_since_ = 0.0;
+  double last_request_time_ = 0.0;
+  uint64_t last_request_reached_id_ = 0;
+};
+
+const char* toString(msg::MissionState state);
+
+}  // namespace auv::mission

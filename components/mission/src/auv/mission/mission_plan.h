@@ -1,0 +1,61 @@
+#pragma once
+// A mission: start-to-goal queries run in order (PAPER.md 2.3), read from a YAML file
+// (format in components/mission/README.md) or received in a StartMissionRequest.
+
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "auv/msg/all.h"
+
+namespace auv::mission {
+
+/// A malformed or unacceptable mission; the message names the file/query and the field.
+class MissionError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// One query: everything a PlannerQuery carries except ids, stamps and the start (the vehicle's
+/// position when the query begins).
+struct MissionQuery {
+  std::string name;
+  Eigen::Vector3d goal{0, 0, 0};        ///< m NED
+  double goal_tolerance = 1.5;          ///< m, ε_goal
+  double time_budget = 0.0;             ///< s to the first waypoint; 0 = the planner's default
+  bool visibility_objective = true;     ///< false: path length only
+  double expected_distance = 1.0;       ///< m, d_e of Eq. (1)
+  double admissible_range = 1.0;        ///< m, Δd_a of Eq. (1)
+  Eigen::Vector3d bounds_min{0, 0, 0};  ///< m NED, sampling region
+  Eigen::Vector3d bounds_max{0, 0, 0};
+  bool fixed_depth = false;  ///< plan in the plane z = depth
+  /// m, depth of the plane; unset = the vehicle's depth when the query starts.
+  std::optional<double> depth;
+};
+
+struct MissionPlan {
+  std::string name;  ///< becomes the mission id prefix
+  std::vector<MissionQuery> queries;
+};
+
+/// Reads and checks a mission file. Throws MissionError naming the file and the field.
+MissionPlan loadMissionFile(const std::string& path);
+/// Parses mission YAML text; `source` names it in errors.
+MissionPlan parseMission(const std::string& yaml_text, const std::string& source);
+/// Writes `plan` as mission YAML (what loadMissionFile reads back).
+std::string toYaml(const MissionPlan& plan);
+
+/// Checks what can be checked without a map: finite values, ranges, goal inside the bounds,
+/// bounds non-empty. Throws MissionError naming `source`, the query and the field.
+void checkQuery(const MissionQuery& query, const std::string& source);
+
+/// The PlannerQuery for `query` (query_id, start and stamp left for the caller; depth 0 when
+/// the query has none).
+msg::PlannerQuery toPlannerQuery(const MissionQuery& query);
+/// Back from a PlannerQuery (name "query <i>").
+MissionQuery fromPlannerQuery(const msg::PlannerQuery& query, std::size_t index);
+
+}  // namespace auv::mission

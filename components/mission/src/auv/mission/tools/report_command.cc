@@ -1,0 +1,357 @@
+// `auv mission report <run-dir>`: the mission figure (top-down SVG: map, planner trees and
+// paths, true and estimated trajectories, waypoints, collisions) and summary.json, from the
+// simulator's ground truth and the mission handler's log (components/mission/README.md).
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <limits>
+#include <map>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <octomap/OcTree.h>
+#include <Eigen/Core>
+
+#include "auv/mission/tools/mission_cli.h"
+
+namespace auv::mission {
+namespace {
+namespace fs = std::filesystem;
+
+struct Sample {
+  double t;
+  Eigen::Vector3d p;
+};
+
+/// Rows of a CSV (header skipped) or whitespace table ('#' comments skipped) as strings.
+std::vector<std::vector<std::string>> readTable(const fs::path& path, char separator,
+                                                bool has_header) {
+  std::vector<std::vector<std::string>> rows;
+  std::ifstream in(path);
+  std::string line;
+  bool first = true;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    if (first && has_header) {
+      first = false;
+      continue;
+    }
+    first = false;
+    std::vector<std::string> fields;
+    std::stringstream stream(line);
+    std::string field;
+    if (separator == ' ') {
+      while (stream >> field) fields.push_back(field);
+    } else {
+      while (std::getline(stream, field, separator)) fields.push_back(field);
+    }
+    rows.push_back(fields);
+  }
+  return rows;
+}
+
+double number(const std::string& text) {
+  try {
+    return std::stod(text);
+  } catch (const std::exception&) {
+    return std::nan("");
+  }
+}
+
+std::vector<Sample> readTum(const fs::path& path) {
+  std::vector<Sample> samples;
+  for (const auto& row : readTable(path, ' ', false)) {
+    if (row.size() < 4) continue;
+    samples.push_back({number(row[0]), {number(row[1]), number(row[2]), number(row[3])}});
+  }
+  return samples;
+}
+
+double pathLength(const std::vector<Sample>& samples, double from, double to) {
+  double length = 0.0;
+  for (std::size_t i = 1; i < samples.size(); ++i) {
+    if (samples[i - 1].t < from || samples[i].t > to) continue;
+    length += (samples[i].p - samples[i - 1].p).norm();
+  }
+  return length;
+}
+
+const Sample* at(const std::vector<Sample>& samples, double t) {
+  auto it = std::lower_bound(samples.begin(), samples.end(), t,
+                             [](const Sample& s, double time) { return s.t < time; });
+  if (it == samples.end()) return samples.empty() ? nullptr : &samples.back();
+  return &*it;
+}
+
+std::string json(double value) {
+  if (!std::isfinite(value)) return "null";
+  std::ostringstream out;
+  out.precision(6);
+  out << value;
+  return out.str();
+}
+
+std::string quote(const std::string& text) {
+  std::string out = "\"";
+  for (char c : text) {
+    if (c == '"' || c == '\\') out += '\\';
+    out += c;
+  }
+  return out + "\"";
+}
+
+/// Top-down SVG: north up (x NED), east right (y NED).
+class Svg {
+ public:
+  Svg(const Eigen::Vector2d& min, const Eigen::Vector2d& max, double pixels_per_metre)
+      : min_(min), max_(max), scale_(pixels_per_metre) {
+    width_ = (max.y() - min.y()) * scale_;
+    height_ = (max.x() - min.x()) * scale_;
+    out_ << "<svg xmlns='http://www.w3.org/2000/svg' width='" << width_ << "' height='"
+         << height_ + 60 << "' font-family='sans-serif' font-size='12'>\n"
+         << "<rect width='100%' height='100%' fill='white'/>\n";
+  }
+  double x(const Eigen::Vector3d& p) const { return (p.y() - min_.y()) * scale_; }
+  double y(const Eigen::Vector3d& p) const { return (max_.x() - p.x()) * scale_; }
+  void polyline(const std::vector<Eigen::Vector3d>& points, const std::string& style) {
+    if (points.size() < 2) return;
+    out_ << "<polyline fill='none' " << style << " points='";
+    for (const auto& p : points) out_ << x(p) << "," << y(p) << " ";
+    out_ << "'/>\n";
+  }
+  void square(const Eigen::Vector3d& centre, double size, const std::string& fill) {
+    out_ << "<rect x='" << x(centre) - size * scale_ / 2 << "' y='" << y(centre) - size * scale_ / 2
+         << "' width='" << size * scale_ << "' height='" << size * scale_ << "' fill='" << fill
+         << "'/>\n";
+  }
+  void circle(const Eigen::Vector3d& c, double r, const std::string& style) {
+    out_ << "<circle cx='" << x(c) << "' cy='" << y(c) << "' r='" << r << "' " << style << "/>\n";
+  }
+  void text(double px, double py, const std::string& text, const std::string& colour) {
+    out_ << "<text x='" << px << "' y='" << py << "' fill='" << colour << "'>" << text
+         << "</text>\n";
+  }
+  double height() const { return height_; }
+  std::string finish() { return out_.str() + "</svg>\n"; }
+
+ private:
+  Eigen::Vector2d min_, max_;
+  double scale_, width_, height_;
+  std::ostringstream out_;
+};
+
+struct QueryRecord {
+  int index = -1;
+  double start_t = std::nan(""), end_t = std::nan("");
+  Eigen::Vector3d start = Eigen::Vector3d::Constant(std::nan(""));
+  Eigen::Vector3d end = Eigen::Vector3d::Constant(std::nan(""));
+  bool succeeded = false;
+};
+
+}  // namespace
+
+int reportMain(const std::vector<std::string>& args) {
+  if (args.empty() || args[0] == "--help") {
+    std::cerr << "usage: auv mission report <run-dir> [--out DIR]\n";
+    return args.empty() ? 2 : 0;
+  }
+  const fs::path run = args[0];
+  const fs::path log = run / "mission";
+  fs::path out_dir = log;
+  if (args.size() == 3 && args[1] == "--out") {
+    out_dir = args[2];
+  } else if (args.size() != 1) {
+    std::cerr << "auv mission report: usage: auv mission report <run-dir> [--out DIR]\n";
+    return 2;
+  }
+  for (const fs::path& needed : {log / "events.csv", run / "ground_truth" / "trajectory.tum"}) {
+    if (!fs::exists(needed)) {
+      std::cerr << "auv mission report: " << needed.string()
+                << " is missing (a run folder of `auv launch bringup/launch/vehicle_sim.yaml`?)\n";
+      return 1;
+    }
+  }
+  const auto truth = readTum(run / "ground_truth" / "trajectory.tum");
+  const auto estimate = readTum(run / "ground_truth" / "navigation.tum");
+
+  // Mission events: query windows, waypoints, final state.
+  std::map<std::string, QueryRecord> queries;  // by query id
+  std::vector<Eigen::Vector3d> waypoints;
+  std::string final_state = "UNKNOWN", final_message;
+  double mission_start = std::nan(""), mission_end = std::nan("");
+  for (const auto& row : readTable(log / "events.csv", ',', true)) {
+    if (row.size() < 9) continue;
+    const double t = number(row[0]);
+    const std::string state = row[1].substr(0, row[1].find('/'));
+    const Eigen::Vector3d position(number(row[5]), number(row[6]), number(row[7]));
+    if (std::isnan(mission_start)) mission_start = t;
+    mission_end = t;
+    final_state = state;
+    final_message = row[8];
+    const std::string query_id = row[3];
+    if (query_id != "0") {
+      QueryRecord& q = queries[query_id];
+      if (std::isnan(q.start_t)) {
+        q.start_t = t;
+        q.start = position;
+        q.index = std::stoi(row[2]);
+      }
+    }
+  }
+  for (const auto& row : readTable(log / "waypoints.csv", ',', true)) {
+    if (row.size() >= 6) waypoints.push_back({number(row[3]), number(row[4]), number(row[5])});
+  }
+  // A query ends where the next starts, or at the mission's end.
+  std::vector<QueryRecord*> ordered;
+  for (auto& [id, q] : queries) ordered.push_back(&q);
+  std::sort(ordered.begin(), ordered.end(),
+            [](const QueryRecord* a, const QueryRecord* b) { return a->start_t < b->start_t; });
+  for (std::size_t i = 0; i < ordered.size(); ++i) {
+    ordered[i]->end_t = i + 1 < ordered.size() ? ordered[i + 1]->start_t : mission_end;
+    ordered[i]->succeeded = i + 1 < ordered.size() || final_state == "SUCCEEDED";
+    if (const Sample* s = at(truth, ordered[i]->end_t)) ordered[i]->end = s->p;
+    if (const Sample* s = at(truth, ordered[i]->start_t)) ordered[i]->start = s->p;
+  }
+
+  std::vector<Eigen::Vector3d> collisions;
+  for (const auto& row : readTable(run / "ground_truth" / "collisions.csv", ',', true)) {
+    if (row.size() >= 10 && row[9] == "1") {
+      collisions.push_back({number(row[1]), number(row[2]), number(row[3])});
+    }
+  }
+  double min_clearance = std::numeric_limits<double>::infinity();
+  for (const auto& row : readTable(run / "ground_truth" / "clearance.csv", ',', true)) {
+    if (row.size() >= 2) {
+      const double t = number(row[0]);
+      if (t >= mission_start && t <= mission_end)
+        min_clearance = std::min(min_clearance, number(row[1]));
+    }
+  }
+  double max_nav_error = 0.0;
+  for (const Sample& s : estimate) {
+    if (s.t < mission_start || s.t > mission_end) continue;
+    if (const Sample* true_sample = at(truth, s.t)) {
+      max_nav_error = std::max(max_nav_error, (true_sample->p - s.p).head<2>().norm());
+    }
+  }
+
+  // Figure extent: trajectories and map.
+  Eigen::Vector2d lo = Eigen::Vector2d::Constant(1e9), hi = Eigen::Vector2d::Constant(-1e9);
+  auto grow = [&](const Eigen::Vector3d& p) {
+    if (!p.allFinite()) return;
+    lo = lo.cwiseMin(p.head<2>());
+    hi = hi.cwiseMax(p.head<2>());
+  };
+  for (const auto& s : truth) grow(s.p);
+  std::unique_ptr<octomap::OcTree> map;
+  std::set<std::pair<int, int>> occupied_columns;
+  const double column = 0.5;
+  if (fs::exists(log / "map.bt")) {
+    map = std::make_unique<octomap::OcTree>(0.1);
+    if (map->readBinary((log / "map.bt").string())) {
+      for (auto it = map->begin_leafs(); it != map->end_leafs(); ++it) {
+        if (!map->isNodeOccupied(*it)) continue;
+        occupied_columns.insert({static_cast<int>(std::floor(it.getX() / column)),
+                                 static_cast<int>(std::floor(it.getY() / column))});
+      }
+    }
+  }
+  for (const auto& [i, j] : occupied_columns) grow({(i + 0.5) * column, (j + 0.5) * column, 0});
+  if (truth.empty()) {
+    std::cerr << "auv mission report: " << (run / "ground_truth" / "trajectory.tum").string()
+              << " has no poses\n";
+    return 1;
+  }
+  lo -= Eigen::Vector2d::Constant(2.0);
+  hi += Eigen::Vector2d::Constant(2.0);
+  const double scale = std::clamp(900.0 / std::max(hi.x() - lo.x(), hi.y() - lo.y()), 4.0, 40.0);
+  Svg svg(lo, hi, scale);
+  for (const auto& [i, j] : occupied_columns) {
+    svg.square({(i + 0.5) * column, (j + 0.5) * column, 0}, column, "#9a8c7a");
+  }
+  // Planner trees (last of each query), then paths, then trajectories on top.
+  for (const auto& entry : fs::directory_iterator(log)) {
+    if (entry.path().filename().string().rfind("tree_", 0) != 0) continue;
+    const auto rows = readTable(entry.path(), ',', true);
+    std::vector<Eigen::Vector3d> nodes;
+    for (const auto& row : rows) nodes.push_back({number(row[2]), number(row[3]), number(row[4])});
+    for (const auto& row : rows) {
+      const int parent = static_cast<int>(number(row[1]));
+      const int index = static_cast<int>(number(row[0]));
+      if (parent >= 0 && parent < static_cast<int>(nodes.size())) {
+        svg.polyline({nodes[parent], nodes[index]}, "stroke='#b0c4de' stroke-width='0.6'");
+      }
+    }
+  }
+  std::map<std::string, std::vector<Eigen::Vector3d>> paths;  // the last path of each query
+  std::map<std::string, std::string> last_seq;
+  for (const auto& row : readTable(log / "paths.csv", ',', true)) {
+    if (row.size() < 7) continue;
+    if (last_seq[row[1]] != row[2]) {
+      paths[row[1]].clear();
+      last_seq[row[1]] = row[2];
+    }
+    paths[row[1]].push_back({number(row[4]), number(row[5]), number(row[6])});
+  }
+  for (const auto& [id, path] : paths) {
+    svg.polyline(path, "stroke='#2e8b57' stroke-width='1.5' stroke-dasharray='4,3'");
+  }
+  std::vector<Eigen::Vector3d> true_line, estimate_line;
+  for (const auto& s : truth) true_line.push_back(s.p);
+  for (const auto& s : estimate) estimate_line.push_back(s.p);
+  svg.polyline(estimate_line, "stroke='#ff8c00' stroke-width='1.5'");
+  svg.polyline(true_line, "stroke='#1f4e9c' stroke-width='2'");
+  for (const auto& w : waypoints) svg.circle(w, 2.0, "fill='#2e8b57'");
+  for (const auto& c : collisions) svg.circle(c, 6.0, "fill='none' stroke='red' stroke-width='2'");
+  for (const QueryRecord* q : ordered) {
+    svg.circle(q->start, 4.0, "fill='black'");
+    svg.text(svg.x(q->start) + 5, svg.y(q->start) - 5, "q" + std::to_string(q->index + 1), "black");
+  }
+  const double legend = svg.height() + 18;
+  svg.text(10, legend, "true trajectory", "#1f4e9c");
+  svg.text(120, legend, "navigation estimate", "#ff8c00");
+  svg.text(260, legend, "last planner paths", "#2e8b57");
+  svg.text(390, legend, "planner trees", "#7a9cc6");
+  svg.text(490, legend, "mapped occupied (top-down)", "#9a8c7a");
+  svg.text(10, legend + 18,
+           final_state + " - collisions: " + std::to_string(collisions.size()) +
+               " - north up, east right, " + json(1.0 / scale * 100) + " m per 100 px",
+           collisions.empty() ? "black" : "red");
+
+  std::error_code error;
+  fs::create_directories(out_dir, error);
+  std::ofstream(out_dir / "report.svg") << svg.finish();
+
+  std::ostringstream summary;
+  summary << "{\n  \"run\": " << quote(fs::absolute(run).string()) << ",\n"
+          << "  \"state\": " << quote(final_state) << ",\n"
+          << "  \"message\": " << quote(final_message) << ",\n"
+          << "  \"duration_s\": " << json(mission_end - mission_start) << ",\n"
+          << "  \"collisions\": " << collisions.size() << ",\n"
+          << "  \"min_true_clearance_m\": " << json(min_clearance) << ",\n"
+          << "  \"max_navigation_error_m\": " << json(max_nav_error) << ",\n"
+          << "  \"executed_length_m\": " << json(pathLength(truth, mission_start, mission_end))
+          << ",\n  \"queries\": [";
+  for (std::size_t i = 0; i < ordered.size(); ++i) {
+    const QueryRecord& q = *ordered[i];
+    summary << (i ? "," : "") << "\n    {\"index\": " << q.index
+            << ", \"succeeded\": " << (q.succeeded ? "true" : "false")
+            << ", \"start_t\": " << json(q.start_t) << ", \"end_t\": " << json(q.end_t)
+            << ", \"start\": [" << json(q.start.x()) << ", " << json(q.start.y()) << ", "
+            << json(q.start.z()) << "], \"end\": [" << json(q.end.x()) << ", " << json(q.end.y())
+            << ", " << json(q.end.z())
+            << "], \"executed_length_m\": " << json(pathLength(truth, q.start_t, q.end_t)) << "}";
+  }
+  summary << "\n  ]\n}\n";
+  std::ofstream(out_dir / "summary.json") << summary.str();
+  std::cout << "figure: " << (out_dir / "report.svg").string()
+            << "\nsummary: " << (out_dir / "summary.json").string() << "\n"
+            << summary.str();
+  return 0;
+}
+
+}  // namespace auv::mission
