@@ -182,6 +182,46 @@ processes:
       parseLaunchYaml(kYaml, "sim.yaml", "/", {{"world", "breakwater"}});
   EXPECT_EQ(given.processes[0].components[0].parameters["run_dir"].as<std::string>(),
             "runs/breakwater-1");
+
+  // An argument's value may use the arguments declared before it.
+  constexpr const char* kChained = R"yaml(
+arguments:
+  world: canyon
+  run_dir: {default: "runs/$(arg world)"}
+processes:
+  - {name: sim, component: simulator, parameters: {run_dir: $(arg run_dir)}}
+)yaml";
+  const LaunchDescription chained =
+      parseLaunchYaml(kChained, "sim.yaml", "/", {{"world", "breakwater"}});
+  EXPECT_EQ(chained.processes[0].components[0].parameters["run_dir"].as<std::string>(),
+            "runs/breakwater");
+  const LaunchDescription overridden =
+      parseLaunchYaml(kChained, "sim.yaml", "/", {{"run_dir", "elsewhere"}});
+  EXPECT_EQ(overridden.processes[0].components[0].parameters["run_dir"].as<std::string>(),
+            "elsewhere");
+}
+
+TEST(LaunchDescriptionTest, EnabledLeavesProcessesOutAndRejectsNonBooleans) {
+  constexpr const char* kYaml = R"(
+arguments:
+  auto_run: {default: "false"}
+processes:
+  - {name: sim, command: [sleep, "1"]}
+  - {name: runner, enabled: $(arg auto_run), command: [echo, run], required: true}
+)";
+  const LaunchDescription off = parseLaunchYaml(kYaml, "v.yaml", "/");
+  ASSERT_EQ(off.processes.size(), 1u);
+  EXPECT_EQ(off.processes[0].name, "sim");
+  const LaunchDescription on = parseLaunchYaml(kYaml, "v.yaml", "/", {{"auto_run", "true"}});
+  ASSERT_EQ(on.processes.size(), 2u);
+  EXPECT_EQ(on.processes[1].name, "runner");
+  EXPECT_TRUE(on.processes[1].required);
+  try {
+    parseLaunchYaml(kYaml, "v.yaml", "/", {{"auto_run", "maybe"}});
+    ADD_FAILURE() << "accepted enabled: maybe";
+  } catch (const LaunchFileError& e) {
+    EXPECT_EQ(e.field(), "processes[1].enabled");
+  }
 }
 
 TEST(LaunchDescriptionTest, ArgumentErrorsNameTheArgument) {

@@ -24,35 +24,44 @@ std::string closest(const std::string& name, const std::vector<LaunchArgument>& 
   return best;
 }
 
+/// `text` with every $(arg name) replaced by its value; errors name `path`.
+std::string substituteText(const std::string& text,
+                           const std::map<std::string, std::string>& values,
+                           const std::vector<LaunchArgument>& declared, const std::string& source,
+                           const std::string& path) {
+  static const std::regex pattern(R"(\$\(arg\s+([A-Za-z_][A-Za-z0-9_]*)\s*\))");
+  if (text.find("$(") == std::string::npos) return text;
+  std::string out;
+  auto begin = std::sregex_iterator(text.begin(), text.end(), pattern);
+  size_t last = 0;
+  for (auto it = begin; it != std::sregex_iterator(); ++it) {
+    const std::string name = (*it)[1];
+    const auto value = values.find(name);
+    if (value == values.end()) {
+      const std::string hint = closest(name, declared);
+      throw LaunchFileError(source, path,
+                            "$(arg " + name + ") refers to an undeclared argument" +
+                                (hint.empty() ? "" : " (did you mean '" + hint + "'?)") +
+                                "; declared: " + declaredList(declared));
+    }
+    out += text.substr(last, it->position() - last) + value->second;
+    last = it->position() + it->length();
+  }
+  out += text.substr(last);
+  if (out.find("$(") != std::string::npos) {
+    throw LaunchFileError(source, path,
+                          "malformed substitution in '" + text + "' (the only one is $(arg name))");
+  }
+  return out;
+}
+
 void substitute(YAML::Node node, const std::map<std::string, std::string>& values,
                 const std::vector<LaunchArgument>& declared, const std::string& source,
                 const std::string& path) {
   if (node.IsScalar()) {
-    static const std::regex pattern(R"(\$\(arg\s+([A-Za-z_][A-Za-z0-9_]*)\s*\))");
     const std::string text = node.Scalar();
     if (text.find("$(") == std::string::npos) return;
-    std::string out;
-    auto begin = std::sregex_iterator(text.begin(), text.end(), pattern);
-    size_t last = 0;
-    for (auto it = begin; it != std::sregex_iterator(); ++it) {
-      const std::string name = (*it)[1];
-      const auto value = values.find(name);
-      if (value == values.end()) {
-        const std::string hint = closest(name, declared);
-        throw LaunchFileError(source, path,
-                              "$(arg " + name + ") refers to an undeclared argument" +
-                                  (hint.empty() ? "" : " (did you mean '" + hint + "'?)") +
-                                  "; declared: " + declaredList(declared));
-      }
-      out += text.substr(last, it->position() - last) + value->second;
-      last = it->position() + it->length();
-    }
-    out += text.substr(last);
-    if (out.find("$(") != std::string::npos) {
-      throw LaunchFileError(
-          source, path, "malformed substitution in '" + text + "' (the only one is $(arg name))");
-    }
-    node = out;
+    node = substituteText(text, values, declared, source, path);
     return;
   }
   if (node.IsSequence()) {
@@ -122,12 +131,16 @@ std::vector<LaunchArgument> applyLaunchArguments(YAML::Node& root,
     }
     values[name] = value;
   }
+  // A value may use the arguments declared before it: run_dir: "runs/$(arg world)".
+  std::map<std::string, std::string> resolved;
   for (LaunchArgument& a : declared) {
     if (!values.count(a.name)) {
       throw LaunchFileError(source, "arguments." + a.name,
                             "required argument not given (add " + a.name + ":=<value>)");
     }
-    a.default_value = values[a.name];
+    a.default_value =
+        substituteText(values[a.name], resolved, declared, source, "arguments." + a.name);
+    resolved[a.name] = values[a.name] = a.default_value;
   }
   substitute(root, values, declared, source, "");
   return declared;

@@ -20,7 +20,8 @@ namespace fs = std::filesystem;
 constexpr const char* kTopLevelKeys[] = {"environment", "shutdown_timeout", "processes"};
 constexpr const char* kProcessKeys[] = {"name",    "component",    "components",    "command",
                                         "vendor",  "parameters",   "params_file",   "environment",
-                                        "restart", "max_restarts", "restart_delay", "required"};
+                                        "restart", "max_restarts", "restart_delay", "required",
+                                        "enabled"};
 constexpr const char* kComponentEntryKeys[] = {"component", "name", "parameters"};
 
 // Frequent spellings from other launch systems, suggested when the key is unknown.
@@ -45,10 +46,11 @@ const std::map<std::string, std::string>& keyAliases() {
       {"timeout", "shutdown_timeout"},
       {"sigterm_timeout", "shutdown_timeout"},
       {"on_exit", "required"},
+      {"condition", "enabled"},
+      {"if", "enabled"},
   };
   return aliases;
 }
-
 
 // Closest candidate to `word`, or "" when nothing is close enough to be a plausible typo.
 std::string suggest(const std::string& word, const std::vector<std::string>& candidates) {
@@ -144,6 +146,11 @@ class Parser {
 
     std::map<std::string, size_t> first_use;
     for (size_t i = 0; i < processes.size(); ++i) {
+      // `enabled: false` (usually `enabled: $(arg x)`) leaves a process out of this launch.
+      if (processes[i].IsMap() && processes[i]["enabled"] &&
+          !parseBool(processes[i]["enabled"], join(processPath(i), "enabled"))) {
+        continue;
+      }
       ProcessDescription process = parseProcess(processes[i], processPath(i));
       const auto [it, inserted] = first_use.emplace(process.name, i);
       if (!inserted) {

@@ -29,6 +29,23 @@ TEST(MapValidity, LongMotionsDoNotStepOverAThinWall) {
             0.5 * testing::kResolution + 1e-9);
 }
 
+TEST(MapValidity, AStartInsideTheMarginMayOnlyBeLeftByMovingAway) {
+  testing::FlatWorld world;  // clearance 1 m
+  testing::addOccupiedBox(*world.tree, {10.0, -10.0, 0.0}, {10.5, 10.0, 10.0});
+  world.build();
+  const auto inside = world.state(9.5, 0.0);  // 0.75 m from the wall's cell centres
+  ASSERT_FALSE(world.si->isValid(inside.get()));
+  // Straight away from the wall, into valid space: allowed.
+  EXPECT_TRUE(world.si->checkMotion(inside.get(), world.state(6.0, 0.0).get()));
+  // Along the wall, never getting valid: refused; towards it: refused.
+  EXPECT_FALSE(world.si->checkMotion(inside.get(), world.state(9.5, 5.0).get()));
+  EXPECT_FALSE(world.si->checkMotion(inside.get(), world.state(9.75, 0.0).get()));
+  // Away, then back into the margin: the escape ends once valid, so refused.
+  const auto valid = world.state(7.0, 0.0);
+  ASSERT_TRUE(world.si->isValid(valid.get()));
+  EXPECT_FALSE(world.si->checkMotion(valid.get(), world.state(9.5, 1.0).get()));
+}
+
 TEST(MapValidity, FixedDepthKeepsSampledStatesAtThatDepth) {
   testing::FlatWorld world;
   world.build();

@@ -373,11 +373,15 @@ void MissionExecutive::hold(bool keep_position) {
 }
 
 void MissionExecutive::abortToHold(const std::string& reason) {
-  hold(false);
+  // Before readiness the mission has not commanded the vehicle, and may have no navigation to
+  // take a depth from (a setpoint at depth 0 would surface it): leave the controller alone.
+  const bool commanded = status_.state() != msg::MISSION_STATE_CHECKING_READINESS;
+  if (commanded) hold(false);
   current_.reset();
   next_.reset();
   command_id_ = 0;
-  setState(msg::MISSION_STATE_ABORTED, reason + "; holding depth");
+  setState(msg::MISSION_STATE_ABORTED,
+           reason + (commanded ? "; holding depth" : "; the vehicle was not commanded yet"));
 }
 
 }  // namespace auv::mission

@@ -59,7 +59,8 @@ class MissionExecutive {
   /// `why`, when a mission is already running.
   bool start(const std::string& mission_id, const std::vector<MissionQuery>& queries, double now,
              std::string* why);
-  /// Stops the running mission (ABORTED) and holds the vehicle. False when none is running.
+  /// Stops the running mission (ABORTED) and holds the vehicle (no command while still checking
+  /// readiness: the mission has not commanded it). False when none is running.
   bool abort(const std::string& reason, double now);
 
   void onOdometry(const Eigen::Vector3d& position, double yaw, double now);

@@ -61,7 +61,13 @@ bool MapMotionValidator::checkMotion(const ob::State* from, const ob::State* to)
 
 bool MapMotionValidator::checkMotion(const ob::State* from, const ob::State* to,
                                      std::pair<ob::State*, double>& last_valid) const {
-  // The start state is assumed valid (OMPL convention); the end state is always checked.
+  // The end state is always checked. A start state that is valid is trusted (OMPL convention).
+  // One that is not (the vehicle found itself too close to a wall just mapped) may only be left
+  // by an escape: clearance never decreasing until the motion is valid again, then valid to
+  // the end. Without it a vehicle inside the margin could never plan its way out.
+  const ob::StateValidityChecker& checker = *si_->getStateValidityChecker();
+  bool escaping = !si_->isValid(from);
+  double previous_clearance = escaping ? checker.clearance(from) : 0.0;
   const double length = si_->distance(from, to);
   const int segments = std::max(1, static_cast<int>(std::ceil(length / step_)));
   ob::State* probe = si_->allocState();
@@ -69,10 +75,16 @@ bool MapMotionValidator::checkMotion(const ob::State* from, const ob::State* to,
   int i = 1;
   for (; i <= segments; ++i) {
     si_->getStateSpace()->interpolate(from, to, static_cast<double>(i) / segments, probe);
-    if (!si_->isValid(probe)) {
+    if (si_->isValid(probe)) {
+      escaping = false;
+      continue;
+    }
+    const double clearance = escaping ? checker.clearance(probe) : 0.0;
+    if (!escaping || clearance < previous_clearance || i == segments) {
       valid = false;
       break;
     }
+    previous_clearance = clearance;
   }
   if (valid) {
     ++valid_;

@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <chrono>
 #include <ctime>
+#include <filesystem>
 #include <iostream>
 #include <map>
 #include <optional>
@@ -147,11 +148,24 @@ std::string noHandler(const interfaces::Node& node) {
 
 int startMain(const std::vector<std::string>& args) {
   try {
-    const Options options(args, {"--id", "--timeout"}, {"--wait"});
+    const Options options(args, {"--id", "--timeout", "--report"}, {"--wait"});
     if (options.positional.size() != 1) {
-      throw UsageError("usage: auv mission start <mission.yaml> [--id ID] [--wait] [--timeout S]");
+      throw UsageError(
+          "usage: auv mission start <mission.yaml> [--id ID] [--wait] [--report RUN_DIR] "
+          "[--timeout S]");
     }
-    const MissionPlan plan = loadMissionFile(options.positional[0]);  // names file and field
+    const double timeout = options.seconds("--timeout", 10);
+    interfaces::Executor::installSignalHandlers();
+    // A mission file the simulator is about to write (launch with auto_mission) may not
+    // exist yet: wait for it as long as for the mission handler.
+    const std::string& path = options.positional[0];
+    const auto file_deadline = Clock::now() + toMilliseconds(timeout);
+    if (!std::filesystem::exists(path)) std::cerr << "waiting for " << path << std::endl;
+    while (!std::filesystem::exists(path) && Clock::now() < file_deadline &&
+           !interfaces::Executor::signalled()) {
+      std::this_thread::sleep_for(100ms);
+    }
+    const MissionPlan plan = loadMissionFile(path);  // names file and field
     msg::StartMissionRequest request;
     request.mission_id(options.values.count("--id") ? options.values.at("--id") : "");
     for (const MissionQuery& query : plan.queries)
@@ -164,13 +178,11 @@ int startMain(const std::vector<std::string>& args) {
       request.mission_id(plan.name + "-" + stamp);
     }
 
-    interfaces::Executor::installSignalHandlers();
     interfaces::Node node("auv_mission_cli");
     auto client =
         node.createClient<msg::StartMissionRequest, msg::StartMissionReply>("mission/start");
     msg::StartMissionReply reply;
-    const auto status =
-        client->call(request, &reply, toMilliseconds(options.seconds("--timeout", 10)));
+    const auto status = client->call(request, &reply, toMilliseconds(timeout));
     if (status != interfaces::CallStatus::OK) return fail("start", noHandler(node), 1);
     if (reply.status().code() != msg::REPLY_CODE_OK) {
       return fail("start", "refused: " + reply.status().error_text(), 1);
@@ -178,9 +190,13 @@ int startMain(const std::vector<std::string>& args) {
     std::cout << "mission '" << reply.mission_id() << "' started (" << plan.queries.size()
               << " queries)" << std::endl;
     if (!options.flag("--wait")) return 0;
-    const auto last =
-        watchStatus(node, reply.mission_id(), true, options.seconds("--timeout", 1e9));
+    const auto last = watchStatus(node, reply.mission_id(), true, 1e9);
     if (!last || !finished(last->state())) return fail("start", "the mission did not end", 1);
+    if (options.values.count("--report")) {
+      // The simulator's last poses reach the disk within its flush period.
+      std::this_thread::sleep_for(1500ms);
+      if (reportMain({options.values.at("--report")}) != 0) return 1;
+    }
     return last->state() == msg::MISSION_STATE_SUCCEEDED ? 0 : 1;
   } catch (const UsageError& error) {
     return fail("start", error.what(), 2);

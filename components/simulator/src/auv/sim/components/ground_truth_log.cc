@@ -29,6 +29,7 @@ GroundTruthLog::GroundTruthLog(const std::string& run_dir) {
                   "# navigation estimate: t[s sim] x y z[m NED] qx qy qz qw (FRD->NED)\n");
   collisions_ = openOrThrow(dir / "collisions.csv",
                             "t,x,y,z,normal_x,normal_y,normal_z,penetration,speed,started\n");
+  clearance_ = openOrThrow(dir / "clearance.csv", "t,clearance\n");
 }
 
 void GroundTruthLog::writePose(std::ofstream& out, double t, const Eigen::Isometry3d& pose) {
@@ -42,6 +43,10 @@ void GroundTruthLog::trajectory(double t, const Eigen::Isometry3d& body_pose) {
   writePose(trajectory_, t, body_pose);
 }
 
+void GroundTruthLog::clearance(double t, double clearance_m) {
+  clearance_ << t << ',' << clearance_m << '\n';
+}
+
 void GroundTruthLog::navigation(double t, const Eigen::Isometry3d& estimated_pose) {
   writePose(navigation_, t, estimated_pose);
 }
@@ -53,12 +58,14 @@ void GroundTruthLog::collision(double t, const Eigen::Vector3d& point,
               << ',' << normal.y() << ',' << normal.z() << ',' << penetration << ',' << speed << ','
               << (started ? 1 : 0) << '\n';
   collisions_.flush();
+  clearance_.flush();
 }
 
 void GroundTruthLog::flush() {
   trajectory_.flush();
   navigation_.flush();
   collisions_.flush();
+  clearance_.flush();
 }
 
 }  // namespace auv::sim

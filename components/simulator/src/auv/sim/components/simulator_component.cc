@@ -1,4 +1,5 @@
 #include "auv/sim/components/simulator_component.h"
+#include "auv/sim/world/mission_export.h"
 
 #include <yaml-cpp/yaml.h>
 
@@ -20,6 +21,10 @@ std::string joinWorldNames() {
   for (const std::string& w : availableWorlds()) names += (names.empty() ? "" : ", ") + w;
   return names;
 }
+
+// ground_truth/clearance.csv: rows per simulated second, and the distance they are capped at.
+constexpr double kClearanceRate = 5.0;
+constexpr double kClearanceCap = 5.0;
 
 std::string timestampForFolder() {
   const std::time_t now = std::time(nullptr);
@@ -144,6 +149,8 @@ void SimulatorComponent::configure(interfaces::Node& node) {
   }
   log_ = std::make_unique<GroundTruthLog>(options_.run_dir);
   writeRunScenario(scenario_, options_.run_dir);
+  // The world's inspection mission, ready for `auv mission start <run>/mission.yaml`.
+  std::ofstream(fs::path(options_.run_dir) / "mission.yaml") << missionYaml(scenario_, *mesh_);
 
   clock_pub_ = node.createPublisher<msg::Clock>("clock", interfaces::clockQos());
   odometry_pub_ = node.createPublisher<msg::Odometry>("nav/odometry", interfaces::stateQos());
@@ -215,6 +222,7 @@ void SimulatorComponent::run() {
   const Clock::time_point wall_start = Clock::now();
   const double sim_start = simulationTime();
   double next_report = sim_start + 60.0;
+  Clock::time_point next_flush = wall_start + std::chrono::seconds(1);
   bool finished = false;
   while (running_) {
     if (options_.duration > 0 && simulationTime() >= options_.duration) {
@@ -239,6 +247,12 @@ void SimulatorComponent::run() {
       std::this_thread::sleep_until(
           wall_start + std::chrono::duration_cast<Clock::duration>(
                            std::chrono::duration<double>(elapsed_sim / options_.real_time_factor)));
+    }
+    if (Clock::now() >= next_flush) {
+      // Readers of the run folder (the mission report at the end of a mission) see the ground
+      // truth at most a second old.
+      log_->flush();
+      next_flush = Clock::now() + std::chrono::seconds(1);
     }
     if (t >= next_report) {
       const double wall = std::chrono::duration<double>(Clock::now() - wall_start).count();
@@ -301,6 +315,11 @@ void SimulatorComponent::step(double dt) {
   if (t + 1e-9 >= next_trajectory_) {
     next_trajectory_ = t + 1.0 / options_.trajectory_rate;
     log_->trajectory(t, state.pose());
+  }
+  if (t + 1e-9 >= next_clearance_) {
+    next_clearance_ = t + 1.0 / kClearanceRate;
+    log_->clearance(
+        t, hullClearance(*world_, scenario_.seabed_depth, hull_, state.pose(), kClearanceCap));
   }
   while (sonar_->due(t)) {
     sonar_pub_->publish(toSonarBeam(sonar_->ping(state.pose(), t, *world_)));

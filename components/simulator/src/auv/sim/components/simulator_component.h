@@ -80,6 +80,7 @@ class SimulatorComponent : public interfaces::Component {
   double last_altitude_ = -1.0;
   double roughness_ = 0.0;
   double next_odometry_ = 0.0, next_trajectory_ = 0.0;
+  double next_clearance_ = 0.0;
   bool in_contact_ = false;
   double last_collision_event_ = -1e9;
   std::atomic<uint64_t> collisions_{0};

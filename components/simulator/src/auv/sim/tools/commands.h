@@ -16,5 +16,9 @@ int renderMain(const std::vector<std::string>& args);
 int calibrationMain(const std::vector<std::string>& args);
 /// `auv sim check <scenario.yaml|mesh>`: validates a scenario or mesh and prints a summary.
 int checkMain(const std::vector<std::string>& args);
+/// `auv sim octomap <world|scenario.yaml> --out map.bt ...`: the world's true occupancy (.bt).
+int octomapMain(const std::vector<std::string>& args);
+/// `auv sim mission <world|scenario> [--seed N] [--out FILE]`: the world's mission file.
+int missionMain(const std::vector<std::string>& args);
 
 }  // namespace auv::sim

@@ -13,7 +13,9 @@ void usage(std::ostream& out) {
          "  generate     generate procedural worlds (breakwater, canyon, ...) from a seed\n"
          "  check        validate a scenario file or a mesh and print a summary\n"
          "  render       render the camera videos of a simulated run from its trajectory\n"
-         "  calibration  render underwater chessboard sequences for camera calibration\n\n"
+         "  calibration  render underwater chessboard sequences for camera calibration\n"
+         "  octomap      write a world's true occupancy as an OctoMap .bt (benchmarks)\n"
+         "  mission      write a world's inspection mission file for `auv mission start`\n\n"
          "`auv sim <command> --help` describes a command.\n";
 }
 
@@ -34,6 +36,8 @@ int main(int argc, char** argv) {
   if (command == "check") return auv::sim::checkMain(args);
   if (command == "render") return auv::sim::renderMain(args);
   if (command == "calibration") return auv::sim::calibrationMain(args);
+  if (command == "octomap") return auv::sim::octomapMain(args);
+  if (command == "mission") return auv::sim::missionMain(args);
   std::cerr << "auv sim: unknown command '" << command << "'\n";
   usage(std::cerr);
   return 2;

@@ -56,4 +56,23 @@ std::optional<HullContact> findHullContact(const RayCaster& world, double seabed
   return best;
 }
 
+double hullClearance(const RayCaster& world, double seabed_depth, const HullShape& hull,
+                     const Eigen::Isometry3d& body_pose, double max_distance) {
+  const double half_axis = std::max(0.0, hull.length / 2 - hull.radius);
+  const Eigen::Vector3d a = body_pose * Eigen::Vector3d(half_axis, 0, 0);
+  const Eigen::Vector3d b = body_pose * Eigen::Vector3d(-half_axis, 0, 0);
+  double nearest = max_distance + hull.radius;  // from the axis
+  constexpr int kSamples = 5;
+  for (int i = 0; i < kSamples; ++i) {
+    const Eigen::Vector3d p = a + (b - a) * (static_cast<double>(i) / (kSamples - 1));
+    Eigen::Vector3f closest;
+    uint32_t triangle = RayHit::kNoHit;
+    if (world.closestPoint(p.cast<float>(), static_cast<float>(nearest), closest, triangle)) {
+      nearest = std::min(nearest, (closest.cast<double>() - p).norm());
+    }
+  }
+  nearest = std::min(nearest, seabed_depth - std::max(a.z(), b.z()));
+  return std::min(max_distance, nearest - hull.radius);
+}
+
 }  // namespace auv::sim

@@ -28,4 +28,10 @@ std::optional<HullContact> findHullContact(const RayCaster& world, double seabed
                                            const HullShape& hull,
                                            const Eigen::Isometry3d& body_pose);
 
+/// Distance from the hull surface at `body_pose` to the world (mesh or flat seabed), capped at
+/// `max_distance`; <= 0 in contact. Measured from 5 points along the axis, so it may
+/// overestimate by a few centimetres between them: a figure for reports, not for contacts.
+double hullClearance(const RayCaster& world, double seabed_depth, const HullShape& hull,
+                     const Eigen::Isometry3d& body_pose, double max_distance);
+
 }  // namespace auv::sim

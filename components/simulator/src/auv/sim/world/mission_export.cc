@@ -1,0 +1,39 @@
+#include "auv/sim/world/mission_export.h"
+
+#include <algorithm>
+#include <sstream>
+
+#include <Eigen/Geometry>
+
+namespace auv::sim {
+
+std::string missionYaml(const Scenario& scenario, const Mesh& world_mesh,
+                        const MissionExportOptions& options) {
+  Eigen::AlignedBox2d horizontal;
+  for (const Eigen::Vector3f& v : world_mesh.vertices)
+    horizontal.extend(v.head<2>().cast<double>());
+  horizontal.extend(scenario.start_position.head<2>());
+  for (const MissionQuery& q : scenario.queries) horizontal.extend(q.goal.head<2>());
+  const Eigen::Vector2d lo = horizontal.min().array() - options.bounds_margin;
+  const Eigen::Vector2d hi = horizontal.max().array() + options.bounds_margin;
+  std::ostringstream out;
+  out.precision(6);
+  out << std::fixed;
+  out << "# Inspection mission of scenario '" << scenario.name << "' (" << scenario.file
+      << "),\n# written by the simulator: `auv mission start <this file>`.\n"
+      << "mission:\n  name: " << scenario.name << "\n  defaults:\n"
+      << "    objective: visibility\n"
+      << "    expected_distance: " << options.expected_distance << "\n"
+      << "    admissible_range: " << options.admissible_range << "\n"
+      << "    fixed_depth: " << (options.fixed_depth ? "true" : "false") << "\n"
+      << "    bounds: {min: [" << lo.x() << ", " << lo.y() << ", 0.0], max: [" << hi.x() << ", "
+      << hi.y() << ", " << scenario.seabed_depth << "]}\n"
+      << "  queries:\n";
+  for (const MissionQuery& q : scenario.queries) {
+    out << "    - {name: " << q.name << ", goal: [" << q.goal.x() << ", " << q.goal.y() << ", "
+        << q.goal.z() << "], goal_tolerance: " << q.tolerance << "}\n";
+  }
+  return out.str();
+}
+
+}  // namespace auv::sim

@@ -1,0 +1,24 @@
+#pragma once
+// The scenario's queries as a mission file for the mission handler (format:
+// components/mission/README.md), so a simulated world comes with its inspection mission.
+
+#include <string>
+
+#include "auv/sim/world/mesh.h"
+#include "auv/sim/world/scenario.h"
+
+namespace auv::sim {
+
+struct MissionExportOptions {
+  double bounds_margin = 4.0;      ///< m, the sampling region: mesh, start and goals grown by this
+  double expected_distance = 1.5;  ///< m, d_e of Eq. (1): beyond the planner clearance (1 m)
+  double admissible_range = 1.0;   ///< m, Δd_a of Eq. (1)
+  bool fixed_depth = true;         ///< plan at the vehicle's depth (the paper's 2-D profiler)
+};
+
+/// Mission YAML: one query per scenario query, horizontal bounds from the world mesh (in the
+/// world frame), the start and the goals, depth range from the surface to the seabed.
+std::string missionYaml(const Scenario& scenario, const Mesh& world_mesh,
+                        const MissionExportOptions& options = {});
+
+}  // namespace auv::sim
