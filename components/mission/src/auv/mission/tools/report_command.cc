@@ -15,6 +15,8 @@
 
 #include <octomap/OcTree.h>
 #include <Eigen/Core>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "auv/mission/tools/mission_cli.h"
 
@@ -104,44 +106,79 @@ std::string quote(const std::string& text) {
   return out + "\"";
 }
 
-/// Top-down SVG: north up (x NED), east right (y NED).
-class Svg {
+/// Top-down figure drawn twice, as SVG (vector, for papers) and PNG (OpenCV, for quick looks):
+/// north up (x NED), east right (y NED). Colours are "#rrggbb".
+class Figure {
  public:
-  Svg(const Eigen::Vector2d& min, const Eigen::Vector2d& max, double pixels_per_metre)
+  static constexpr int kLegendHeight = 60;
+
+  Figure(const Eigen::Vector2d& min, const Eigen::Vector2d& max, double pixels_per_metre)
       : min_(min), max_(max), scale_(pixels_per_metre) {
     width_ = (max.y() - min.y()) * scale_;
     height_ = (max.x() - min.x()) * scale_;
-    out_ << "<svg xmlns='http://www.w3.org/2000/svg' width='" << width_ << "' height='"
-         << height_ + 60 << "' font-family='sans-serif' font-size='12'>\n"
+    svg_ << "<svg xmlns='http://www.w3.org/2000/svg' width='" << width_ << "' height='"
+         << height_ + kLegendHeight << "' font-family='sans-serif' font-size='12'>\n"
          << "<rect width='100%' height='100%' fill='white'/>\n";
+    png_ = cv::Mat(static_cast<int>(std::ceil(height_)) + kLegendHeight,
+                   static_cast<int>(std::ceil(width_)), CV_8UC3, cv::Scalar(255, 255, 255));
   }
   double x(const Eigen::Vector3d& p) const { return (p.y() - min_.y()) * scale_; }
   double y(const Eigen::Vector3d& p) const { return (max_.x() - p.x()) * scale_; }
-  void polyline(const std::vector<Eigen::Vector3d>& points, const std::string& style) {
+  double height() const { return height_; }
+
+  void polyline(const std::vector<Eigen::Vector3d>& points, const std::string& colour, double width,
+                bool dashed = false) {
     if (points.size() < 2) return;
-    out_ << "<polyline fill='none' " << style << " points='";
-    for (const auto& p : points) out_ << x(p) << "," << y(p) << " ";
-    out_ << "'/>\n";
+    svg_ << "<polyline fill='none' stroke='" << colour << "' stroke-width='" << width << "'"
+         << (dashed ? " stroke-dasharray='4,3'" : "") << " points='";
+    for (const auto& p : points) svg_ << x(p) << "," << y(p) << " ";
+    svg_ << "'/>\n";
+    for (std::size_t i = 1; i < points.size(); ++i) {
+      if (dashed && i % 2 == 0) continue;
+      cv::line(png_, pixel(points[i - 1]), pixel(points[i]), bgr(colour),
+               std::max(1, static_cast<int>(std::lround(width))), cv::LINE_AA);
+    }
   }
-  void square(const Eigen::Vector3d& centre, double size, const std::string& fill) {
-    out_ << "<rect x='" << x(centre) - size * scale_ / 2 << "' y='" << y(centre) - size * scale_ / 2
-         << "' width='" << size * scale_ << "' height='" << size * scale_ << "' fill='" << fill
-         << "'/>\n";
+  void square(const Eigen::Vector3d& centre, double size, const std::string& colour) {
+    const double half = size * scale_ / 2;
+    svg_ << "<rect x='" << x(centre) - half << "' y='" << y(centre) - half << "' width='"
+         << 2 * half << "' height='" << 2 * half << "' fill='" << colour << "'/>\n";
+    cv::rectangle(png_, cv::Point2d(x(centre) - half, y(centre) - half),
+                  cv::Point2d(x(centre) + half, y(centre) + half), bgr(colour), cv::FILLED);
   }
-  void circle(const Eigen::Vector3d& c, double r, const std::string& style) {
-    out_ << "<circle cx='" << x(c) << "' cy='" << y(c) << "' r='" << r << "' " << style << "/>\n";
+  void circle(const Eigen::Vector3d& c, double radius, const std::string& colour, bool filled) {
+    svg_ << "<circle cx='" << x(c) << "' cy='" << y(c) << "' r='" << radius << "' "
+         << (filled ? "fill='" + colour + "'"
+                    : "fill='none' stroke='" + colour + "' stroke-width='2'")
+         << "/>\n";
+    cv::circle(png_, pixel(c), static_cast<int>(std::lround(radius)), bgr(colour),
+               filled ? cv::FILLED : 2, cv::LINE_AA);
   }
   void text(double px, double py, const std::string& text, const std::string& colour) {
-    out_ << "<text x='" << px << "' y='" << py << "' fill='" << colour << "'>" << text
+    svg_ << "<text x='" << px << "' y='" << py << "' fill='" << colour << "'>" << text
          << "</text>\n";
+    cv::putText(png_, text, cv::Point2d(px, py), cv::FONT_HERSHEY_SIMPLEX, 0.4, bgr(colour), 1,
+                cv::LINE_AA);
   }
-  double height() const { return height_; }
-  std::string finish() { return out_.str() + "</svg>\n"; }
+  /// Writes <stem>.svg and <stem>.png; false when either could not be written.
+  bool write(const fs::path& stem) {
+    std::ofstream svg(stem.string() + ".svg");
+    svg << svg_.str() << "</svg>\n";
+    return static_cast<bool>(svg) && cv::imwrite(stem.string() + ".png", png_);
+  }
 
  private:
+  cv::Point pixel(const Eigen::Vector3d& p) const {
+    return {static_cast<int>(std::lround(x(p))), static_cast<int>(std::lround(y(p)))};
+  }
+  static cv::Scalar bgr(const std::string& hex) {
+    const unsigned value = static_cast<unsigned>(std::stoul(hex.substr(1), nullptr, 16));
+    return cv::Scalar(value & 0xff, (value >> 8) & 0xff, (value >> 16) & 0xff);
+  }
   Eigen::Vector2d min_, max_;
   double scale_, width_, height_;
-  std::ostringstream out_;
+  std::ostringstream svg_;
+  cv::Mat png_;
 };
 
 struct QueryRecord {
@@ -269,9 +306,9 @@ int reportMain(const std::vector<std::string>& args) {
   lo -= Eigen::Vector2d::Constant(2.0);
   hi += Eigen::Vector2d::Constant(2.0);
   const double scale = std::clamp(900.0 / std::max(hi.x() - lo.x(), hi.y() - lo.y()), 4.0, 40.0);
-  Svg svg(lo, hi, scale);
+  Figure figure(lo, hi, scale);
   for (const auto& [i, j] : occupied_columns) {
-    svg.square({(i + 0.5) * column, (j + 0.5) * column, 0}, column, "#9a8c7a");
+    figure.square({(i + 0.5) * column, (j + 0.5) * column, 0}, column, "#9a8c7a");
   }
   // Planner trees (last of each query), then paths, then trajectories on top.
   for (const auto& entry : fs::directory_iterator(log)) {
@@ -283,7 +320,7 @@ int reportMain(const std::vector<std::string>& args) {
       const int parent = static_cast<int>(number(row[1]));
       const int index = static_cast<int>(number(row[0]));
       if (parent >= 0 && parent < static_cast<int>(nodes.size())) {
-        svg.polyline({nodes[parent], nodes[index]}, "stroke='#b0c4de' stroke-width='0.6'");
+        figure.polyline({nodes[parent], nodes[index]}, "#b0c4de", 0.6);
       }
     }
   }
@@ -298,33 +335,38 @@ int reportMain(const std::vector<std::string>& args) {
     paths[row[1]].push_back({number(row[4]), number(row[5]), number(row[6])});
   }
   for (const auto& [id, path] : paths) {
-    svg.polyline(path, "stroke='#2e8b57' stroke-width='1.5' stroke-dasharray='4,3'");
+    figure.polyline(path, "#2e8b57", 1.5, true);
   }
   std::vector<Eigen::Vector3d> true_line, estimate_line;
   for (const auto& s : truth) true_line.push_back(s.p);
   for (const auto& s : estimate) estimate_line.push_back(s.p);
-  svg.polyline(estimate_line, "stroke='#ff8c00' stroke-width='1.5'");
-  svg.polyline(true_line, "stroke='#1f4e9c' stroke-width='2'");
-  for (const auto& w : waypoints) svg.circle(w, 2.0, "fill='#2e8b57'");
-  for (const auto& c : collisions) svg.circle(c, 6.0, "fill='none' stroke='red' stroke-width='2'");
+  figure.polyline(estimate_line, "#ff8c00", 1.5);
+  figure.polyline(true_line, "#1f4e9c", 2);
+  for (const auto& w : waypoints) figure.circle(w, 2.0, "#2e8b57", true);
+  for (const auto& c : collisions) figure.circle(c, 6.0, "#ff0000", false);
   for (const QueryRecord* q : ordered) {
-    svg.circle(q->start, 4.0, "fill='black'");
-    svg.text(svg.x(q->start) + 5, svg.y(q->start) - 5, "q" + std::to_string(q->index + 1), "black");
+    figure.circle(q->start, 4.0, "#000000", true);
+    figure.text(figure.x(q->start) + 5, figure.y(q->start) - 5, "q" + std::to_string(q->index + 1),
+                "#000000");
   }
-  const double legend = svg.height() + 18;
-  svg.text(10, legend, "true trajectory", "#1f4e9c");
-  svg.text(120, legend, "navigation estimate", "#ff8c00");
-  svg.text(260, legend, "last planner paths", "#2e8b57");
-  svg.text(390, legend, "planner trees", "#7a9cc6");
-  svg.text(490, legend, "mapped occupied (top-down)", "#9a8c7a");
-  svg.text(10, legend + 18,
-           final_state + " - collisions: " + std::to_string(collisions.size()) +
-               " - north up, east right, " + json(1.0 / scale * 100) + " m per 100 px",
-           collisions.empty() ? "black" : "red");
+  const double legend = figure.height() + 18;
+  figure.text(10, legend, "true trajectory", "#1f4e9c");
+  figure.text(120, legend, "navigation estimate", "#ff8c00");
+  figure.text(260, legend, "last planner paths", "#2e8b57");
+  figure.text(390, legend, "planner trees", "#7a9cc6");
+  figure.text(490, legend, "mapped occupied (top-down)", "#9a8c7a");
+  figure.text(10, legend + 18,
+              final_state + " - collisions: " + std::to_string(collisions.size()) +
+                  " - north up, east right, " + json(1.0 / scale * 100) + " m per 100 px",
+              collisions.empty() ? "#000000" : "#ff0000");
 
   std::error_code error;
   fs::create_directories(out_dir, error);
-  std::ofstream(out_dir / "report.svg") << svg.finish();
+  if (!figure.write(out_dir / "report")) {
+    std::cerr << "auv mission report: cannot write " << (out_dir / "report").string()
+              << ".svg/.png\n";
+    return 1;
+  }
 
   std::ostringstream summary;
   summary << "{\n  \"run\": " << quote(fs::absolute(run).string()) << ",\n"
@@ -348,7 +390,7 @@ int reportMain(const std::vector<std::string>& args) {
   }
   summary << "\n  ]\n}\n";
   std::ofstream(out_dir / "summary.json") << summary.str();
-  std::cout << "figure: " << (out_dir / "report.svg").string()
+  std::cout << "figure: " << (out_dir / "report.svg").string() << " (and .png)"
             << "\nsummary: " << (out_dir / "summary.json").string() << "\n"
             << summary.str();
   return 0;
