@@ -120,7 +120,9 @@ bool MissionExecutive::start(const std::string& mission_id,
 std::string MissionExecutive::notReadyReason(double now) const {
   if (!position_) return "no navigation (nav/odometry) received";
   if (now - odometry_time_ > options_.odometry_timeout) {
-    return "navigation stale: last nav/odometry " + formatSeconds(now - odometry_time_) + " ago";
+    // Fixed wording: a message that changed every tick would republish the status each tick.
+    return "navigation stale (no nav/odometry within odometry_timeout " +
+           formatSeconds(options_.odometry_timeout) + ")";
   }
   if (!controller_ || now - controller_time_ > options_.controller_timeout) {
     return "no controller status (control/status) within " +
@@ -153,6 +155,12 @@ void MissionExecutive::tick(double now) {
   if (now - odometry_time_ > options_.odometry_timeout) {
     abortToHold("navigation stale: last nav/odometry " + formatSeconds(now - odometry_time_) +
                 " ago (odometry_timeout " + formatSeconds(options_.odometry_timeout) + ")");
+    return;
+  }
+  if (now - controller_time_ > options_.controller_timeout) {
+    abortToHold("controller silent: no control/status for " +
+                formatSeconds(now - controller_time_) + " (controller_timeout " +
+                formatSeconds(options_.controller_timeout) + ")");
     return;
   }
   if (state == msg::MISSION_STATE_WAITING_FOR_WAYPOINT) {
@@ -327,6 +335,15 @@ void MissionExecutive::onCancel(const msg::WaypointCancel& cancel, double now) {
   status_.waypoints_cancelled(status_.waypoints_cancelled() + 1);
   if (cancel.reason() == msg::CANCEL_REASON_NO_SOLUTION) {
     abortToHold("planner found no solution: " + cancel.reason_text());
+    return;
+  }
+  if (cancel.reason() == msg::CANCEL_REASON_QUERY_REPLACED ||
+      cancel.reason() == msg::CANCEL_REASON_QUERY_ABORTED) {
+    // Another client took the planner over: waiting for waypoints would only time out.
+    hold(true);
+    status_.queries_failed(status_.queries_failed() + 1);
+    setState(msg::MISSION_STATE_FAILED,
+             "the planner dropped this mission's query: " + cancel.reason_text());
     return;
   }
   if (cancel.reason() == msg::CANCEL_REASON_PLANNER_ERROR) {

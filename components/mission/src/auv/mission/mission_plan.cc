@@ -97,6 +97,13 @@ void readQueryFields(const YAML::Node& node, const std::string& context, Mission
   if (node["depth"]) query.depth = read<double>(node["depth"], field("depth"));
 }
 
+/// `text` as a double-quoted YAML scalar (names may hold '#', ': ', quotes, backslashes).
+std::string quoted(const std::string& text) {
+  YAML::Emitter out;
+  out << YAML::DoubleQuoted << text;
+  return out.c_str();
+}
+
 std::string vectorYaml(const Eigen::Vector3d& v) {
   std::ostringstream out;
   out.precision(10);
@@ -197,9 +204,9 @@ MissionPlan loadMissionFile(const std::string& path) {
 std::string toYaml(const MissionPlan& plan) {
   std::ostringstream out;
   out.precision(10);
-  out << "mission:\n  name: " << plan.name << "\n  queries:\n";
+  out << "mission:\n  name: " << quoted(plan.name) << "\n  queries:\n";
   for (const MissionQuery& q : plan.queries) {
-    out << "    - name: \"" << q.name << "\"\n"
+    out << "    - name: " << quoted(q.name) << "\n"
         << "      goal: " << vectorYaml(q.goal) << "\n"
         << "      goal_tolerance: " << q.goal_tolerance << "\n"
         << "      time_budget: " << q.time_budget << "\n"

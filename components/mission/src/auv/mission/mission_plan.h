@@ -52,8 +52,8 @@ std::string toYaml(const MissionPlan& plan);
 /// bounds non-empty. Throws MissionError naming `source`, the query and the field.
 void checkQuery(const MissionQuery& query, const std::string& source);
 
-/// The PlannerQuery for `query` (query_id, start and stamp left for the caller; depth 0 when
-/// the query has none).
+/// The PlannerQuery for `query` (query_id, start and stamp left for the caller; depth NaN when
+/// the query has none: the mission handler fills in the vehicle's depth).
 msg::PlannerQuery toPlannerQuery(const MissionQuery& query);
 /// Back from a PlannerQuery (name "query <i>").
 MissionQuery fromPlannerQuery(const msg::PlannerQuery& query, std::size_t index);

@@ -208,6 +208,13 @@ std::string MissionComponent::startMission(const std::string& requested_id, cons
                                            const std::string& source) {
   const auto& position = executive_->vehiclePosition();
   try {
+    for (const MissionQuery& query : plan.queries) {
+      if (query.fixed_depth && !query.depth && !position) {
+        throw MissionError(source + ": query '" + query.name +
+                           "' plans at the vehicle's depth, but no navigation has arrived yet "
+                           "(nav/odometry): give its depth or start again when navigation runs");
+      }
+    }
     for (const MissionQuery& query : plan.queries) checkQuery(query, source);
     checkAgainstVehicle(plan.queries, map_->sequence() > 0 ? &map_->tree() : nullptr,
                         position ? position->z() : 0.0, options_.limits, source);
@@ -259,7 +266,8 @@ void MissionComponent::onAbort(const msg::TriggerRequest& request, msg::TriggerR
     throw interfaces::ServiceError(msg::REPLY_CODE_REJECTED, "no mission is running");
   }
   flush("abort", reason);
-  reply.message("mission '" + executive_->status().mission_id() + "' aborted; holding depth");
+  reply.message("mission '" + executive_->status().mission_id() +
+                "' aborted: " + executive_->status().message());
 }
 
 void MissionComponent::onOdometry(const msg::Odometry& odometry) {
