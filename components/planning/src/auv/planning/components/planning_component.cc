@@ -55,10 +55,14 @@ struct PlanningComponent::ActiveQuery {
   std::shared_ptr<OnlineRRTstar> planner;
   Eigen::Vector3d goal = Eigen::Vector3d::Zero();
   double time_budget = 0.0;
-  int64_t start_ns = 0;
+  // Last time the tree had a solution, or the query (re)started: the budget runs from here, so
+  // an obstacle that removes the solution mid-mission gets a full budget to be planned around.
+  int64_t solved_ns = 0;
   uint64_t active_waypoint_id = 0;  // 0: none issued since the (re)start
+  msg::Waypoint active_waypoint;    // the one sent as active_waypoint_id, for repeated requests
   uint64_t checked_revision = 0;    // field revision the tree was last re-checked against
   bool no_solution_reported = false;
+  uint64_t earlier_iterations = 0;  // iterations of the trees dropped by restarts
 };
 
 namespace {
@@ -257,10 +261,32 @@ void PlanningComponent::onQuery(const msg::PlannerQuery& query) {
 }
 
 void PlanningComponent::onWaypointRequest(const msg::WaypointRequest& request) {
-  std::lock_guard<std::mutex> lock(mutex_);  // waits at most one planning slice
+  // Queued, never answered here: waiting for the planning mutex (a slice, a full map's distance
+  // field) would stall the executor, and with it every component composed in this process.
+  {
+    std::lock_guard<std::mutex> lock(inbox_mutex_);
+    request_inbox_.push_back(request);
+  }
+  inbox_changed_.notify_one();
+}
+
+void PlanningComponent::handleWaypointRequest(const msg::WaypointRequest& request) {
   if (!query_ || query_->query.query_id() != request.query_id()) {
-    AUV_WARN(node_->logger(),
-             "waypoint request for query " << request.query_id() << ", which is not being planned");
+    // Queries and requests travel on different topics: a mission handler's first request can
+    // overtake its query. Kept for the next query to start, used if it is that one.
+    early_request_ = request;
+    if (query_ && request.query_id() < query_->query.query_id()) {
+      AUV_WARN(node_->logger(), "waypoint request for query " << request.query_id()
+                                                              << ", older than the one planned ("
+                                                              << query_->query.query_id() << ")");
+    }
+    return;
+  }
+  if (query_->active_waypoint_id != 0 &&
+      request.reached_waypoint_id() != query_->active_waypoint_id) {
+    // The vehicle has not reached the active waypoint: a repeated request whose answer was
+    // lost or crossed it. Popping again would skip a waypoint; send the active one again.
+    waypoint_pub_->publish(query_->active_waypoint);
     return;
   }
   pending_request_ = request;
@@ -274,7 +300,8 @@ void PlanningComponent::planningLoop() {
       // Nothing to grow: sleep until a map update or a query arrives (or a stop).
       std::unique_lock<std::mutex> lock(inbox_mutex_);
       inbox_changed_.wait_for(lock, std::chrono::milliseconds(100), [this] {
-        return !running_ || !map_inbox_.empty() || query_inbox_.has_value();
+        return !running_ || !map_inbox_.empty() || query_inbox_.has_value() ||
+               !request_inbox_.empty();
       });
     }
     if (!running_) break;
@@ -289,13 +316,16 @@ void PlanningComponent::planningLoop() {
 void PlanningComponent::applyMapUpdates() {
   std::deque<msg::OctomapUpdate> updates;
   std::optional<msg::PlannerQuery> query;
+  std::deque<msg::WaypointRequest> requests;
   {
     std::lock_guard<std::mutex> lock(inbox_mutex_);
     updates.swap(map_inbox_);
     query.swap(query_inbox_);
+    requests.swap(request_inbox_);
   }
   for (const auto& update : updates) applyMapUpdate(update);
   if (query) startQuery(*query);
+  for (const auto& request : requests) handleWaypointRequest(request);
 }
 
 void PlanningComponent::applyMapUpdate(const msg::OctomapUpdate& update) {
@@ -336,7 +366,11 @@ void PlanningComponent::startQuery(const msg::PlannerQuery& query) {
            "query " + std::to_string(query.query_id()) + " replaces it");
   }
   query_.reset();
-  pending_request_.reset();
+  pending_request_.reset();  // for the replaced query
+  if (early_request_ && early_request_->query_id() == query.query_id()) {
+    pending_request_ = early_request_;  // it overtook this query
+  }
+  early_request_.reset();
   auto active = std::make_unique<ActiveQuery>();
   active->query = query;
   try {
@@ -396,11 +430,12 @@ void PlanningComponent::startQuery(const msg::PlannerQuery& query) {
     query_ = std::move(active);  // for the query id of the cancel
     cancel(0, msg::CANCEL_REASON_PLANNER_ERROR, std::string("query rejected: ") + error.what());
     query_.reset();
+    pending_request_.reset();
     return;
   }
   active->time_budget =
       query.time_budget() > 0.0 ? query.time_budget() : options_.default_time_budget;
-  active->start_ns = node_->clock().nowNs();
+  active->solved_ns = node_->clock().nowNs();
   active->checked_revision = field_->revision();
   query_ = std::move(active);
   AUV_INFO(node_->logger(), "planning query " << query.query_id());
@@ -416,6 +451,17 @@ void PlanningComponent::vehicleState(ob::State* state) const {
   query_->si->enforceBounds(state);  // also puts it on the fixed depth
 }
 
+bool PlanningComponent::hullPassesAlong(const Eigen::Vector3d& from,
+                                        const Eigen::Vector3d& to) const {
+  const double step = 0.5 * options_.map_resolution;
+  const int steps = std::max(1, static_cast<int>(std::ceil((to - from).norm() / step)));
+  for (int i = 0; i <= steps; ++i) {
+    const Eigen::Vector3d p = from + (to - from) * (static_cast<double>(i) / steps);
+    if (field_->distance(p) < options_.clearance.hull_radius) return false;
+  }
+  return true;
+}
+
 void PlanningComponent::planSlice() {
   if (!query_) return;
   ActiveQuery& q = *query_;
@@ -425,38 +471,74 @@ void PlanningComponent::planSlice() {
     q.checked_revision = field_->revision();
     ob::ScopedState<> vehicle(q.si);
     vehicleState(vehicle.get());
-    const UpdateResult result = q.planner->updateTree(vehicle.get());
-    if (result.needsRestart()) {
+    UpdateResult result = q.planner->updateTree(nullptr);
+    // The vehicle drifts off the planned edges by its tracking error, which the safety margin
+    // is there to absorb: the way to the root is blocked only when the hull itself would touch.
+    result.vehicle_to_root_blocked =
+        !hullPassesAlong(statePosition(vehicle.get()), statePosition(q.planner->root()->state));
+    // Without an active waypoint the root is where the vehicle holds (the query's start or the
+    // waypoint just reached): too close to a newly seen wall is no reason to restart there, and
+    // the motion validator lets the tree leave it by moving away from the wall.
+    if (result.needsRestart() && q.active_waypoint_id != 0) {
       const Eigen::Vector3d root = statePosition(q.planner->root()->state);
       std::ostringstream text;
       text << (result.root_in_collision ? "root" : "segment vehicle -> root") << " at (" << root.x()
            << ", " << root.y() << ", " << root.z() << ") closer than "
-           << options_.clearance.clearance() << " m to the map (version " << map_sequence_ << ")";
+           << (result.root_in_collision ? options_.clearance.clearance()
+                                        : options_.clearance.hull_radius)
+           << " m to the map (version " << map_sequence_ << ")";
       cancel(q.active_waypoint_id,
              result.root_in_collision ? msg::CANCEL_REASON_ROOT_IN_COLLISION
                                       : msg::CANCEL_REASON_APPROACH_IN_COLLISION,
              text.str());
+      q.earlier_iterations += q.planner->iterations();  // reset() zeroes the core's count
       q.planner->reset(vehicle.get());
       q.active_waypoint_id = 0;
+      q.solved_ns = node_->clock().nowNs();
     }
   }
+  if (q.planner->treeSize() >= options_.max_tree_size && !q.planner->bestSolution() &&
+      q.planner->root() != nullptr) {
+    // Full without a solution: only popWaypoint() (which needs a solution) or a restart would
+    // prune it, so growing would never resume, even once the map opens a way. Grow a fresh
+    // tree from the same root: the active waypoint stays valid.
+    ob::ScopedState<> root(q.si);
+    q.si->copyState(root.get(), q.planner->root()->state);
+    q.earlier_iterations += q.planner->iterations();
+    q.planner->reset(root.get());
+  }
   if (q.planner->treeSize() < options_.max_tree_size) {
-    q.planner->solve(ob::timedPlannerTerminationCondition(options_.iteration_budget));
+    // Stops at max_tree_size too: one slice may add thousands of nodes.
+    const OnlineRRTstar& planner = *q.planner;
+    const std::size_t max_size = options_.max_tree_size;
+    q.planner->solve(ob::plannerOrTerminationCondition(
+        ob::timedPlannerTerminationCondition(options_.iteration_budget),
+        ob::PlannerTerminationCondition(
+            [&planner, max_size] { return planner.treeSize() >= max_size; })));
     ++slices_;
   }
   answerWaypointRequest();
-  const double elapsed = 1e-9 * static_cast<double>(node_->clock().nowNs() - q.start_ns);
-  if (!q.planner->bestSolution() && !q.no_solution_reported && elapsed > q.time_budget) {
+  const int64_t now = node_->clock().nowNs();
+  if (q.planner->bestSolution()) {
+    q.solved_ns = now;
+    q.no_solution_reported = false;  // a later loss of every solution is reported again
+    return;
+  }
+  const double unsolved = 1e-9 * static_cast<double>(now - q.solved_ns);
+  if (!q.no_solution_reported && unsolved > q.time_budget) {
     q.no_solution_reported = true;
     std::ostringstream text;
-    text << "no solution after " << elapsed << " s (budget " << q.time_budget << " s), "
+    text << "no solution for " << unsolved << " s (budget " << q.time_budget << " s), "
          << q.planner->treeSize() << " nodes";
     cancel(q.active_waypoint_id, msg::CANCEL_REASON_NO_SOLUTION, text.str());
   }
 }
 
 void PlanningComponent::answerWaypointRequest() {
-  if (!pending_request_ || !query_ || !query_->planner->bestSolution()) return;
+  if (!pending_request_ || !query_ || !query_->planner->bestSolution() ||
+      pending_request_->query_id() != query_->query.query_id()) {
+    return;
+  }
   ActiveQuery& q = *query_;
   const Eigen::Vector3d from = statePosition(q.planner->root()->state);
   ob::ScopedState<> waypoint_state(q.si);
@@ -473,6 +555,7 @@ void PlanningComponent::answerWaypointRequest() {
   waypoint.tolerance(options_.waypoint_tolerance);
   waypoint.is_final((position - q.goal).norm() <= q.query.goal_tolerance());
   q.active_waypoint_id = waypoint.waypoint_id();
+  q.active_waypoint = waypoint;
   pending_request_.reset();
   waypoint_pub_->publish(waypoint);
 }
@@ -534,7 +617,7 @@ void PlanningComponent::publishViews() {
       if (node == best) tree.best_solution_index(index);
       for (const OnlineRRTstar::Node* child : node->children) stack.emplace_back(child, index);
     }
-    tree.iterations(0);  // the core does not count iterations
+    tree.iterations(q.earlier_iterations + q.planner->iterations());
     tree_pub_->publish(tree);
   }
 }

@@ -35,9 +35,14 @@ class ReplicaDistanceField;
 /// (command), `planner/path` and `planner/tree` (viewing); calls `map/request_full` (Trigger)
 /// when an increment does not continue the replica's version.
 ///
-/// Threading: callbacks run on the executor and only queue data or take the planning mutex
-/// briefly; the planning thread applies map updates, re-checks the tree and solves in slices
-/// of iteration_budget, all under that mutex (the core's rule: no map update while solving).
+/// A waypoint request whose reached_waypoint_id is not the active waypoint (a repeat: the
+/// answer was lost or crossed it) gets the active waypoint again instead of the next one; a
+/// request may also arrive before the query it names has started.
+///
+/// Threading: callbacks run on the executor and only queue data (never wait for the planning
+/// mutex, which would stall every component composed in the process); the planning thread applies
+/// map updates, re-checks the tree and solves in slices of iteration_budget, all under that mutex
+/// (the core's rule: no map update while solving).
 class PlanningComponent : public interfaces::Component {
  public:
   struct Options {
@@ -58,14 +63,18 @@ class PlanningComponent : public interfaces::Component {
     double field_margin = 5.0;
     double iteration_budget = 0.1;  ///< s, length of one solve() slice, in [0.005, 10].
     /// Growing pauses at this many nodes until popWaypoint() or a restart prunes the tree:
-    /// pruning and re-indexing cost O(tree size) while the waypoint request waits, in
-    /// [100, 1e7].
+    /// pruning and re-indexing cost O(tree size) while the waypoint request waits. A full
+    /// tree without a solution is regrown from its root instead (nothing else would prune
+    /// it). In [100, 1e7].
     std::size_t max_tree_size = 20000;
-    double default_time_budget = 10.0;  ///< s, time budget when a query gives 0, in [0.1, 3600].
-    double path_rate = 2.0;             ///< Hz, rate of planner/path, in [0.01, 100].
-    double tree_rate = 1.0;             ///< Hz, rate of planner/tree, in [0.01, 100].
-    double waypoint_speed = 0.5;        ///< m/s, Waypoint.speed, in [0.01, 10].
-    double waypoint_tolerance = 0.5;    ///< m, Waypoint.tolerance, in [0.01, 10].
+    /// s, time budget when a query gives 0, in [0.1, 3600]. A query is cancelled with
+    /// NO_SOLUTION when its tree has had no solution for this long: since the query started,
+    /// since a restart, or since an obstacle removed the last solution.
+    double default_time_budget = 10.0;
+    double path_rate = 2.0;           ///< Hz, rate of planner/path, in [0.01, 100].
+    double tree_rate = 1.0;           ///< Hz, rate of planner/tree, in [0.01, 100].
+    double waypoint_speed = 0.5;      ///< m/s, Waypoint.speed, in [0.01, 10].
+    double waypoint_tolerance = 0.5;  ///< m, Waypoint.tolerance, in [0.01, 10].
     /// s, period of map/request_full calls while the replica misses an update, in [0.1, 60].
     double full_request_period = 1.0;
     std::string map_id = "octomap";     ///< OctomapUpdate.map_id this planner follows.
@@ -84,6 +93,11 @@ class PlanningComponent : public interfaces::Component {
   uint64_t mapSequence() const { return map_sequence_; }
   /// Planning slices run since activate(). Thread-safe.
   uint64_t slices() const { return slices_; }
+  /// Latest position from `nav/odometry` (none yet: nullopt). Thread-safe.
+  std::optional<Eigen::Vector3d> vehiclePosition() const {
+    std::lock_guard<std::mutex> lock(inbox_mutex_);
+    return vehicle_position_;
+  }
 
  private:
   struct ActiveQuery;  // space, objective, planner and bookkeeping of the current query
@@ -92,8 +106,11 @@ class PlanningComponent : public interfaces::Component {
   void onOdometry(const msg::Odometry& odometry);
   void onQuery(const msg::PlannerQuery& query);
   void onWaypointRequest(const msg::WaypointRequest& request);
+  /// Planning thread, under mutex_: answers now, or keeps it pending until a solution exists.
+  void handleWaypointRequest(const msg::WaypointRequest& request);
   void planningLoop();
-  /// Planning thread, under mutex_: the queued map updates, then a queued query.
+  /// Planning thread, under mutex_: the queued map updates, a queued query, then the queued
+  /// waypoint requests.
   void applyMapUpdates();
   void applyMapUpdate(const msg::OctomapUpdate& update);
   void startQuery(const msg::PlannerQuery& query);
@@ -103,6 +120,9 @@ class PlanningComponent : public interfaces::Component {
   void cancel(uint64_t waypoint_id, int reason, const std::string& text);
   void publishViews();
   void requestFullMapIfNeeded();
+  /// Whether the segment stays at least hull_radius from the map (no margin): the test of the
+  /// way from the vehicle to the tree root.
+  bool hullPassesAlong(const Eigen::Vector3d& from, const Eigen::Vector3d& to) const;
   /// The vehicle's position as a state of the active query's space (clamped to its bounds).
   void vehicleState(ompl::base::State* state) const;
 
@@ -124,6 +144,7 @@ class PlanningComponent : public interfaces::Component {
   std::condition_variable inbox_changed_;
   std::deque<msg::OctomapUpdate> map_inbox_;
   std::optional<msg::PlannerQuery> query_inbox_;
+  std::deque<msg::WaypointRequest> request_inbox_;
   std::optional<Eigen::Vector3d> vehicle_position_;  // guarded by inbox_mutex_
 
   // Planning state: the planning thread and onWaypointRequest, under mutex_.
@@ -131,7 +152,8 @@ class PlanningComponent : public interfaces::Component {
   std::unique_ptr<octomap::OcTree> tree_;
   std::shared_ptr<ReplicaDistanceField> field_;
   std::unique_ptr<ActiveQuery> query_;
-  std::optional<msg::WaypointRequest> pending_request_;
+  std::optional<msg::WaypointRequest> pending_request_;  // for the active query
+  std::optional<msg::WaypointRequest> early_request_;    // for a query not started (yet)
   uint64_t next_waypoint_id_ = 1;
 
   std::atomic<uint64_t> map_sequence_{0};
