@@ -16,7 +16,7 @@ struct MissionLimits {
   double max_depth = 50.0;
   /// m, the planner's clearance (hull radius + safety margin): a goal closer than this to a
   /// known occupied cell cannot be reached.
-  double goal_clearance = 1.0;
+  double goal_clearance = 1.2;
 };
 
 /// Throws MissionError naming `source`, the query and the reason when a goal (or the plane of a

@@ -18,9 +18,9 @@ namespace auv::planning {
 struct ClearanceOptions {
   /// m, radius of the sphere enclosing the hull (Sparus II: 1.6 m long).
   double hull_radius = 0.8;
-  /// m, extra distance kept on top of the hull radius (navigation error, map noise). Small
-  /// enough that the narrowest canyon passage (4.2 m) stays open at 0.5 m map resolution.
-  double safety_margin = 0.2;
+  /// m, extra distance kept on top of the hull radius (navigation drift between visits, map
+  /// quantisation). Small enough that the narrowest canyon passage (4.2 m) stays open.
+  double safety_margin = 0.4;
   /// m, motion check step; <= 0 means half the map resolution. Never above half of it.
   double motion_check_step = 0.0;
 

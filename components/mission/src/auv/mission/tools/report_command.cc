@@ -320,7 +320,7 @@ int reportMain(const std::vector<std::string>& args) {
       const int parent = static_cast<int>(number(row[1]));
       const int index = static_cast<int>(number(row[0]));
       if (parent >= 0 && parent < static_cast<int>(nodes.size())) {
-        figure.polyline({nodes[parent], nodes[index]}, "#b0c4de", 0.6);
+        figure.polyline({nodes[parent], nodes[index]}, "#d6e1ef", 0.6);
       }
     }
   }

@@ -455,9 +455,18 @@ bool PlanningComponent::hullPassesAlong(const Eigen::Vector3d& from,
                                         const Eigen::Vector3d& to) const {
   const double step = 0.5 * options_.map_resolution;
   const int steps = std::max(1, static_cast<int>(std::ceil((to - from).norm() / step)));
-  for (int i = 0; i <= steps; ++i) {
-    const Eigen::Vector3d p = from + (to - from) * (static_cast<double>(i) / steps);
-    if (field_->distance(p) < options_.clearance.hull_radius) return false;
+  // A vehicle already closer than the hull radius (drift, a wall just mapped) may move away:
+  // the distance must not shrink until it is clear, as in MapMotionValidator's escapes.
+  double previous = field_->distance(from);
+  bool escaping = previous < options_.clearance.hull_radius;
+  for (int i = 1; i <= steps; ++i) {
+    const double distance = field_->distance(from + (to - from) * (static_cast<double>(i) / steps));
+    if (distance >= options_.clearance.hull_radius) {
+      escaping = false;
+    } else if (!escaping || distance < previous) {
+      return false;
+    }
+    previous = distance;
   }
   return true;
 }

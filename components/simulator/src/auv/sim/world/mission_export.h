@@ -11,7 +11,7 @@ namespace auv::sim {
 
 struct MissionExportOptions {
   double bounds_margin = 4.0;      ///< m, the sampling region: mesh, start and goals grown by this
-  double expected_distance = 1.5;  ///< m, d_e of Eq. (1): beyond the planner clearance (1 m)
+  double expected_distance = 1.5;  ///< m, d_e of Eq. (1): beyond the planner clearance (1.2 m)
   double admissible_range = 1.0;   ///< m, Δd_a of Eq. (1)
   bool fixed_depth = true;         ///< plan at the vehicle's depth (the paper's 2-D profiler)
 };

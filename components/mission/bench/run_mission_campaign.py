@@ -1,0 +1,168 @@
+#!/usr/bin/env python3
+"""Mission campaign (benchmark, not a test): the world's inspection mission over many seeds.
+
+For each world and seed it runs `auv launch bringup/launch/vehicle_sim.yaml auto_mission:=true`
+(simulator with navigation drift, mapping, planning, mission, controller), reads the mission
+report (`<run>/mission/summary.json`), and compares each completed query's executed true path
+with the oracle shortest path between the same two points on the world's true map at the
+planner's clearance (`planning_oracle` on `auv sim octomap`). Figures: success, collisions,
+minimum true clearance, navigation error, path length / oracle, wall time. Results go to
+bench_results/mission_campaign_<stamp>.{md,json}.
+
+  components/mission/bench/run_mission_campaign.py [--worlds canyon,breakwater,dead_end_bay]
+      [--seeds 20] [--first-seed 1] [--real-time-factor 8] [--domain 45] [--keep-runs]
+"""
+import argparse
+import datetime
+import json
+import os
+import shutil
+import statistics
+import subprocess
+import sys
+import time
+
+import yaml
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
+LAUNCH = os.path.join(ROOT, "bringup", "launch", "vehicle_sim.yaml")
+CLEARANCE = 1.2  # m, the planner's hull_radius + safety_margin (planning defaults)
+ORACLE_GRID = 0.2  # m
+TRUE_MAP_RESOLUTION = 0.1  # m
+
+
+def find_program(name):
+    """A program of the merged install: bin/ or lib/<package>/."""
+    install = os.path.join(ROOT, "install")
+    for folder in ("bin", "lib/auv_planning", "lib/auv_mission"):
+        path = os.path.join(install, folder, name)
+        if os.path.exists(path):
+            return path
+    found = shutil.which(name)
+    if not found:
+        sys.exit(f"run_mission_campaign: {name} not found (build the workspace first)")
+    return found
+
+
+def oracle_length(true_map, start, goal):
+    out = subprocess.run(
+        [find_program("planning_oracle"), "--map", true_map, "--start", ",".join(map(str, start)),
+         "--goal", ",".join(map(str, goal)), "--clearance", str(CLEARANCE), "--fixed-depth",
+         "--grid", str(ORACLE_GRID), "--quiet"], capture_output=True, text=True)
+    if out.returncode != 0:
+        return None, out.stderr.strip()
+    return float(out.stdout.strip().split()[0]), ""
+
+
+def true_map_for(world, seed, cache):
+    path = os.path.join(cache, f"{world}-{seed}-true.bt")
+    if not os.path.exists(path):
+        subprocess.run([find_program("auv"), "sim", "octomap", world, "--seed", str(seed),
+                        "--resolution", str(TRUE_MAP_RESOLUTION), "--out", path], check=True,
+                       stdout=subprocess.DEVNULL)
+    return path
+
+
+def run_mission(world, seed, args, runs_dir):
+    run_dir = os.path.join(runs_dir, f"{world}-{seed}")
+    shutil.rmtree(run_dir, ignore_errors=True)
+    command = [find_program("auv"), "launch", LAUNCH, f"world:={world}", f"seed:={seed}",
+               "auto_mission:=true", f"real_time_factor:={args.real_time_factor}",
+               f"domain:={args.domain}", f"run_dir:={run_dir}"]
+    started = time.monotonic()
+    with open(os.path.join(runs_dir, f"{world}-{seed}.log"), "w") as log:
+        try:
+            code = subprocess.run(command, stdout=log, stderr=subprocess.STDOUT,
+                                  timeout=args.timeout).returncode
+        except subprocess.TimeoutExpired:
+            code = "timeout"
+    wall = time.monotonic() - started
+    summary_path = os.path.join(run_dir, "mission", "summary.json")
+    summary = json.load(open(summary_path)) if os.path.exists(summary_path) else None
+    return run_dir, code, wall, summary
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--worlds", default="canyon,breakwater,dead_end_bay")
+    parser.add_argument("--seeds", type=int, default=20)
+    parser.add_argument("--first-seed", type=int, default=1)
+    parser.add_argument("--real-time-factor", type=float, default=8.0)
+    parser.add_argument("--domain", type=int, default=45)
+    parser.add_argument("--timeout", type=float, default=3600.0, help="s of wall time per mission")
+    parser.add_argument("--keep-runs", action="store_true", help="keep the run folders")
+    args = parser.parse_args()
+
+    stamp = datetime.datetime.now().strftime("%Y%m%d_%H%M%S")
+    results_dir = os.path.join(ROOT, "bench_results")
+    runs_dir = os.path.join(results_dir, f"mission_campaign_{stamp}")
+    os.makedirs(runs_dir, exist_ok=True)
+    rows = []
+    for world in args.worlds.split(","):
+        for seed in range(args.first_seed, args.first_seed + args.seeds):
+            run_dir, code, wall, summary = run_mission(world, seed, args, runs_dir)
+            row = {"world": world, "seed": seed, "exit": code, "wall_s": round(wall, 1)}
+            if summary:
+                row.update({k: summary[k] for k in ("state", "message", "duration_s", "collisions",
+                                                    "min_true_clearance_m",
+                                                    "max_navigation_error_m",
+                                                    "executed_length_m")})
+                mission = yaml.safe_load(open(os.path.join(run_dir, "mission.yaml")))["mission"]
+                true_map = true_map_for(world, seed, runs_dir)
+                ratios = []
+                for query in summary["queries"]:
+                    if not query["succeeded"]:
+                        continue
+                    # Same end points as the vehicle: start and end of the executed query.
+                    length, error = oracle_length(true_map, query["start"], query["end"])
+                    if length:
+                        ratios.append(query["executed_length_m"] / length)
+                    else:
+                        row.setdefault("oracle_errors", []).append(error)
+                row["path_ratios"] = [round(r, 3) for r in ratios]
+                row["queries"] = f'{sum(q["succeeded"] for q in summary["queries"])}/' \
+                                 f'{len(mission["queries"])}'
+            else:
+                row["state"] = "NO REPORT"
+            rows.append(row)
+            print(json.dumps(row), flush=True)
+            if not args.keep_runs:
+                for sub in ("ground_truth",):
+                    shutil.rmtree(os.path.join(run_dir, sub), ignore_errors=True)
+
+    lines = [f"# Mission campaign {stamp}", "",
+             f"vehicle_sim.yaml, auto_mission, real_time_factor {args.real_time_factor}, "
+             f"navigation drift on (simulator defaults), clearance {CLEARANCE} m; oracle: "
+             f"planning_oracle on the true map at {TRUE_MAP_RESOLUTION} m, grid {ORACLE_GRID} m, "
+             "between the executed query's true start and end.", "",
+             "| world | runs | succeeded | collisions (runs with any) | min true clearance (m) | "
+             "path / oracle median (max) | max nav error (m) | wall s / run |",
+             "|---|---|---|---|---|---|---|---|"]
+    for world in args.worlds.split(","):
+        mine = [r for r in rows if r["world"] == world]
+        done = [r for r in mine if r.get("state") == "SUCCEEDED"]
+        collided = [r for r in mine if r.get("collisions", 0) > 0]
+        clearances = [r["min_true_clearance_m"] for r in mine
+                      if r.get("min_true_clearance_m") is not None]
+        ratios = [x for r in mine for x in r.get("path_ratios", [])]
+        nav = [r["max_navigation_error_m"] for r in mine if r.get("max_navigation_error_m")]
+        def cell(values, text):
+            return text(values) if values else "-"
+        lines.append(" | ".join([
+            f"| {world}", str(len(mine)), str(len(done)),
+            f"{sum(r.get('collisions', 0) for r in mine)} ({len(collided)})",
+            cell(clearances, lambda v: f"{min(v):.2f}"),
+            cell(ratios, lambda v: f"{statistics.median(v):.3f} ({max(v):.3f})"),
+            cell(nav, lambda v: f"{max(v):.2f}"),
+            cell(mine, lambda v: f"{statistics.mean(r['wall_s'] for r in v):.0f}")]) + " |")
+    lines += ["", "Per run:", "", "```"] + [json.dumps(r) for r in rows] + ["```"]
+    md = os.path.join(results_dir, f"mission_campaign_{stamp}.md")
+    open(md, "w").write("\n".join(lines) + "\n")
+    json.dump(rows, open(os.path.join(results_dir, f"mission_campaign_{stamp}.json"), "w"),
+              indent=1)
+    print("\n".join(lines[:len(args.worlds.split(",")) + 6]))
+    print(f"results: {md}")
+
+
+if __name__ == "__main__":
+    main()
