@@ -50,10 +50,21 @@ double OctomapDistanceField::distance(const Eigen::Vector3d& position) const {
       return options_.max_distance;
     }
   }
-  const float distance =
-      edt_->getDistance(octomap::point3d(position.x(), position.y(), position.z()));
-  if (distance < 0.0f) return options_.max_distance;  // outside the grid: unknown, free
-  return std::min<double>(distance, options_.max_distance);
+  float grid_distance = 0.0f;
+  octomap::point3d obstacle;
+  edt_->getDistanceAndClosestObstacle(octomap::point3d(position.x(), position.y(), position.z()),
+                                      grid_distance, obstacle);
+  if (grid_distance < 0.0f) return options_.max_distance;  // outside the grid: unknown, free
+  if (grid_distance >= options_.max_distance) return options_.max_distance;
+  // The grid measures between cell centres, off by up to a cell diagonal from what matters:
+  // the surface seen lies somewhere in the occupied cell, the vehicle anywhere in its own.
+  // The distance from the position itself to the obstacle cell's box is a lower bound.
+  const double half = 0.5 * tree_->getResolution();
+  const Eigen::Vector3d gap =
+      ((position - Eigen::Vector3d(obstacle.x(), obstacle.y(), obstacle.z())).cwiseAbs().array() -
+       half)
+          .max(0.0);
+  return std::min(gap.norm(), options_.max_distance);
 }
 
 double OctomapDistanceField::resolution() const { return tree_->getResolution(); }

@@ -27,7 +27,8 @@ class PlanningConfigError : public std::invalid_argument {
 class DistanceField {
  public:
   virtual ~DistanceField() = default;
-  /// m, distance from `position` (NED) to the nearest occupied cell, clamped at maxDistance().
+  /// m, distance from `position` (NED) to the nearest occupied cell (to the cell's box, not its
+  /// centre: a lower bound of the distance to what the sensor saw), clamped at maxDistance().
   /// Points outside the mapped volume are unknown, hence free: they return maxDistance().
   virtual double distance(const Eigen::Vector3d& position) const = 0;
   /// m, the distance reported when nothing occupied is nearer.

@@ -20,9 +20,7 @@ namespace {
 constexpr double kCostTolerance = 1e-6;
 /// Tree sizes between refreshes of the cost the progress thread reads.
 constexpr std::size_t kPublishCostEvery = 64;
-/// Removing nodes one by one from the GNAT costs about a nearest query each; past this
-/// fraction of the tree, rebuilding the index from the remaining nodes is cheaper.
-constexpr double kRebuildFraction = 0.125;
+
 }  // namespace
 
 OnlineRRTstar::OnlineRRTstar(const ob::SpaceInformationPtr& si) : ob::Planner(si, "OnlineRRTstar") {
@@ -294,6 +292,9 @@ void OnlineRRTstar::postSolution(bool approximate) {
   }
   double distance_to_goal = 0.0;
   const bool satisfied = pdef_->getGoal()->isSatisfied(path->getStates().back(), &distance_to_goal);
+  // One path, the current best: earlier ones may run through pruned or repaired parts of the
+  // tree, and OMPL would keep (and sort) every one posted over a long mission.
+  pdef_->clearSolutionPaths();
   pdef_->addSolutionPath(path, approximate || !satisfied, distance_to_goal, getName());
 }
 
@@ -316,13 +317,36 @@ bool OnlineRRTstar::popWaypoint(ob::State* waypoint) {
 }
 
 UpdateResult OnlineRRTstar::updateTree(const ob::State* vehicle_state) {
+  return recheckTree(vehicle_state, {});
+}
+
+UpdateResult OnlineRRTstar::updateTree(const ob::State* vehicle_state,
+                                       const Eigen::AlignedBox3d& changed, double influence) {
+  if (changed.isEmpty())
+    return recheckTree(vehicle_state, [](const Node*, const Node*) { return false; });
+  const Eigen::AlignedBox3d near_change(changed.min().array() - influence,
+                                        changed.max().array() + influence);
+  const auto position = [](const Node* node) {
+    const auto* state = node->state->as<ob::RealVectorStateSpace::StateType>();
+    return Eigen::Vector3d(state->values[0], state->values[1], state->values[2]);
+  };
+  return recheckTree(vehicle_state, [&](const Node* parent, const Node* child) {
+    Eigen::AlignedBox3d edge(position(parent));
+    edge.extend(position(child));
+    return edge.intersects(near_change);
+  });
+}
+
+UpdateResult OnlineRRTstar::recheckTree(
+    const ob::State* vehicle_state, const std::function<bool(const Node*, const Node*)>& affected) {
   UpdateResult result;
   if (root_ == nullptr) return result;
   result.root_in_collision = !si_->isValid(root_->state);
   result.vehicle_to_root_blocked =
       vehicle_state != nullptr && !si_->checkMotion(vehicle_state, root_->state);
   // DFS from the root; a child whose state or edge collides goes with its whole subtree.
-  // Edge costs are recomputed on the way since the objective depends on the map too.
+  // Edge costs are recomputed on the way since the objective depends on the map too; edges the
+  // change cannot reach keep theirs, but their cost-to-come follows their parent's.
   std::vector<Node*> stack{root_};
   std::vector<Node*> colliding;
   std::vector<Node*> removed;
@@ -331,11 +355,13 @@ UpdateResult OnlineRRTstar::updateTree(const ob::State* vehicle_state) {
     stack.pop_back();
     colliding.clear();
     for (Node* child : node->children) {
-      if (!si_->isValid(child->state) || !si_->checkMotion(node->state, child->state)) {
-        colliding.push_back(child);
-        continue;
+      if (!affected || affected(node, child)) {
+        if (!si_->isValid(child->state) || !si_->checkMotion(node->state, child->state)) {
+          colliding.push_back(child);
+          continue;
+        }
+        child->incoming_cost = objective_->motionCost(node->state, child->state);
       }
-      child->incoming_cost = objective_->motionCost(node->state, child->state);
       child->cost = objective_->combineCosts(node->cost, child->incoming_cost);
       stack.push_back(child);
     }
@@ -359,20 +385,9 @@ void OnlineRRTstar::detachSubtree(Node* subtree_root, std::vector<Node*>& remove
 
 void OnlineRRTstar::discard(const std::vector<Node*>& removed) {
   if (removed.empty()) return;
-  // The GNAT measures distances to the nodes it removes: they are freed only afterwards.
-  bool indexed_one_by_one =
-      static_cast<double>(removed.size()) <= kRebuildFraction * static_cast<double>(nn_->size());
-  if (indexed_one_by_one) {
-    for (Node* node : removed) indexed_one_by_one &= nn_->remove(node);
-  }
-  if (indexed_one_by_one) {
-    std::unordered_set<const Node*> gone(removed.begin(), removed.end());
-    solutions_.erase(std::remove_if(solutions_.begin(), solutions_.end(),
-                                    [&gone](const Node* node) { return gone.count(node) > 0; }),
-                     solutions_.end());
-  } else {
-    reindex();  // walks the tree from root_, which no longer reaches the removed nodes
-  }
+  // One rebuild: removing nodes one by one from OMPL's GNAT rebuilds it whenever a removed
+  // node is a pivot, dozens of times for one obstacle (measured by bench/update_bench).
+  reindex();  // walks the tree from root_, which no longer reaches the removed nodes
   for (Node* node : removed) {
     si_->freeState(node->state);
     delete node;

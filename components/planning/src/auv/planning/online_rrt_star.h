@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <vector>
@@ -13,6 +14,7 @@
 #include <ompl/base/Planner.h>
 #include <ompl/datastructures/NearestNeighbors.h>
 #include <ompl/util/RandomNumbers.h>
+#include <Eigen/Geometry>
 
 namespace auv::planning {
 
@@ -57,6 +59,11 @@ class OnlineRRTstar : public ompl::base::Planner {
   bool popWaypoint(ompl::base::State* waypoint);
   /// DFS re-check of every node and edge on the current map; colliding subtrees are freed.
   UpdateResult updateTree(const ompl::base::State* vehicle_state);
+  /// The same, when the map changed only inside `changed` (RealVector states): edges whose
+  /// bounding box stays `influence` metres away from it (the clearance, or how far the
+  /// objective looks if farther) keep their validity and cost without a check.
+  UpdateResult updateTree(const ompl::base::State* vehicle_state,
+                          const Eigen::AlignedBox3d& changed, double influence);
   /// Drops the tree and restarts it with `root_state` as root (keeps the goal).
   void reset(const ompl::base::State* root_state);
 
@@ -93,10 +100,13 @@ class OnlineRRTstar : public ompl::base::Planner {
   void propagateCost(Node* node);
   void detachFromParent(Node* node);
   void freeSubtree(Node* node);
+  /// updateTree() over the edges `affected` says may have changed (all when it is empty).
+  UpdateResult recheckTree(const ompl::base::State* vehicle_state,
+                           const std::function<bool(const Node*, const Node*)>& affected);
   /// Detaches `subtree_root` from its parent and appends its nodes to `removed`.
   void detachSubtree(Node* subtree_root, std::vector<Node*>& removed);
   /// Drops the detached `removed` nodes from the nearest-neighbour structure and the solution
-  /// list (one by one when they are few, else by re-indexing the tree), then frees them.
+  /// list (by re-indexing the tree), then frees them.
   void discard(const std::vector<Node*>& removed);
   /// Rebuilds the nearest-neighbour structure and the solution list from the tree.
   void reindex();

@@ -342,6 +342,7 @@ void PlanningComponent::applyMapUpdate(const msg::OctomapUpdate& update) {
       map_sequence_ = update.sequence_number();
       full_map_needed_ = false;
       if (query_) field_->rebuild(tree_.get());
+      recheck_everything_ = true;
     } else if (update.kind() == msg::OCTOMAP_UPDATE_INCREMENTAL &&
                update.encoding() == msg::OCTOMAP_ENCODING_FULL) {
       if (map_sequence_ == 0 || update.base_sequence() != map_sequence_) {
@@ -352,6 +353,13 @@ void PlanningComponent::applyMapUpdate(const msg::OctomapUpdate& update) {
                                      *tree_);
       map_sequence_ = update.sequence_number();
       if (query_) field_->update();
+      const Eigen::Vector3d changed_min = toVector(update.changed_min());
+      const Eigen::Vector3d changed_max = toVector(update.changed_max());
+      if ((changed_min.array() < changed_max.array()).all()) {
+        changed_region_.extend(Eigen::AlignedBox3d(changed_min, changed_max));
+      } else if (!(changed_min.array() > changed_max.array()).any()) {
+        recheck_everything_ = true;  // a flat box: not filled in by the sender, so unknown
+      }  // else an empty update: nothing changed
     }
   } catch (const std::exception& error) {
     full_map_needed_ = true;
@@ -437,6 +445,8 @@ void PlanningComponent::startQuery(const msg::PlannerQuery& query) {
       query.time_budget() > 0.0 ? query.time_budget() : options_.default_time_budget;
   active->solved_ns = node_->clock().nowNs();
   active->checked_revision = field_->revision();
+  changed_region_.setEmpty();  // the new tree is grown on the map as it is now
+  recheck_everything_ = false;
   query_ = std::move(active);
   AUV_INFO(node_->logger(), "planning query " << query.query_id());
 }
@@ -480,7 +490,17 @@ void PlanningComponent::planSlice() {
     q.checked_revision = field_->revision();
     ob::ScopedState<> vehicle(q.si);
     vehicleState(vehicle.get());
-    UpdateResult result = q.planner->updateTree(nullptr);
+    // Only edges near what changed can change (the mapping component reports the box of every
+    // increment): within the clearance for validity, within the band of Eq. (1) for costs.
+    const double influence =
+        std::max(options_.clearance.clearance(),
+                 q.query.expected_distance() + 0.5 * q.query.admissible_range()) +
+        options_.map_resolution;
+    UpdateResult result = recheck_everything_
+                              ? q.planner->updateTree(nullptr)
+                              : q.planner->updateTree(nullptr, changed_region_, influence);
+    recheck_everything_ = false;
+    changed_region_.setEmpty();
     // The vehicle drifts off the planned edges by its tracking error, which the safety margin
     // is there to absorb: the way to the root is blocked only when the hull itself would touch.
     result.vehicle_to_root_blocked =

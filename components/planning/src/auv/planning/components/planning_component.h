@@ -19,6 +19,7 @@
 #include <ompl/base/ProblemDefinition.h>
 #include <ompl/base/SpaceInformation.h>
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "auv/interfaces/component.h"
 #include "auv/planning/distance_field.h"
@@ -155,6 +156,10 @@ class PlanningComponent : public interfaces::Component {
   std::optional<msg::WaypointRequest> pending_request_;  // for the active query
   std::optional<msg::WaypointRequest> early_request_;    // for a query not started (yet)
   uint64_t next_waypoint_id_ = 1;
+
+  // What changed in the map since the tree was last re-checked (planning thread only).
+  Eigen::AlignedBox3d changed_region_;
+  bool recheck_everything_ = true;  // a FULL map arrived: no box says what changed
 
   std::atomic<uint64_t> map_sequence_{0};
   std::atomic<bool> full_map_needed_{false};
