@@ -108,6 +108,14 @@ void SimulatorComponent::configure(interfaces::Node& node) {
         {},
         {},
         true});
+  mission_objective_ = p.declare<std::string>(
+      "mission_objective", "visibility",
+      D{"objective of <run>/mission.yaml: visibility (Eq. 1 + length) or path_length",
+        "",
+        {},
+        {},
+        {"visibility", "path_length"},
+        true});
   if (p.get<bool>("use_sim_time")) {
     throw ConfigError("simulator: use_sim_time must be false: the simulator is the clock");
   }
@@ -150,7 +158,10 @@ void SimulatorComponent::configure(interfaces::Node& node) {
   log_ = std::make_unique<GroundTruthLog>(options_.run_dir);
   writeRunScenario(scenario_, options_.run_dir);
   // The world's inspection mission, ready for `auv mission start <run>/mission.yaml`.
-  std::ofstream(fs::path(options_.run_dir) / "mission.yaml") << missionYaml(scenario_, *mesh_);
+  MissionExportOptions mission;
+  mission.objective = mission_objective_;
+  std::ofstream(fs::path(options_.run_dir) / "mission.yaml")
+      << missionYaml(scenario_, *mesh_, mission);
 
   clock_pub_ = node.createPublisher<msg::Clock>("clock", interfaces::clockQos());
   odometry_pub_ = node.createPublisher<msg::Odometry>("nav/odometry", interfaces::stateQos());

@@ -81,6 +81,7 @@ class SimulatorComponent : public interfaces::Component {
   double roughness_ = 0.0;
   double next_odometry_ = 0.0, next_trajectory_ = 0.0;
   double next_clearance_ = 0.0;
+  std::string mission_objective_;  // of the mission file written into the run folder
   bool in_contact_ = false;
   double last_collision_event_ = -1e9;
   std::atomic<uint64_t> collisions_{0};

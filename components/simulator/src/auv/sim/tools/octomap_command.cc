@@ -284,6 +284,11 @@ int octomapMain(const std::vector<std::string>& args) {
                        std::min(0.0, static_cast<double>(bounds.min().z())));
     const Vector3d high(bounds.max().x() + parsed.margin, bounds.max().y() + parsed.margin,
                         scenario.seabed_depth);
+    if (!(high.z() > low.z())) {
+      throw std::runtime_error(scenario.file + ": world.seabed_depth " +
+                               std::to_string(scenario.seabed_depth) +
+                               " m is above the surface and the mesh: no water to map");
+    }
     octomap::OcTreeKey low_key, high_key;
     if (!tree.coordToKeyChecked(octomap::point3d(low.x(), low.y(), low.z()), low_key) ||
         !tree.coordToKeyChecked(octomap::point3d(high.x(), high.y(), high.z()), high_key)) {

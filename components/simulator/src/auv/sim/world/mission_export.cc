@@ -22,7 +22,7 @@ std::string missionYaml(const Scenario& scenario, const Mesh& world_mesh,
   out << "# Inspection mission of scenario '" << scenario.name << "' (" << scenario.file
       << "),\n# written by the simulator: `auv mission start <this file>`.\n"
       << "mission:\n  name: " << scenario.name << "\n  defaults:\n"
-      << "    objective: visibility\n"
+      << "    objective: " << options.objective << "\n"
       << "    expected_distance: " << options.expected_distance << "\n"
       << "    admissible_range: " << options.admissible_range << "\n"
       << "    fixed_depth: " << (options.fixed_depth ? "true" : "false") << "\n"

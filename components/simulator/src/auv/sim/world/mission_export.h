@@ -14,6 +14,7 @@ struct MissionExportOptions {
   double expected_distance = 1.5;  ///< m, d_e of Eq. (1): beyond the planner clearance (1.2 m)
   double admissible_range = 1.0;   ///< m, Δd_a of Eq. (1)
   bool fixed_depth = true;         ///< plan at the vehicle's depth (the paper's 2-D profiler)
+  std::string objective = "visibility";  ///< visibility (Eq. 1 + length) or path_length
 };
 
 /// Mission YAML: one query per scenario query, horizontal bounds from the world mesh (in the
