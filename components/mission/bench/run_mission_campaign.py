@@ -68,7 +68,7 @@ def run_mission(world, seed, args, runs_dir):
     shutil.rmtree(run_dir, ignore_errors=True)
     command = [find_program("auv"), "launch", LAUNCH, f"world:={world}", f"seed:={seed}",
                "auto_mission:=true", f"real_time_factor:={args.real_time_factor}",
-               f"domain:={args.domain}", f"run_dir:={run_dir}"]
+               f"domain:={args.domain}", f"run_dir:={run_dir}", f"objective:={args.objective}"]
     started = time.monotonic()
     with open(os.path.join(runs_dir, f"{world}-{seed}.log"), "w") as log:
         try:
@@ -90,6 +90,7 @@ def main():
     parser.add_argument("--real-time-factor", type=float, default=8.0)
     parser.add_argument("--domain", type=int, default=45)
     parser.add_argument("--timeout", type=float, default=3600.0, help="s of wall time per mission")
+    parser.add_argument("--objective", default="visibility", choices=["visibility", "path_length"])
     parser.add_argument("--keep-runs", action="store_true", help="keep the run folders")
     args = parser.parse_args()
 
@@ -131,7 +132,8 @@ def main():
                     shutil.rmtree(os.path.join(run_dir, sub), ignore_errors=True)
 
     lines = [f"# Mission campaign {stamp}", "",
-             f"vehicle_sim.yaml, auto_mission, real_time_factor {args.real_time_factor}, "
+             f"vehicle_sim.yaml, auto_mission, objective {args.objective}, "
+             f"real_time_factor {args.real_time_factor}, "
              f"navigation drift on (simulator defaults), clearance {CLEARANCE} m; oracle: "
              f"planning_oracle on the true map at {TRUE_MAP_RESOLUTION} m, grid {ORACLE_GRID} m, "
              "between the executed query's true start and end.", "",
