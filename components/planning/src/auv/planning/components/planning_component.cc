@@ -12,6 +12,7 @@
 #include <ompl/base/spaces/RealVectorStateSpace.h>
 
 #include "auv/mapping/map_builder.h"
+#include "auv/mapping/map_replica.h"
 
 namespace auv::planning {
 
@@ -84,21 +85,6 @@ void setStamp(msg::Header& header, int64_t ns) { header.stamp(interfaces::toMsgT
 void setPosition(ob::State* state, const Eigen::Vector3d& position) {
   auto* values = state->as<ob::RealVectorStateSpace::StateType>()->values;
   for (int i = 0; i < 3; ++i) values[i] = position[i];
-}
-
-/// Reads a FULL update (either encoding) into a new OcTree; throws std::runtime_error.
-std::unique_ptr<octomap::OcTree> readFullMap(const msg::OctomapUpdate& update) {
-  std::istringstream stream(std::string(update.data().begin(), update.data().end()));
-  if (update.encoding() == msg::OCTOMAP_ENCODING_BINARY) {
-    auto tree = std::make_unique<octomap::OcTree>(update.resolution());
-    if (!tree->readBinary(stream)) throw std::runtime_error("unreadable .bt map");
-    return tree;
-  }
-  std::unique_ptr<octomap::AbstractOcTree> read(octomap::AbstractOcTree::read(stream));
-  auto* tree = dynamic_cast<octomap::OcTree*>(read.get());
-  if (tree == nullptr) throw std::runtime_error("map is not an OcTree .ot stream");
-  read.release();
-  return std::unique_ptr<octomap::OcTree>(tree);
 }
 
 }  // namespace
@@ -338,7 +324,7 @@ void PlanningComponent::applyMapUpdate(const msg::OctomapUpdate& update) {
   }
   try {
     if (update.kind() == msg::OCTOMAP_UPDATE_FULL) {
-      tree_ = readFullMap(update);
+      tree_ = mapping::readFullMap(update);
       map_sequence_ = update.sequence_number();
       full_map_needed_ = false;
       if (query_) field_->rebuild(tree_.get());
@@ -359,7 +345,7 @@ void PlanningComponent::applyMapUpdate(const msg::OctomapUpdate& update) {
         changed_region_.extend(Eigen::AlignedBox3d(changed_min, changed_max));
       } else if (!(changed_min.array() > changed_max.array()).any()) {
         recheck_everything_ = true;  // a flat box: not filled in by the sender, so unknown
-      }  // else an empty update: nothing changed
+      }                              // else an empty update: nothing changed
     }
   } catch (const std::exception& error) {
     full_map_needed_ = true;
