@@ -1,195 +1,420 @@
 // Mapping benchmark (not a test): beams/s and points/s inserted through MapBuilder (change
-// tracking on, as in the component) against raw octomap::OcTree::insertPointCloud on the same
-// measurements in the same run, and the ratio (issue 4 goal: >= 0.9x).
+// tracking on, as in the component) and through the mapping component on real DDS, each beside
+// raw octomap::OcTree::insertPointCloud on the same measurements in the same run, and the
+// ratios (issue 4 goal: >= 0.9x). Stream and scene: bench_stream.h; component runs:
+// component_bench.h; how to read the figures: README.md, "Benchmark".
 //
 //   mapping_bench [--beams 200000] [--swaths 2000] [--points 256] [--resolution 0.5]
-//                 [--seed 1] [--out results.md]
+//                 [--odometry-rate 10] [--seed 1] [--vendors fastdds,cyclonedds]
+//                 [--modes inprocess,child,cross] [--domain 86] [--qos bulk_transfer]
+//                 [--beam-window 200] [--cloud-window 64] [--pin] [-p name:=value]...
+//                 [--out results.md]
 //
-// Scene: the vehicle drives along x at 1.5 m/s down a canyon with walls at y = +-kHalfWidth and
-// a floor kFloorDepth below it; a profiling sonar sweeps 360 deg at one beam per ping (returns
-// beyond max range are no-return beams); a multibeam swath fans kPoints returns across the
-// canyon. Raw baseline per beam: a one-point cloud (the return, or a point past max range with
-// maxrange set, which clears free space only), i.e. the same cell updates.
+// --modes: `inprocess` = the component in this process (own node and participant, spun by the
+// main thread; a feeder thread publishes), `child` = the component in a child process as
+// `auv run mapping` hosts it, `cross` = the same fed from the other vendor; `none` = library
+// only. Domains: --domain + 0..3 (fastdds in process, fastdds child, cyclonedds in process,
+// cyclonedds child; test/README.md). -p: component parameters.
+// --pin: raw, library and the component's executor thread on CPU 1, everything else on CPU 0
+// (only useful on an otherwise idle machine: with other load on CPU 0 the feeder starves).
+#include <time.h>
+#include <unistd.h>
+
+#include <algorithm>
 #include <chrono>
-#include <cmath>
+#include <cstdlib>
 #include <fstream>
+#include <iomanip>
 #include <iostream>
-#include <random>
 #include <sstream>
 #include <string>
+#include <vector>
 
-#include "auv/mapping/map_builder.h"
+#include "bench_stream.h"
+#include "component_bench.h"
 
 namespace {
 
+using namespace auv::mapping;
+using namespace auv::mapping::bench;
 using Clock = std::chrono::steady_clock;
-using auv::mapping::BeamGeometry;
-using auv::mapping::MapBuilder;
-
-constexpr double kHalfWidth = 8.0;    // m, canyon half width
-constexpr double kFloorDepth = 6.0;   // m, floor below the vehicle
-constexpr double kMaxRange = 20.0;    // m, sonar max range
-constexpr double kSpeed = 1.5;        // m/s, along x
-constexpr double kPingRate = 50.0;    // Hz, profiler pings
-constexpr double kRangeNoise = 0.05;  // m, 1 sigma
-constexpr double kSwathWidth = 2.4;   // rad, multibeam fan across the canyon
 
 struct Args {
-  std::size_t beams = 200000;
-  std::size_t swaths = 2000;
-  std::size_t points = 256;
+  StreamOptions stream;
   double resolution = 0.5;
-  unsigned seed = 1;
+  std::vector<std::string> vendors{"fastdds", "cyclonedds"};
+  std::vector<std::string> modes{"inprocess", "child", "cross"};
+  int domain = 86;
+  std::string qos = "bulk_transfer";
+  std::size_t beam_window = ComponentRun().beam_window;
+  std::size_t cloud_window = ComponentRun().cloud_window;
+  std::vector<std::string> parameters;
   std::string out;
+  bool pin = false;
+  bool serve = false;  // child: host the component
+  std::string serve_vendor = "cyclonedds";
+  int progress_fd = -1;
 };
 
-double secondsSince(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
+std::vector<std::string> splitList(const std::string& value) {
+  std::vector<std::string> out;
+  std::stringstream in(value);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    if (!item.empty()) out.push_back(item);
+  }
+  return out;
 }
 
-// Range to the canyon walls/floor along `direction` from the vehicle, or infinity.
-double rangeToCanyon(const Eigen::Vector3d& direction) {
-  double range = std::numeric_limits<double>::infinity();
-  if (std::abs(direction.y()) > 1e-9) range = std::min(range, kHalfWidth / std::abs(direction.y()));
-  if (direction.z() > 1e-9) range = std::min(range, kFloorDepth / direction.z());
-  return range;
+constexpr const char* kUsage =
+    "usage: mapping_bench [--beams 200000] [--swaths 2000] [--points 256] [--resolution 0.5]\n"
+    "         [--odometry-rate 10] [--seed 1] [--vendors fastdds,cyclonedds]\n"
+    "         [--modes inprocess,child,cross|none] [--domain 86] [--qos bulk_transfer|default]\n"
+    "         [--beam-window 200] [--cloud-window 64] [--pin] [-p name:=value]... [--out f.md]\n"
+    "Beams/s and points/s through MapBuilder and the mapping component (in this process,\n"
+    "in a child process, in a child fed from the other vendor) vs raw\n"
+    "OcTree::insertPointCloud on the same data; components/mapping/README.md, Benchmark.\n";
+
+Args parseArgs(int argc, char** argv) {
+  Args a;
+  for (int i = 1; i < argc; ++i) {
+    const std::string key = argv[i];
+    if (key == "-h" || key == "--help") {
+      std::cout << kUsage;
+      std::exit(0);
+    }
+    if (key == "--serve" || key == "--pin" || key == "--no-pin") {
+      if (key == "--serve") a.serve = true;
+      if (key != "--serve") a.pin = key == "--pin";
+      continue;
+    }
+    if (i + 1 >= argc) throw std::invalid_argument("missing value after " + key);
+    const std::string value = argv[++i];
+    if (key == "--beams")
+      a.stream.beams = std::stoul(value);
+    else if (key == "--swaths")
+      a.stream.swaths = std::stoul(value);
+    else if (key == "--points")
+      a.stream.points = std::stoul(value);
+    else if (key == "--odometry-rate")
+      a.stream.odometry_rate = std::stod(value);
+    else if (key == "--seed")
+      a.stream.seed = static_cast<unsigned>(std::stoul(value));
+    else if (key == "--resolution")
+      a.resolution = std::stod(value);
+    else if (key == "--vendors" || key == "--vendor") {
+      a.vendors = splitList(value);
+      a.serve_vendor = value;
+    } else if (key == "--modes")
+      a.modes = value == "none" ? std::vector<std::string>{} : splitList(value);
+    else if (key == "--domain")
+      a.domain = std::stoi(value);
+    else if (key == "--progress-fd")
+      a.progress_fd = std::stoi(value);
+    else if (key == "--qos")
+      a.qos = value == "default" ? "" : value;
+    else if (key == "--beam-window")
+      a.beam_window = std::stoul(value);
+    else if (key == "--cloud-window")
+      a.cloud_window = std::stoul(value);
+    else if (key == "-p")
+      a.parameters.push_back(value);
+    else if (key == "--out")
+      a.out = value;
+    else
+      throw std::invalid_argument("unknown option " + key);
+  }
+  for (const auto& m : a.modes) {
+    if (m != "inprocess" && m != "child" && m != "cross")
+      throw std::invalid_argument("unknown mode " + m);
+  }
+  return a;
 }
 
-struct Beam {
-  Eigen::Vector3d origin;
-  Eigen::Vector3d direction;
-  double range;  // > kMaxRange: no return
+double threadCpuSeconds() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+/// One timed insertion of the whole input on this thread.
+struct Timed {
+  double seconds = 0.0;
+  double cpu_seconds = 0.0;
+  std::string map_ot;  // AbstractOcTree::write (log-odds)
+  std::string map_bt;  // writeBinaryConst (maximum likelihood)
 };
+
+template <class Tree>
+void writeMaps(const Tree& tree, Timed& timed) {
+  std::ostringstream ot, bt;
+  tree.write(ot);
+  tree.writeBinaryConst(bt);
+  timed.map_ot = ot.str();
+  timed.map_bt = bt.str();
+}
+
+template <class Body>
+void time(Timed& timed, Body&& body) {
+  const double cpu0 = threadCpuSeconds();
+  const auto t0 = Clock::now();
+  body();
+  timed.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  timed.cpu_seconds = threadCpuSeconds() - cpu0;
+}
+
+Timed rawBeams(const Stream& s, double resolution) {
+  Timed timed;
+  octomap::OcTree tree(resolution);
+  octomap::Pointcloud one;
+  time(timed, [&] {
+    for (std::size_t i = 0; i < s.raw_beam_ends.size(); ++i) {
+      one.clear();
+      one.push_back(s.raw_beam_ends[i]);
+      tree.insertPointCloud(one, s.raw_beam_origins[i], s.beam_max_range);
+    }
+  });
+  writeMaps(tree, timed);
+  return timed;
+}
+
+Timed libraryBeams(const Stream& s, const MapBuilder::Options& options) {
+  Timed timed;
+  MapBuilder builder(options);
+  builder.enableChangeTracking(true);
+  time(timed, [&] {
+    for (std::size_t i = 0; i < s.beam_geometry.size(); ++i)
+      builder.insertBeam(s.beam_geometry[i], s.beam_world_T_sensor[i]);
+  });
+  builder.takeDiff();
+  writeMaps(builder.tree(), timed);
+  return timed;
+}
+
+Timed rawClouds(const Stream& s, double resolution) {
+  Timed timed;
+  octomap::OcTree tree(resolution);
+  time(timed, [&] {
+    for (std::size_t i = 0; i < s.raw_clouds.size(); ++i) {
+      const Eigen::Vector3d& o = s.cloud_origins[i];
+      tree.insertPointCloud(s.raw_clouds[i],
+                            octomap::point3d(static_cast<float>(o.x()), static_cast<float>(o.y()),
+                                             static_cast<float>(o.z())),
+                            s.cloud_max_range);
+    }
+  });
+  writeMaps(tree, timed);
+  return timed;
+}
+
+Timed libraryClouds(const Stream& s, const MapBuilder::Options& options) {
+  Timed timed;
+  MapBuilder builder(options);
+  builder.enableChangeTracking(true);
+  time(timed, [&] {
+    for (std::size_t i = 0; i < s.cloud_points.size(); ++i)
+      builder.insertCloud(s.cloud_points[i], s.cloud_origins[i], s.cloud_max_range);
+  });
+  builder.takeDiff();
+  writeMaps(builder.tree(), timed);
+  return timed;
+}
+
+std::string fmt(double value, int precision = 0) {
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(precision) << value;
+  return out.str();
+}
+
+/// One input kind (beams or points): the library and the component runs, each beside a raw
+/// run made just before it (the machine is shared: its load drifts within seconds).
+class Table {
+ public:
+  Table(std::string unit, double count) : unit_(std::move(unit)), count_(count) {}
+  void library(const Timed& raw, const Timed& t) {
+    library_ot_ = t.map_ot;
+    rows_.push_back({"MapBuilder (library)", count_ / t.seconds, 1e6 * t.cpu_seconds / count_, -1.0,
+                     t.map_bt == raw.map_bt ? "yes (= raw)" : "NO", "", raw});
+  }
+  void component(const std::string& what, const Timed& raw, const ComponentResult& r) {
+    if (!r.ok) {
+      rows_.push_back({what, 0.0, 0.0, 0.0, "", "failed: " + r.error, raw});
+      return;
+    }
+    // How much of the time the executor had work: the rest it waited for input.
+    std::string note =
+        fmt(r.seconds, 2) + " s, executor busy " + fmt(100.0 * r.executor_cpu_s / r.seconds) + " %";
+    if (r.updates > 0) note += ", " + std::to_string(r.updates) + " map updates";
+    if (r.dropped > 0) note += ", " + std::to_string(r.dropped) + " dropped";
+    if (r.publish_retries > 0) note += ", " + std::to_string(r.publish_retries) + " write retries";
+    rows_.push_back({what, r.per_s, 1e6 * r.executor_cpu_s / count_, 1e6 * r.total_cpu_s / count_,
+                     r.map_ot == library_ot_ ? "yes (= library)" : "NO", note, raw});
+  }
+  std::string markdown() const {
+    std::ostringstream out;
+    out << "| path | " << unit_ << "s/s | raw " << unit_ << "s/s | ratio | CPU µs/" << unit_
+        << " | raw CPU µs/" << unit_ << " | CPU ratio | CPU µs/" << unit_
+        << " (all threads) | same map | notes |\n"
+        << "|---|---:|---:|---:|---:|---:|---:|---:|---|---|\n";
+    for (const Row& row : rows_) {
+      const double raw_rate = count_ / row.raw.seconds;
+      const double raw_us = 1e6 * row.raw.cpu_seconds / count_;
+      out << "| " << row.what << " | ";
+      if (row.rate <= 0.0) {
+        out << "| " << fmt(raw_rate) << " | | | " << fmt(raw_us, 2) << " | | | | " << row.note
+            << " |\n";
+        continue;
+      }
+      out << fmt(row.rate) << " | " << fmt(raw_rate) << " | " << fmt(row.rate / raw_rate, 2)
+          << " | " << fmt(row.thread_us, 2) << " | " << fmt(raw_us, 2) << " | "
+          << fmt(raw_us / row.thread_us, 2) << " | "
+          << (row.process_us < 0 ? std::string("-") : fmt(row.process_us, 2)) << " | " << row.same
+          << " | " << row.note << " |\n";
+    }
+    out << "\nraw = OcTree::insertPointCloud on the same data, measured just before the row. "
+        << "ratio = " << unit_ << "s/s / raw " << unit_ << "s/s (goal >= 0.9). CPU µs = CPU time "
+        << "of the inserting thread (library: the measuring thread, component: its executor "
+        << "thread); CPU ratio = raw's / the row's; all threads: component, feeder, map reader "
+        << "and the DDS threads of both sides (2 CPUs: at most 2 s per s).\n";
+    return out.str();
+  }
+
+ private:
+  struct Row {
+    std::string what;
+    double rate;        // per second; 0: failed
+    double thread_us;   // CPU per measurement, inserting thread
+    double process_us;  // CPU per measurement, all threads of the pipeline; < 0: -
+    std::string same;
+    std::string note;
+    Timed raw;
+  };
+  std::string unit_;
+  double count_;
+  std::string library_ot_;
+  std::vector<Row> rows_;
+};
+
+/// Runs `measure` with this thread on kWorkCpu when pinning (the CPU the component's executor
+/// gets), then returns to kOtherCpu.
+template <class F>
+Timed onWorkCpu(bool pin, F&& measure) {
+  if (pin) pinThisThread(kWorkCpu);
+  Timed timed = measure();
+  if (pin) pinThisThread(kOtherCpu);
+  return timed;
+}
+
+std::string selfExecutable() {
+  char path[4096];
+  const ssize_t n = readlink("/proc/self/exe", path, sizeof(path) - 1);
+  if (n <= 0) throw std::runtime_error("cannot read /proc/self/exe");
+  return std::string(path, static_cast<std::size_t>(n));
+}
 
 }  // namespace
 
 int main(int argc, char** argv) {
   Args args;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string key = argv[i], value = argv[i + 1];
-    if (key == "--beams")
-      args.beams = std::stoul(value);
-    else if (key == "--swaths")
-      args.swaths = std::stoul(value);
-    else if (key == "--points")
-      args.points = std::stoul(value);
-    else if (key == "--resolution")
-      args.resolution = std::stod(value);
-    else if (key == "--seed")
-      args.seed = static_cast<unsigned>(std::stoul(value));
-    else if (key == "--out")
-      args.out = value;
-    else {
-      std::cerr << "unknown option " << key << "\n";
-      return 2;
+  try {
+    args = parseArgs(argc, argv);
+    if (args.serve) {
+      return serveComponent(auv::interfaces::vendorFromString(args.serve_vendor), args.domain,
+                            args.parameters, args.progress_fd, args.pin);
     }
+  } catch (const std::exception& e) {
+    std::cerr << "mapping_bench: " << e.what() << "\n" << kUsage;
+    return 2;
   }
-  std::mt19937 random(args.seed);
-  std::normal_distribution<double> noise(0.0, kRangeNoise);
-
-  // Profiler beams: head sweeps about the vehicle's vertical axis, tilted 20 deg down.
-  std::vector<Beam> beams(args.beams);
-  const double tilt = 20.0 * M_PI / 180.0;
-  for (std::size_t i = 0; i < beams.size(); ++i) {
-    const double t = static_cast<double>(i) / kPingRate;
-    const double angle = 0.9 * static_cast<double>(i) * M_PI / 180.0;  // 0.9 deg steps
-    beams[i].origin = Eigen::Vector3d(kSpeed * t, 0.0, 0.0);
-    beams[i].direction = Eigen::Vector3d(std::cos(angle) * std::cos(tilt),
-                                         std::sin(angle) * std::cos(tilt), std::sin(tilt));
-    beams[i].range = rangeToCanyon(beams[i].direction) + noise(random);
+  if (args.pin && (sysconf(_SC_NPROCESSORS_ONLN) < 2 || !pinThisThread(kOtherCpu))) {
+    std::cerr << "mapping_bench: cannot pin to CPUs 0 and 1, running unpinned\n";
+    args.pin = false;
   }
-
   MapBuilder::Options options;
   options.resolution = args.resolution;
-  MapBuilder builder(options);
-  builder.enableChangeTracking(true);
-  auto t0 = Clock::now();
-  for (const Beam& beam : beams) {
-    BeamGeometry geometry;
-    geometry.direction = beam.direction;
-    geometry.max_range = kMaxRange;
-    if (beam.range <= kMaxRange) geometry.return_range = beam.range;
-    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-    pose.translation() = beam.origin;
-    builder.insertBeam(geometry, pose);
-  }
-  const double ours_beam_s = secondsSince(t0);
-  builder.takeDiff();
+  const Stream stream = makeStream(args.stream);
+  std::vector<std::string> parameters{"resolution:=" + std::to_string(args.resolution)};
+  parameters.insert(parameters.end(), args.parameters.begin(), args.parameters.end());
 
-  octomap::OcTree raw(args.resolution);
-  octomap::Pointcloud one;
-  t0 = Clock::now();
-  for (const Beam& beam : beams) {
-    one.clear();
-    const double range = std::min(beam.range, kMaxRange + 1.0);  // past max range: clear only
-    const Eigen::Vector3d end = beam.origin + range * beam.direction;
-    one.push_back(static_cast<float>(end.x()), static_cast<float>(end.y()),
-                  static_cast<float>(end.z()));
-    raw.insertPointCloud(
-        one,
-        octomap::point3d(static_cast<float>(beam.origin.x()), static_cast<float>(beam.origin.y()),
-                         static_cast<float>(beam.origin.z())),
-        kMaxRange);
-  }
-  const double raw_beam_s = secondsSince(t0);
-  std::ostringstream ours_map, raw_map;
-  builder.tree().writeBinaryConst(ours_map);
-  raw.writeBinaryConst(raw_map);
-  const bool beam_maps_equal = ours_map.str() == raw_map.str();
-
-  // Multibeam swaths: one cloud per swath, vertical fan across the canyon.
-  std::vector<std::vector<Eigen::Vector3d>> swaths(args.swaths);
-  std::vector<octomap::Pointcloud> raw_swaths(args.swaths);
-  std::vector<Eigen::Vector3d> swath_origins(args.swaths);
-  for (std::size_t s = 0; s < swaths.size(); ++s) {
-    swath_origins[s] = Eigen::Vector3d(0.2 * static_cast<double>(s), 0.0, 0.0);
-    for (std::size_t k = 0; k < args.points; ++k) {
-      const double across = -kSwathWidth / 2 + kSwathWidth * static_cast<double>(k) /
-                                                   static_cast<double>(args.points - 1);
-      const Eigen::Vector3d direction(0.0, std::sin(across), std::cos(across));
-      const double range = rangeToCanyon(direction) + noise(random);
-      const Eigen::Vector3d point = swath_origins[s] + range * direction;
-      swaths[s].push_back(point);
-      raw_swaths[s].push_back(static_cast<float>(point.x()), static_cast<float>(point.y()),
-                              static_cast<float>(point.z()));
+  // Component runs, vendor-major; per vendor one domain in this process, one for a child.
+  struct Run {
+    std::string name;
+    ComponentRun run;
+  };
+  std::vector<Run> runs;
+  for (std::size_t v = 0; v < args.vendors.size(); ++v) {
+    for (const std::string mode : {"inprocess", "child", "cross"}) {
+      if (std::find(args.modes.begin(), args.modes.end(), mode) == args.modes.end()) continue;
+      ComponentRun run;
+      run.vendor = auv::interfaces::vendorFromString(args.vendors[v]);
+      run.domain = args.domain + static_cast<int>(2 * v) + (mode == "inprocess" ? 0 : 1);
+      run.child_process = mode != "inprocess";
+      std::string name =
+          "component, " + args.vendors[v] + (run.child_process ? ", own process" : ", in process");
+      if (mode == "cross") {
+        run.feeder_vendor = run.vendor == auv::interfaces::Vendor::FASTDDS
+                                ? auv::interfaces::Vendor::CYCLONEDDS
+                                : auv::interfaces::Vendor::FASTDDS;
+        name += ", fed by " + auv::interfaces::toString(*run.feeder_vendor);
+      }
+      run.self_executable = selfExecutable();
+      run.qos = args.qos;
+      run.beam_window = args.beam_window;
+      run.cloud_window = args.cloud_window;
+      run.pin = args.pin;
+      run.parameters = parameters;
+      runs.push_back({name, run});
     }
   }
-  MapBuilder cloud_builder(options);
-  cloud_builder.enableChangeTracking(true);
-  t0 = Clock::now();
-  for (std::size_t s = 0; s < swaths.size(); ++s) {
-    cloud_builder.insertCloud(swaths[s], swath_origins[s], kMaxRange);
-  }
-  const double ours_cloud_s = secondsSince(t0);
-  octomap::OcTree raw_cloud(args.resolution);
-  t0 = Clock::now();
-  for (std::size_t s = 0; s < swaths.size(); ++s) {
-    const Eigen::Vector3d& o = swath_origins[s];
-    raw_cloud.insertPointCloud(
-        raw_swaths[s],
-        octomap::point3d(static_cast<float>(o.x()), static_cast<float>(o.y()),
-                         static_cast<float>(o.z())),
-        kMaxRange);
-  }
-  const double raw_cloud_s = secondsSince(t0);
-  std::ostringstream ours_cloud_map, raw_cloud_map;
-  cloud_builder.tree().writeBinaryConst(ours_cloud_map);
-  raw_cloud.writeBinaryConst(raw_cloud_map);
 
-  const double points = static_cast<double>(args.swaths * args.points);
-  const double n_beams = static_cast<double>(args.beams);
+  const double n_beams = static_cast<double>(stream.beams.size());
+  Table beams("beam", n_beams);
+  const bool pin = args.pin;
+  auto raw_beams = [&] {
+    return onWorkCpu(pin, [&] { return rawBeams(stream, args.resolution); });
+  };
+  {
+    const Timed raw = raw_beams();
+    beams.library(raw, onWorkCpu(pin, [&] { return libraryBeams(stream, options); }));
+  }
+  for (const Run& r : runs) {
+    std::cerr << "mapping_bench: beams through the " << r.name << " ...\n";
+    const Timed raw = raw_beams();
+    beams.component(r.name, raw, runBeams(stream, r.run));
+  }
+
+  const double n_points = static_cast<double>(stream.clouds.size() * args.stream.points);
+  Table points("point", n_points);
+  auto raw_clouds = [&] {
+    return onWorkCpu(pin, [&] { return rawClouds(stream, args.resolution); });
+  };
+  {
+    const Timed raw = raw_clouds();
+    points.library(raw, onWorkCpu(pin, [&] { return libraryClouds(stream, options); }));
+  }
+  for (const Run& r : runs) {
+    std::cerr << "mapping_bench: clouds through the " << r.name << " ...\n";
+    const Timed raw = raw_clouds();
+    points.component(r.name, raw, runClouds(stream, args.stream.points, r.run));
+  }
+
   std::ostringstream report;
   report << "# mapping_bench\n\n"
-         << "resolution " << args.resolution << " m, " << args.beams << " beams, " << args.swaths
-         << " swaths x " << args.points << " points, seed " << args.seed << "\n\n"
-         << "| input | MapBuilder /s | raw insertPointCloud /s | ratio | same map |\n"
-         << "|---|---|---|---|---|\n"
-         << "| beams | " << n_beams / ours_beam_s << " | " << n_beams / raw_beam_s << " | "
-         << raw_beam_s / ours_beam_s << " | " << (beam_maps_equal ? "yes" : "no") << " |\n"
-         << "| points | " << points / ours_cloud_s << " | " << points / raw_cloud_s << " | "
-         << raw_cloud_s / ours_cloud_s << " | "
-         << (ours_cloud_map.str() == raw_cloud_map.str() ? "yes" : "no") << " |\n\n"
-         << "goal: ratio >= 0.9 (issue 4)\n";
+         << "resolution " << args.resolution << " m; " << stream.beams.size()
+         << " profiler beams (50 Hz stamps, 200 bins each) with odometry at "
+         << args.stream.odometry_rate << " Hz (" << stream.odometry.size() << " samples); "
+         << stream.clouds.size() << " swaths x " << args.stream.points << " points; seed "
+         << args.stream.seed << "; component input QoS "
+         << (args.qos.empty() ? std::string("default") : args.qos) << "; feeder window "
+         << args.beam_window << " beams / " << args.cloud_window << " clouds; "
+         << sysconf(_SC_NPROCESSORS_ONLN) << " CPUs, "
+         << (pin ? "raw, library and the component's executor thread pinned to CPU 1, the rest "
+                   "to CPU 0"
+                 : "unpinned")
+         << "\n\n"
+         << "## Beams\n\n"
+         << beams.markdown() << "\n## Points (multibeam swaths, one PointCloud per swath)\n\n"
+         << points.markdown();
   std::cout << report.str();
   if (!args.out.empty()) {
     std::ofstream file(args.out);

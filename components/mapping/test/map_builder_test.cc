@@ -1,12 +1,16 @@
 // MapBuilder against analytic expectations: a beam at a wall at known range, a no-return beam,
-// exact replication through incremental diffs, .bt round trip and snapshots.
+// exact replication through incremental diffs, .bt round trip and snapshots; the .ot writer
+// against OctoMap's.
 #include "auv/mapping/map_builder.h"
+#include "auv/mapping/ot_stream.h"
 
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <map>
 #include <random>
 #include <sstream>
+#include <tuple>
 
 namespace auv::mapping {
 namespace {
@@ -226,6 +230,107 @@ TEST(MapBuilderTest, SnapshotsAreImmutableCopies) {
   builder.clear();
   EXPECT_EQ(builder.tree().size(), 0u);
   EXPECT_TRUE(isOccupied(*taken, 4.25, 0.25, 0.25));  // readers keep their version
+}
+
+TEST(MapBuilderTest, SnapshotsAreCopiedOnlyForReadersThatAsk) {
+  MapBuilder builder;
+  BeamGeometry beam;
+  beam.return_range = 4.0;
+  builder.insertBeam(beam, sensorAt({0.1, 0.1, 0.1}, 0));
+  EXPECT_FALSE(builder.refreshSnapshot());    // nobody asked
+  EXPECT_EQ(builder.snapshot()->size(), 0u);  // asks; the copy comes with the next refresh
+  EXPECT_TRUE(builder.refreshSnapshot());
+  EXPECT_EQ(builder.snapshot()->size(), builder.tree().size());
+  EXPECT_FALSE(builder.refreshSnapshot());  // asked, but nothing changed: no copy
+  builder.insertBeam(beam, sensorAt({0.1, 2.1, 0.1}, 0));
+  EXPECT_TRUE(builder.refreshSnapshot());  // the request waited for the change
+  EXPECT_EQ(builder.snapshot()->size(), builder.tree().size());
+  builder.clear();
+  EXPECT_TRUE(builder.refreshSnapshot());
+  EXPECT_EQ(builder.snapshot()->size(), 0u);
+}
+
+// Beams from a few poses: a map with pruned regions, several depths and both kinds of cells.
+void addBeams(MapBuilder& builder, int beams) {
+  builder.enableChangeTracking(true);
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> angle(-M_PI, M_PI);
+  std::uniform_real_distribution<double> range(1.0, 25.0);
+  for (int i = 0; i < beams; ++i) {
+    BeamGeometry beam;
+    beam.direction = beamDirection(angle(random));
+    const double r = range(random);
+    if (r <= 20.0) beam.return_range = r;
+    builder.insertBeam(beam, sensorAt({0.3 * (i % 7), -0.2 * (i % 5), 0.1 * (i % 3)}, 0.1 * i));
+  }
+}
+
+TEST(OtStreamTest, WriteTreeIsByteForByteOctomapsWrite) {
+  for (int beams : {0, 1, 500}) {
+    MapBuilder builder;
+    addBeams(builder, beams);
+    std::ostringstream theirs;
+    builder.tree().write(theirs);
+    EXPECT_EQ(ot_stream::writeTree(builder.tree()), theirs.str()) << beams << " beams";
+    EXPECT_EQ(builder.fullWithProbabilities(), theirs.str());
+  }
+}
+
+TEST(OtStreamTest, WriteCellsIsWhatAnOcTreeOfTheCellsWrites) {
+  // The diff as it was built before: an OcTree set lazily, inner nodes updated, then written.
+  MapBuilder builder;
+  addBeams(builder, 300);
+  std::vector<ot_stream::Cell> cells;
+  octomap::OcTree changes(kResolution);
+  for (auto it = builder.tree().begin_leafs(); it != builder.tree().end_leafs(); ++it) {
+    if (it.getDepth() != builder.tree().getTreeDepth()) continue;  // finest cells only
+    cells.push_back({ot_stream::cellCode(it.getKey()), it->getLogOdds()});
+    changes.setNodeValue(it.getKey(), it->getLogOdds(), true);
+  }
+  ASSERT_GT(cells.size(), 100u);
+  changes.updateInnerOccupancy();
+  std::ostringstream theirs;
+  changes.write(theirs);
+  EXPECT_EQ(ot_stream::writeCells(cells, kResolution), theirs.str());
+  std::vector<ot_stream::Cell> none;
+  std::ostringstream empty;
+  octomap::OcTree(kResolution).write(empty);
+  EXPECT_EQ(ot_stream::writeCells(none, kResolution), empty.str());
+  // And the builder's own diff of everything it changed equals that kind of tree too.
+  const MapBuilder::Diff diff = builder.takeDiff();
+  std::istringstream stream(diff.data);
+  std::unique_ptr<octomap::AbstractOcTree> read(octomap::AbstractOcTree::read(stream));
+  auto* tree = dynamic_cast<octomap::OcTree*>(read.get());
+  ASSERT_NE(tree, nullptr);
+  std::ostringstream rewritten;
+  tree->write(rewritten);
+  EXPECT_EQ(rewritten.str(), diff.data);
+  EXPECT_EQ(diff.cell_count, tree->getNumLeafNodes());
+}
+
+TEST(ChangedCellsTest, KeepsTheNewestValuePerCellThroughGrowthAndClears) {
+  detail::ChangedCells cells;
+  std::map<std::tuple<int, int, int>, float> expected;
+  std::mt19937 random(11);
+  std::uniform_int_distribution<int> coordinate(32700, 32840);  // collisions and overwrites
+  for (int round = 0; round < 3; ++round) {
+    const int count = round == 1 ? 50 : 20000;  // grow, then shrink on clear, then grow again
+    for (int i = 0; i < count; ++i) {
+      const octomap::OcTreeKey key(coordinate(random), coordinate(random), coordinate(random));
+      cells.set(key, static_cast<float>(i));
+      expected[{key[0], key[1], key[2]}] = static_cast<float>(i);
+    }
+    ASSERT_EQ(cells.size(), expected.size());
+    std::size_t seen = 0;
+    cells.forEach([&](const octomap::OcTreeKey& key, float value) {
+      EXPECT_EQ(value, (expected[{key[0], key[1], key[2]}]));
+      ++seen;
+    });
+    EXPECT_EQ(seen, expected.size());
+    cells.clear();
+    expected.clear();
+    EXPECT_TRUE(cells.empty());
+  }
 }
 
 TEST(MapBuilderTest, RejectsBadOptions) {

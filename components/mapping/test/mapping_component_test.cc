@@ -164,8 +164,11 @@ TEST(MappingComponentTest, LateJoinerOnOtherVendorGetsFullMapAndExactIncrements)
   }
   EXPECT_GT(compared, 10u);
   EXPECT_EQ(reader.tree->getNumLeafNodes(), built.getNumLeafNodes());
-  // In-process readers see the same map through the snapshot.
-  EXPECT_EQ(mapping.builder().snapshot()->getNumLeafNodes(), built.getNumLeafNodes());
+  // In-process readers see the same map through the snapshot, copied at the next update after
+  // they asked (snapshot() asks).
+  EXPECT_TRUE(executor.spinUntil(
+      [&] { return mapping.builder().snapshot()->getNumLeafNodes() == built.getNumLeafNodes(); },
+      5s));
   mapping.deactivate();
 }
 

@@ -238,6 +238,22 @@ TEST_F(MissionExecutiveTest, FixedDepthQueryWithoutDepthPlansAtTheVehiclesDepth)
   EXPECT_EQ(out.queries.front().depth(), 7.5);
 }
 
+TEST_F(MissionExecutiveTest, LaterFixedDepthQueriesKeepTheFirstQuerysPlane) {
+  MissionQuery first = query({10, 0, 0}, "first");
+  first.fixed_depth = true;
+  MissionQuery second = query({20, 0, 0}, "second");
+  second.fixed_depth = true;
+  vehicle = {0, 0, 3.0};
+  const auto out = startReady({first, second});
+  ASSERT_EQ(out.queries.size(), 1u);
+  EXPECT_EQ(out.queries.front().depth(), 3.0);
+  follow(waypoint({10, 0, 3.0}, true));
+  moveTo({10, 0, 2.6});  // arrives having risen 0.4 m (positive buoyancy)
+  const auto next = executive.takeOutbox();
+  ASSERT_EQ(next.queries.size(), 1u);
+  EXPECT_EQ(next.queries.front().depth(), 3.0);  // the mission's plane, not 2.6
+}
+
 // ---- waypoints ----------------------------------------------------------------------------
 
 TEST_F(MissionExecutiveTest, WaypointBecomesAControllerWaypointCommand) {

@@ -1,10 +1,13 @@
 #include "auv/mapping/map_builder.h"
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+
+#include "auv/mapping/ot_stream.h"
 
 namespace auv::mapping {
 namespace {
@@ -50,21 +53,25 @@ void MapBuilder::configureTree(octomap::OcTree& tree) const {
   tree.setOccupancyThres(options_.occupancy_threshold);
 }
 
+void MapBuilder::update(const octomap::OcTreeKey& key, bool occupied) {
+  const octomap::OcTreeNode* node = tree_.updateNode(key, occupied);
+  if (track_changes_) changed_.set(key, node->getLogOdds());
+}
+
 InsertStats MapBuilder::integrate(const octomap::KeySet& free_keys,
                                   const octomap::KeySet& occupied_keys) {
   InsertStats stats;
   for (const octomap::OcTreeKey& key : free_keys) {
     if (occupied_keys.count(key)) continue;  // a return in the cell outweighs rays through it
-    tree_.updateNode(key, false);
-    if (track_changes_) changed_keys_.insert(key);
+    update(key, false);
     ++stats.free_cells;
   }
   for (const octomap::OcTreeKey& key : occupied_keys) {
-    tree_.updateNode(key, true);
-    if (track_changes_) changed_keys_.insert(key);
+    update(key, true);
     ++stats.occupied_cells;
   }
   cell_updates_ += stats.free_cells + stats.occupied_cells;
+  ++version_;
   return stats;
 }
 
@@ -88,17 +95,16 @@ InsertStats MapBuilder::insertBeam(const BeamGeometry& beam,
   InsertStats stats;
   for (const octomap::OcTreeKey& key : ray_scratch_) {
     if (hit_valid && key == hit) continue;  // a return in the cell outweighs the ray through it
-    tree_.updateNode(key, false);
-    if (track_changes_) changed_keys_.insert(key);
+    update(key, false);
     ++stats.free_cells;
   }
   if (hit_valid) {
-    tree_.updateNode(hit, true);
-    if (track_changes_) changed_keys_.insert(hit);
+    update(hit, true);
     ++stats.occupied_cells;
   }
   cell_updates_ += stats.free_cells + stats.occupied_cells;
   ++beams_inserted_;
+  ++version_;
   return stats;
 }
 
@@ -127,35 +133,31 @@ InsertStats MapBuilder::insertCloud(const std::vector<Eigen::Vector3d>& points_w
 
 void MapBuilder::enableChangeTracking(bool enable) {
   track_changes_ = enable;
-  if (!enable) changed_keys_.clear();
+  if (!enable) changed_.clear();
 }
 
 MapBuilder::Diff MapBuilder::takeDiff() {
   Diff diff;
-  octomap::OcTree changes(options_.resolution);
-  configureTree(changes);
-  const double half = 0.5 * options_.resolution;
-  for (const octomap::OcTreeKey& key : changed_keys_) {
-    const octomap::OcTreeNode* node = tree_.search(key);
-    if (node == nullptr) continue;  // cannot happen between clears; be safe
-    // Lazy: keep every cell at the finest depth, inner values are set once below.
-    changes.setNodeValue(key, node->getLogOdds(), true);
-    const octomap::point3d c = tree_.keyToCoord(key);
-    const Eigen::Vector3d center(c.x(), c.y(), c.z());
-    if (diff.cell_count == 0) {
-      diff.changed_min = center.array() - half;
-      diff.changed_max = center.array() + half;
-    } else {
-      diff.changed_min = diff.changed_min.cwiseMin((center.array() - half).matrix());
-      diff.changed_max = diff.changed_max.cwiseMax((center.array() + half).matrix());
+  diff.cell_count = changed_.size();
+  std::vector<ot_stream::Cell> cells;
+  cells.reserve(changed_.size());
+  octomap::OcTreeKey low(0xFFFF, 0xFFFF, 0xFFFF), high(0, 0, 0);  // keyToCoord is monotonic
+  changed_.forEach([&](const octomap::OcTreeKey& key, float log_odds) {
+    cells.push_back({ot_stream::cellCode(key), log_odds});
+    for (unsigned i = 0; i < 3; ++i) {
+      low[i] = std::min(low[i], key[i]);
+      high[i] = std::max(high[i], key[i]);
     }
-    ++diff.cell_count;
+  });
+  if (!changed_.empty()) {
+    const double half = 0.5 * options_.resolution;
+    const octomap::point3d a = tree_.keyToCoord(low), b = tree_.keyToCoord(high);
+    diff.changed_min = Eigen::Vector3d(a.x(), a.y(), a.z()).array() - half;
+    diff.changed_max = Eigen::Vector3d(b.x(), b.y(), b.z()).array() + half;
   }
-  changes.updateInnerOccupancy();
-  std::ostringstream stream;
-  changes.write(stream);
-  diff.data = stream.str();
-  changed_keys_.clear();
+  // What an OcTree holding these cells (setNodeValue lazily, then updateInnerOccupancy) writes.
+  diff.data = ot_stream::writeCells(cells, tree_.getResolution(), tree_.getTreeDepth());
+  changed_.clear();
   return diff;
 }
 
@@ -199,11 +201,7 @@ std::string MapBuilder::fullBinary() const {
   return stream.str();
 }
 
-std::string MapBuilder::fullWithProbabilities() const {
-  std::ostringstream stream;
-  tree_.write(stream);
-  return stream.str();
-}
+std::string MapBuilder::fullWithProbabilities() const { return ot_stream::writeTree(tree_); }
 
 bool MapBuilder::save(const std::string& path) const {
   // Not OcTree::writeBinary(path): that one converts the live tree to maximum likelihood.
@@ -216,16 +214,26 @@ bool MapBuilder::save(const std::string& path) const {
 
 void MapBuilder::clear() {
   tree_.clear();
-  changed_keys_.clear();
+  changed_.clear();
+  ++version_;
 }
 
 std::shared_ptr<const octomap::OcTree> MapBuilder::takeSnapshot() {
   auto copy = std::make_shared<const octomap::OcTree>(tree_);
   std::atomic_store(&snapshot_, copy);
+  snapshot_version_ = version_;
   return copy;
 }
 
+bool MapBuilder::refreshSnapshot() {
+  // The flag stays set until a copy is made: a request while nothing changed waits for a change.
+  if (version_ == snapshot_version_ || !snapshot_wanted_.exchange(false)) return false;
+  takeSnapshot();
+  return true;
+}
+
 std::shared_ptr<const octomap::OcTree> MapBuilder::snapshot() const {
+  snapshot_wanted_.store(true, std::memory_order_relaxed);
   return std::atomic_load(&snapshot_);
 }
 

@@ -102,6 +102,7 @@ bool MissionExecutive::start(const std::string& mission_id,
     return false;
   }
   queries_ = queries;
+  mission_depth_.reset();
   msg::MissionStatus fresh;
   fresh.mission_id(mission_id);
   fresh.start_time().sec(static_cast<int32_t>(std::floor(now)));
@@ -183,7 +184,12 @@ void MissionExecutive::startQuery(double now) {
   query.start().position(toPoint(*position_));
   query.start().orientation().w(std::cos(yaw_ / 2));
   query.start().orientation().z(std::sin(yaw_ / 2));
-  if (q.fixed_depth && !q.depth) query.depth(position_->z());  // the vehicle's depth
+  if (q.fixed_depth && !q.depth) {
+    // The vehicle's depth when the mission's first such query starts, kept for the others:
+    // each query re-reading it would let the plane creep with every hold.
+    if (!mission_depth_) mission_depth_ = position_->z();
+    query.depth(*mission_depth_);
+  }
   goal_ = q.goal;
   if (query.fixed_depth()) goal_.z() = query.depth();
   goal_tolerance_ = q.goal_tolerance;

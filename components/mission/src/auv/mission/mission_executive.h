@@ -111,6 +111,7 @@ class MissionExecutive {
   std::optional<msg::Waypoint> current_;
   std::optional<msg::Waypoint> next_;
   Eigen::Vector3d goal_{0, 0, 0};
+  std::optional<double> mission_depth_;  // plane of fixed-depth queries that give no depth
   double goal_tolerance_ = 0.0;
   bool next_requested_ = false;
   double waiting_since_ = 0.0;

@@ -1,5 +1,6 @@
 #include "auv/mapping/components/mapping_component.h"
 #include "auv/interfaces/msg_time.h"
+#include "auv/mapping/components/message_conversions.h"
 
 #include <filesystem>
 #include <fstream>
@@ -8,46 +9,12 @@
 namespace auv::mapping {
 namespace {
 
-Eigen::Isometry3d toIsometry(const msg::Pose& pose) {
-  Eigen::Isometry3d result = Eigen::Isometry3d::Identity();
-  result.translation() =
-      Eigen::Vector3d(pose.position().x(), pose.position().y(), pose.position().z());
-  Eigen::Quaterniond q(pose.orientation().w(), pose.orientation().x(), pose.orientation().y(),
-                       pose.orientation().z());
-  if (q.norm() < 1e-9) q = Eigen::Quaterniond::Identity();  // unset orientation
-  result.linear() = q.normalized().toRotationMatrix();
-  return result;
-}
-
-Eigen::Isometry3d toIsometry(const StampedPose& pose) {
-  Eigen::Isometry3d result = Eigen::Isometry3d::Identity();
-  result.translation() = pose.position;
-  result.linear() = pose.orientation.toRotationMatrix();
-  return result;
-}
-
 msg::Point toPoint(const Eigen::Vector3d& v) {
   msg::Point p;
   p.x(v.x());
   p.y(v.y());
   p.z(v.z());
   return p;
-}
-
-/// Beam geometry in the sonar head frame: the first echo within [min_range, max_range] is the
-/// return (later echoes lie behind the first surface: multipath or weaker targets).
-BeamGeometry toGeometry(const msg::SonarBeam& beam) {
-  BeamGeometry geometry;
-  geometry.direction = beamDirection(beam.beam_angle());
-  geometry.min_range = beam.min_range();
-  geometry.max_range = beam.max_range();
-  for (float range : beam.ranges()) {
-    if (range >= beam.min_range() && range <= beam.max_range()) {
-      geometry.return_range = range;
-      break;
-    }
-  }
-  return geometry;
 }
 
 }  // namespace
@@ -192,21 +159,18 @@ void MappingComponent::cleanup() {
 }
 
 void MappingComponent::onOdometry(const msg::Odometry& odometry) {
-  StampedPose pose;
-  pose.stamp_ns = interfaces::toNanoseconds(odometry.header().stamp());
-  const Eigen::Isometry3d world_T_body = toIsometry(odometry.pose().pose());
-  pose.position = world_T_body.translation();
-  pose.orientation = Eigen::Quaterniond(world_T_body.linear());
-  poses_->add(pose);
+  poses_->add(toStampedPose(odometry));
   // Beams that arrived before the odometry covering them.
   while (!waiting_beams_.empty() && tryInsertBeam(waiting_beams_.front())) {
     waiting_beams_.pop_front();
   }
 }
 
-void MappingComponent::onBeam(const msg::SonarBeam& beam) {
+void MappingComponent::onBeam(const msg::SonarBeam& message) {
+  PendingBeam beam{interfaces::toNanoseconds(message.header().stamp()), toGeometry(message),
+                   toIsometry(message.mounting())};
   if (!waiting_beams_.empty() || !tryInsertBeam(beam)) {  // keep beams in stamp order
-    waiting_beams_.push_back(beam);
+    waiting_beams_.push_back(std::move(beam));
     while (static_cast<int64_t>(waiting_beams_.size()) > options_.beam_queue_length) {
       waiting_beams_.pop_front();
       ++beams_dropped_;
@@ -214,19 +178,18 @@ void MappingComponent::onBeam(const msg::SonarBeam& beam) {
   }
 }
 
-bool MappingComponent::tryInsertBeam(const msg::SonarBeam& beam) {
-  const int64_t stamp_ns = interfaces::toNanoseconds(beam.header().stamp());
+bool MappingComponent::tryInsertBeam(const PendingBeam& beam) {
   PoseLookupStatus status;
-  const auto pose = poses_->lookUp(stamp_ns, &status);
+  const auto pose = poses_->lookUp(beam.stamp_ns, &status);
   if (!pose) {
     if (status == PoseLookupStatus::AFTER_END || status == PoseLookupStatus::EMPTY) return false;
     ++beams_dropped_;  // can never be placed
     AUV_DEBUG(node_->logger(), "dropped beam: " << toString(status));
     return true;
   }
-  builder_->insertBeam(toGeometry(beam), toIsometry(*pose) * toIsometry(beam.mounting()));
+  builder_->insertBeam(beam.geometry, toIsometry(*pose) * beam.mounting);
   ++beams_inserted_;
-  newest_stamp_ns_ = std::max(newest_stamp_ns_, stamp_ns);
+  newest_stamp_ns_ = std::max(newest_stamp_ns_, beam.stamp_ns);
   return true;
 }
 
@@ -239,6 +202,7 @@ void MappingComponent::onCloud(const msg::PointCloud& cloud) {
     PoseLookupStatus status;
     const auto pose = poses_->lookUp(stamp_ns, &status);
     if (!pose) {
+      ++clouds_dropped_;
       AUV_DEBUG(node_->logger(), "dropped cloud: " << toString(status));
       return;
     }
@@ -251,6 +215,7 @@ void MappingComponent::onCloud(const msg::PointCloud& cloud) {
   }
   const Eigen::Vector3d origin = world_T_cloud * toIsometry(cloud.sensor_origin()).translation();
   builder_->insertCloud(points, origin, cloud.max_range());
+  ++clouds_inserted_;
   newest_stamp_ns_ = std::max(newest_stamp_ns_, stamp_ns);
 }
 
@@ -274,10 +239,9 @@ void MappingComponent::tick() {
     last_full_ns_ = now_ns;
   } else if (builder_->pendingChangeCount() > 0 && now_ns >= hold_increments_until_ns_) {
     publishIncrement();
-  } else {
-    return;
   }
-  builder_->takeSnapshot();
+  // In-process readers: a copy of the whole tree, so only if one asked (map_builder.h).
+  builder_->refreshSnapshot();
 }
 
 void MappingComponent::fillCommon(msg::OctomapUpdate& update) const {

@@ -48,14 +48,23 @@ class MappingComponent : public interfaces::Component {
   const MapBuilder& builder() const { return *builder_; }
   uint64_t beamsInserted() const { return beams_inserted_; }
   uint64_t beamsDropped() const { return beams_dropped_; }
+  uint64_t cloudsInserted() const { return clouds_inserted_; }
+  /// Clouds whose pose could not be looked up (not in world_frame, odometry not covering).
+  uint64_t cloudsDropped() const { return clouds_dropped_; }
   uint64_t sequenceNumber() const { return sequence_number_; }
 
  private:
   void onBeam(const msg::SonarBeam& beam);
   void onCloud(const msg::PointCloud& cloud);
   void onOdometry(const msg::Odometry& odometry);
+  /// What a beam waiting for odometry needs (not the message: no copy of its bins).
+  struct PendingBeam {
+    int64_t stamp_ns = 0;
+    BeamGeometry geometry;       ///< sonar head frame
+    Eigen::Isometry3d mounting;  ///< head -> body
+  };
   /// Inserts the beam if its pose is known; false if it must wait for newer odometry.
-  bool tryInsertBeam(const msg::SonarBeam& beam);
+  bool tryInsertBeam(const PendingBeam& beam);
   void tick();
   void publishFull();
   void publishIncrement();
@@ -65,7 +74,7 @@ class MappingComponent : public interfaces::Component {
   Options options_;
   std::unique_ptr<MapBuilder> builder_;
   std::unique_ptr<PoseBuffer> poses_;
-  std::deque<msg::SonarBeam> waiting_beams_;
+  std::deque<PendingBeam> waiting_beams_;
   std::shared_ptr<interfaces::Subscription<msg::SonarBeam>> beam_sub_;
   std::shared_ptr<interfaces::Subscription<msg::PointCloud>> cloud_sub_;
   std::shared_ptr<interfaces::Subscription<msg::Odometry>> odometry_sub_;
@@ -82,6 +91,8 @@ class MappingComponent : public interfaces::Component {
   int matched_readers_ = 0;
   uint64_t beams_inserted_ = 0;
   uint64_t beams_dropped_ = 0;
+  uint64_t clouds_inserted_ = 0;
+  uint64_t clouds_dropped_ = 0;
 };
 
 }  // namespace auv::mapping

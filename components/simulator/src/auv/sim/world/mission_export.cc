@@ -25,7 +25,11 @@ std::string missionYaml(const Scenario& scenario, const Mesh& world_mesh,
       << "    objective: " << options.objective << "\n"
       << "    expected_distance: " << options.expected_distance << "\n"
       << "    admissible_range: " << options.admissible_range << "\n"
-      << "    fixed_depth: " << (options.fixed_depth ? "true" : "false") << "\n"
+      << "    fixed_depth: " << (options.fixed_depth ? "true" : "false")
+      << "\n"
+      // The plane of the scenario's start, not the vehicle's depth at the moment the mission
+      // starts: an idle, positively buoyant vehicle may have floated up by then.
+      << "    depth: " << scenario.start_position.z() << "\n"
       << "    bounds: {min: [" << lo.x() << ", " << lo.y() << ", 0.0], max: [" << hi.x() << ", "
       << hi.y() << ", " << scenario.seabed_depth << "]}\n"
       << "  queries:\n";

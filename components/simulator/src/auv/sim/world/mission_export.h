@@ -18,7 +18,8 @@ struct MissionExportOptions {
 };
 
 /// Mission YAML: one query per scenario query, horizontal bounds from the world mesh (in the
-/// world frame), the start and the goals, depth range from the surface to the seabed.
+/// world frame), the start and the goals, depth range from the surface to the seabed; fixed
+/// depth at the scenario's start depth.
 std::string missionYaml(const Scenario& scenario, const Mesh& world_mesh,
                         const MissionExportOptions& options = {});
 
