@@ -30,6 +30,9 @@ class MapReplica {
 
   /// The copy (an empty tree of the resolution before the first FULL map).
   const octomap::OcTree& tree() const { return *tree_; }
+  /// The same, for readers that need a mutable tree (DynamicEDT3D takes one); it is replaced,
+  /// not updated, by a FULL map.
+  octomap::OcTree& tree() { return *tree_; }
   /// Version held (0: none yet).
   uint64_t sequence() const { return sequence_; }
   /// True after a GAP or REJECTED until a FULL map is applied.

@@ -11,7 +11,6 @@
 #include <ompl/base/objectives/PathLengthOptimizationObjective.h>
 #include <ompl/base/spaces/RealVectorStateSpace.h>
 
-#include "auv/mapping/map_builder.h"
 #include "auv/mapping/map_replica.h"
 
 namespace auv::planning {
@@ -167,7 +166,7 @@ void PlanningComponent::configure(interfaces::Node& node) {
                                          {"frame of published poses (NED)", "", {}, {}, {}, true});
   o.clearance.check();
 
-  tree_ = std::make_unique<octomap::OcTree>(o.map_resolution);
+  replica_ = std::make_unique<mapping::MapReplica>(o.map_id, o.map_resolution);
   field_ = std::make_shared<ReplicaDistanceField>(o.map_resolution, o.max_distance);
 
   waypoint_pub_ = node.createPublisher<msg::Waypoint>("planner/waypoint", interfaces::commandQos());
@@ -315,43 +314,27 @@ void PlanningComponent::applyMapUpdates() {
 }
 
 void PlanningComponent::applyMapUpdate(const msg::OctomapUpdate& update) {
-  if (update.map_id() != options_.map_id) return;
-  if (std::abs(update.resolution() - options_.map_resolution) > 1e-9) {
-    AUV_WARN(node_->logger(), "map update " << update.sequence_number() << " has resolution "
-                                            << update.resolution() << " m, map_resolution is "
-                                            << options_.map_resolution << " m: ignored");
+  const mapping::MapReplica::Outcome outcome = replica_->apply(update);
+  map_sequence_ = replica_->sequence();
+  full_map_needed_ = replica_->needsFullMap();
+  if (outcome == mapping::MapReplica::Outcome::REJECTED) {
+    AUV_WARN(node_->logger(),
+             "map update " << update.sequence_number() << " not applied: " << replica_->error());
+  }
+  if (outcome != mapping::MapReplica::Outcome::APPLIED) return;
+  if (update.kind() == msg::OCTOMAP_UPDATE_FULL) {
+    if (query_) field_->rebuild(&replica_->tree());  // a FULL map is a new tree
+    recheck_everything_ = true;
     return;
   }
-  try {
-    if (update.kind() == msg::OCTOMAP_UPDATE_FULL) {
-      tree_ = mapping::readFullMap(update);
-      map_sequence_ = update.sequence_number();
-      full_map_needed_ = false;
-      if (query_) field_->rebuild(tree_.get());
-      recheck_everything_ = true;
-    } else if (update.kind() == msg::OCTOMAP_UPDATE_INCREMENTAL &&
-               update.encoding() == msg::OCTOMAP_ENCODING_FULL) {
-      if (map_sequence_ == 0 || update.base_sequence() != map_sequence_) {
-        full_map_needed_ = true;  // a gap in the chain: only a FULL map repairs the replica
-        return;
-      }
-      mapping::MapBuilder::applyDiff(std::string(update.data().begin(), update.data().end()),
-                                     *tree_);
-      map_sequence_ = update.sequence_number();
-      if (query_) field_->update();
-      const Eigen::Vector3d changed_min = toVector(update.changed_min());
-      const Eigen::Vector3d changed_max = toVector(update.changed_max());
-      if ((changed_min.array() < changed_max.array()).all()) {
-        changed_region_.extend(Eigen::AlignedBox3d(changed_min, changed_max));
-      } else if (!(changed_min.array() > changed_max.array()).any()) {
-        recheck_everything_ = true;  // a flat box: not filled in by the sender, so unknown
-      }                              // else an empty update: nothing changed
-    }
-  } catch (const std::exception& error) {
-    full_map_needed_ = true;
-    AUV_WARN(node_->logger(),
-             "map update " << update.sequence_number() << " not applied: " << error.what());
-  }
+  if (query_) field_->update();
+  const Eigen::Vector3d changed_min = toVector(update.changed_min());
+  const Eigen::Vector3d changed_max = toVector(update.changed_max());
+  if ((changed_min.array() < changed_max.array()).all()) {
+    changed_region_.extend(Eigen::AlignedBox3d(changed_min, changed_max));
+  } else if (!(changed_min.array() > changed_max.array()).any()) {
+    recheck_everything_ = true;  // a flat box: not filled in by the sender, so unknown
+  }                              // else an empty update: nothing changed
 }
 
 void PlanningComponent::startQuery(const msg::PlannerQuery& query) {
@@ -389,7 +372,7 @@ void PlanningComponent::startQuery(const msg::PlannerQuery& query) {
     field_options.max_distance = options_.max_distance;
     field_options.min_corner = space.min_corner - Eigen::Vector3d::Constant(options_.field_margin);
     field_options.max_corner = space.max_corner + Eigen::Vector3d::Constant(options_.field_margin);
-    field_->rebuild(tree_.get(), field_options);
+    field_->rebuild(&replica_->tree(), field_options);
     active->si = makeSpaceInformation(space, field_, options_.clearance);
 
     ob::OptimizationObjectivePtr objective;

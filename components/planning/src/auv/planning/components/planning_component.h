@@ -22,6 +22,7 @@
 #include <Eigen/Geometry>
 
 #include "auv/interfaces/component.h"
+#include "auv/mapping/map_replica.h"
 #include "auv/planning/distance_field.h"
 #include "auv/planning/map_validity.h"
 #include "auv/planning/online_rrt_star.h"
@@ -150,7 +151,7 @@ class PlanningComponent : public interfaces::Component {
 
   // Planning state: the planning thread and onWaypointRequest, under mutex_.
   std::mutex mutex_;
-  std::unique_ptr<octomap::OcTree> tree_;
+  std::unique_ptr<mapping::MapReplica> replica_;  // the map from map/update
   std::shared_ptr<ReplicaDistanceField> field_;
   std::unique_ptr<ActiveQuery> query_;
   std::optional<msg::WaypointRequest> pending_request_;  // for the active query
