@@ -86,6 +86,58 @@ TEST(MapBuilderTest, NoReturnBeamMarksOnlyFreeCellsUpToMaxRange) {
   EXPECT_TRUE(isUnknown(tree, 6.75, 0.25, 0.25));  // beyond max range
 }
 
+// A wall along the plane y = 2.2 (cells y in [2, 2.5)), seen by perpendicular echoes from a
+// vehicle at y = 0.2, then by silent beams grazing it at 2..10 deg (an echo too weak to
+// detect). With the single-ray model each silent beam crosses many wall cells; stopping at the
+// first occupied one keeps the wall, and the space behind it stays unseen.
+std::size_t wallCellsLeft(bool stop_at_occupied, std::size_t* cells_behind_seen) {
+  MapBuilder::Options options;
+  options.no_return_stops_at_occupied = stop_at_occupied;
+  MapBuilder builder(options);
+  BeamGeometry perpendicular;
+  perpendicular.return_range = 2.0;
+  for (double x = 0.25; x < 20.0; x += kResolution) {
+    builder.insertBeam(perpendicular, sensorAt({x, 0.2, 0.2}, M_PI / 2));
+  }
+  BeamGeometry silent;
+  silent.max_range = 20.0;
+  for (double deg = 2.0; deg <= 10.0; deg += 0.5) {
+    builder.insertBeam(silent, sensorAt({0.1, 0.2, 0.2}, deg * M_PI / 180.0));
+  }
+  std::size_t left = 0;
+  *cells_behind_seen = 0;
+  for (double x = 0.25; x < 20.0; x += kResolution) {
+    if (isOccupied(builder.tree(), x, 2.25, 0.25)) ++left;
+    if (!isUnknown(builder.tree(), x, 2.75, 0.25)) ++*cells_behind_seen;
+  }
+  return left;
+}
+
+TEST(MapBuilderTest, SilentGrazingBeamsStopAtTheWallInsteadOfErasingIt) {
+  std::size_t behind = 0;
+  EXPECT_EQ(wallCellsLeft(true, &behind), 40u);
+  EXPECT_EQ(behind, 0u);
+  const std::size_t left_without_rule = wallCellsLeft(false, &behind);
+  EXPECT_LT(left_without_rule, 30u) << "the single-ray model should erode the wall";
+  EXPECT_GT(behind, 0u);
+}
+
+// Beams with an echo from beyond an occupied cell (a copy of a wall left by navigation drift)
+// still clear it; silent beams fade an isolated cell (a false return) one miss at a time.
+TEST(MapBuilderTest, EchoesClearThroughOccupiedCellsAndSilentBeamsFadeFalseReturns) {
+  for (const bool echo : {true, false}) {
+    MapBuilder builder;
+    BeamGeometry false_return;
+    false_return.return_range = 4.2;  // from x = 0.1: the cell [4, 4.5)
+    builder.insertBeam(false_return, sensorAt({0.1, 0.2, 0.2}, 0.0));
+    ASSERT_TRUE(isOccupied(builder.tree(), 4.25, 0.25, 0.25));
+    BeamGeometry later;
+    if (echo) later.return_range = 8.2;
+    for (int i = 0; i < 20; ++i) builder.insertBeam(later, sensorAt({0.1, 0.2, 0.2}, 0.0));
+    EXPECT_TRUE(isFree(builder.tree(), 4.25, 0.25, 0.25)) << (echo ? "echo" : "silent");
+  }
+}
+
 TEST(MapBuilderTest, CloudMatchesRawInsertPointCloud) {
   MapBuilder builder;
   octomap::OcTree raw(kResolution);

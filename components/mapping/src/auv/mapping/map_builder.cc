@@ -93,10 +93,14 @@ InsertStats MapBuilder::insertBeam(const BeamGeometry& beam,
   if (free_until > min_range) tree_.computeRayKeys(toPoint(start), toPoint(end), ray_scratch_);
   // One ray visits each cell once, so no key set is needed (unlike insertCloud).
   InsertStats stats;
+  const bool stop_at_occupied = !has_return && options_.no_return_stops_at_occupied;
   for (const octomap::OcTreeKey& key : ray_scratch_) {
     if (hit_valid && key == hit) continue;  // a return in the cell outweighs the ray through it
+    const octomap::OcTreeNode* node = stop_at_occupied ? tree_.search(key) : nullptr;
+    const bool blocked = node != nullptr && tree_.isNodeOccupied(node);
     update(key, false);
     ++stats.free_cells;
+    if (blocked) break;
   }
   if (hit_valid) {
     update(hit, true);

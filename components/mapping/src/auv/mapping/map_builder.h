@@ -67,7 +67,14 @@ class MapBuilder {
                                        ///< able to become occupied again after long free evidence.
     double clamping_max = 0.971;       ///< upper probability clamp, in [prob_hit, 1).
     double occupancy_threshold = 0.5;  ///< probability above which a cell counts as occupied.
-    void check() const;                ///< Throws std::invalid_argument naming the bad field.
+    /// A beam without an echo clears cells only up to the first one the map holds occupied,
+    /// that one included (one miss: isolated false returns still fade). Why: a beam grazing a
+    /// wall returns too weak an echo to detect, and its single-ray model would otherwise run on
+    /// through the wall and erase it (walls beside the vehicle vanish). Beams with an echo
+    /// still clear through occupied cells, which removes stale copies of walls left by
+    /// navigation drift.
+    bool no_return_stops_at_occupied = true;
+    void check() const;  ///< Throws std::invalid_argument naming the bad field.
   };
 
   MapBuilder() : MapBuilder(Options{}) {}
@@ -75,7 +82,8 @@ class MapBuilder {
 
   /// Integrates one beam seen from `world_T_sensor` (sensor frame -> world): cells from the
   /// beam's min_range up to the return get a miss, the cell at the return a hit; with no
-  /// return, cells up to max_range get a miss only. The return's cell is never also updated as
+  /// return, cells up to max_range get a miss only (or up to the first occupied cell, see
+  /// Options::no_return_stops_at_occupied). The return's cell is never also updated as
   /// free (occupied wins, as in OcTree::insertPointCloud). Keys come from computeRayKeys and
   /// are updated with updateNode rather than through insertPointCloud so that the builder knows
   /// every cell it touched (OctoMap's own change detection only reports occupancy flips, not

@@ -40,6 +40,14 @@ void MappingComponent::configure(interfaces::Node& node) {
   m.occupancy_threshold =
       p.declare<double>("occupancy_threshold", m.occupancy_threshold,
                         {"probability above which a cell is occupied", "", 0.001, 0.999, {}, true});
+  m.no_return_stops_at_occupied =
+      p.declare<bool>("no_return_stops_at_occupied", m.no_return_stops_at_occupied,
+                      {"a beam without echo clears free space only up to the first occupied cell",
+                       "",
+                       {},
+                       {},
+                       {},
+                       true});
   auto& b = options_.poses;
   b.capacity = static_cast<std::size_t>(
       p.declare<int64_t>("pose_buffer_length", static_cast<int64_t>(b.capacity),
