@@ -56,10 +56,15 @@ class Service : public Waitable {
       // Clients resend until answered: answer a repeat from the cache, never run it twice.
       auto& last = last_reply_[request.header().client_guid()];
       if (request.header().sequence_number() <= last.first) {
-        if (request.header().sequence_number() == last.first) replies_->write(&last.second);
+        if (request.header().sequence_number() == last.first && last.second) {
+          sendReply(*last.second);
+        }
         continue;
       }
-      Rep reply;
+      // Built in place and kept by pointer: a reply can be a multi-MiB file chunk
+      // (bulk_transfer), and copying it into the cache cost a full pass over its bytes.
+      auto shared_reply = std::make_shared<Rep>();
+      Rep& reply = *shared_reply;
       reply.header(request.header());
       reply.status().code(msg::REPLY_CODE_OK);
       try {
@@ -74,22 +79,37 @@ class Service : public Waitable {
         reply.status().code(msg::REPLY_CODE_INTERNAL_ERROR);
         reply.status().error_text(e.what());
       }
-      last = {request.header().sequence_number(), reply};
+      last = {request.header().sequence_number(), std::move(shared_reply)};
       ++served_;  // before the reply leaves, so a client that got it sees the count
-      replies_->write(&reply);
+      sendReply(reply);
     }
     return true;
   }
   const std::string& name() const { return name_; }
   uint64_t served() const { return served_; }
+  /// Replies the middleware refused (e.g. a reliable writer blocked past its max_blocking_time
+  /// by a client that stopped reading); the client's resend gets the cached reply.
+  uint64_t failedReplies() const { return failed_replies_; }
 
  private:
+  void sendReply(const Rep& reply) {
+    // A reply that cannot be written must not take the server down: clients resend until
+    // answered, and a repeat is answered from the cache.
+    try {
+      replies_->write(&reply);
+    } catch (const std::exception&) {
+      ++failed_replies_;
+    }
+  }
+
   std::string name_;
   Handler handler_;
   std::unique_ptr<DataWriter> replies_;
   std::atomic<bool> ready_{true};
+  std::atomic<uint64_t> failed_replies_{0};
   std::atomic<uint64_t> served_{0};
-  std::map<std::array<uint8_t, 16>, std::pair<uint64_t, Rep>> last_reply_;  // per client
+  // Per client: the last sequence number answered and its reply, for repeats.
+  std::map<std::array<uint8_t, 16>, std::pair<uint64_t, std::shared_ptr<const Rep>>> last_reply_;
   std::unique_ptr<DataReader> requests_;  // last: destroyed first, before what its callback uses
 };
 
@@ -170,7 +190,7 @@ class Client {
       std::lock_guard<std::mutex> lock(mutex_);
       auto it = pending_.find(reply.header().sequence_number());
       if (it == pending_.end()) continue;  // late reply to a call that timed out
-      it->second.set_value(reply);
+      it->second.set_value(std::move(reply));  // no copy of a large reply
       pending_.erase(it);
     }
   }
