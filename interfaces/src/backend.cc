@@ -5,6 +5,9 @@
 #include <cctype>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
 #include <stdexcept>
 
 namespace auv::interfaces {
@@ -69,6 +72,74 @@ std::string participantUserData(Vendor vendor, const std::string& node_name) {
   gethostname(host, sizeof(host) - 1);
   return "auv:node=" + node_name + ";host=" + host + ";pid=" + std::to_string(getpid()) +
          ";vendor=" + toString(vendor);
+}
+
+SecurityFiles securityFiles(const std::string& keystore, const std::string& identity) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  fs::path root = fs::absolute(keystore, ec);  // file: URIs must not depend on the cwd
+  if (ec) root = keystore;
+  root = root.lexically_normal();
+  const fs::path id = root / "identities" / identity;
+  SecurityFiles files;
+  files.identity_ca = (root / "ca.cert.pem").string();
+  files.permissions_ca = files.identity_ca;
+  files.governance = (root / "governance.p7s").string();
+  files.certificate = (id / "cert.pem").string();
+  files.private_key = (id / "key.pem").string();
+  files.permissions = (id / "permissions.p7s").string();
+  return files;
+}
+
+std::optional<SecurityIdentity> securityFromEnvironment() {
+  const auto get = [](const char* name) {
+    const char* value = std::getenv(name);
+    return std::string(value != nullptr ? value : "");
+  };
+  SecurityIdentity security;
+  security.keystore = get("AUV_SECURITY_KEYSTORE");
+  if (security.keystore.empty()) return std::nullopt;
+  security.identity = get("AUV_SECURITY_IDENTITY");
+  if (security.identity.empty() || security.identity.find('/') != std::string::npos)
+    throw std::invalid_argument(
+        "AUV_SECURITY_IDENTITY: AUV_SECURITY_KEYSTORE is set, so name the identity this "
+        "process uses (a folder under " +
+        security.keystore + "/identities/), got '" + security.identity + "'");
+  const std::string strategy = get("AUV_SECURITY_STRATEGY");
+  if (strategy == "Permissive") {
+    security.enforce = false;
+  } else if (!strategy.empty() && strategy != "Enforce") {
+    throw std::invalid_argument("AUV_SECURITY_STRATEGY: expected Enforce or Permissive, got '" +
+                                strategy + "'");
+  }
+  return security;
+}
+
+std::optional<SecurityFiles> resolveSecurity(const SecurityIdentity& security) {
+  if (security.keystore.empty()) return std::nullopt;
+  const SecurityFiles files = securityFiles(security.keystore, security.identity);
+  for (const std::string* file : {&files.identity_ca, &files.governance, &files.certificate,
+                                  &files.private_key, &files.permissions}) {
+    // Both vendors report an unreadable file only as a failed participant: name it here.
+    if (std::ifstream(*file).good()) continue;
+    const std::string problem = "DDS Security: cannot read " + *file + " (identity '" +
+                                security.identity + "' of keystore " + security.keystore + ")";
+    if (security.enforce)
+      throw std::runtime_error(problem +
+                               "; create it with `auv security init`, or set "
+                               "AUV_SECURITY_STRATEGY=Permissive to run unsecured");
+    std::cerr << "warning: " << problem << ": running UNSECURED (AUV_SECURITY_STRATEGY="
+              << "Permissive)\n";
+    return std::nullopt;
+  }
+  return files;
+}
+
+std::optional<SecurityFiles> participantSecurity(const ParticipantOptions& options) {
+  if (options.security) return resolveSecurity(*options.security);
+  const std::optional<SecurityIdentity> from_environment = securityFromEnvironment();
+  if (!from_environment) return std::nullopt;
+  return resolveSecurity(*from_environment);
 }
 
 std::unique_ptr<Participant> createParticipant(Vendor vendor, const ParticipantOptions& options) {

@@ -1,12 +1,18 @@
 // Cyclone DDS backend: plain C API plus the custom sertype of cyclone_sertype.cc.
 #include <dds/dds.h>
+#include <dlfcn.h>
 
 #include <atomic>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "auv/interfaces/backend.h"
 #include "cyclone_config.h"
@@ -26,7 +32,75 @@ constexpr const char* kLoopbackConfig =
     "<NetworkInterface name=\"lo\" multicast=\"true\"/>"
     "</Interfaces><AllowMulticast>true</AllowMulticast></General>"
     "<Internal><SocketReceiveBufferSize min=\"default\" max=\"4MB\"/></Internal>"
-    "</Domain></CycloneDDS>";
+    "%SECURITY%</Domain></CycloneDDS>";
+
+// Debian installs the security plugins in a folder beside libddsc (libddsc0debian/), which
+// dlopen does not search; upstream builds put them next to libddsc, where the plain name
+// works. `name` is e.g. "dds_security_auth".
+std::string securityLibrary(const std::string& name) {
+  namespace fs = std::filesystem;
+  Dl_info info{};
+  if (dladdr(reinterpret_cast<void*>(&dds_create_participant), &info) == 0 ||
+      info.dli_fname == nullptr)
+    return name;
+  std::error_code ec;
+  const fs::path dir = fs::path(info.dli_fname).parent_path();
+  for (const auto& entry : fs::directory_iterator(dir, ec)) {
+    if (entry.path().filename().string().rfind("libddsc", 0) != 0) continue;
+    const fs::path candidate = entry.path() / ("lib" + name + ".so");
+    if (fs::is_regular_file(candidate, ec)) return candidate.string();
+  }
+  return name;
+}
+
+// The three plugins and the six files, as the dds.sec.* properties the OMG specification
+// names (Cyclone reads the same names from the participant QoS).
+std::vector<std::pair<std::string, std::string>> securityProperties(const SecurityFiles& files) {
+  const std::string auth = securityLibrary("dds_security_auth");
+  const std::string access = securityLibrary("dds_security_ac");
+  const std::string crypto = securityLibrary("dds_security_crypto");
+  return {
+      {"dds.sec.auth.library.path", auth},
+      {"dds.sec.auth.library.init", "init_authentication"},
+      {"dds.sec.auth.library.finalize", "finalize_authentication"},
+      {"dds.sec.auth.identity_ca", "file:" + files.identity_ca},
+      {"dds.sec.auth.identity_certificate", "file:" + files.certificate},
+      {"dds.sec.auth.private_key", "file:" + files.private_key},
+      {"dds.sec.access.library.path", access},
+      {"dds.sec.access.library.init", "init_access_control"},
+      {"dds.sec.access.library.finalize", "finalize_access_control"},
+      {"dds.sec.access.permissions_ca", "file:" + files.permissions_ca},
+      {"dds.sec.access.governance", "file:" + files.governance},
+      {"dds.sec.access.permissions", "file:" + files.permissions},
+      {"dds.sec.crypto.library.path", crypto},
+      {"dds.sec.crypto.library.init", "init_crypto"},
+      {"dds.sec.crypto.library.finalize", "finalize_crypto"},
+  };
+}
+
+// The same as a <Security> element of the domain configuration: participants created
+// without dds.sec.* properties in their QoS (the graph inspector's) take it from there.
+std::string securityConfigXml(const SecurityFiles& files) {
+  const auto library = [](const std::string& path, const char* init, const char* finalize) {
+    return "<Library path=\"" + path + "\" initFunction=\"" + init + "\" finalizeFunction=\"" +
+           finalize + "\"/>";
+  };
+  return "<Security><Authentication>" +
+         library(securityLibrary("dds_security_auth"), "init_authentication",
+                 "finalize_authentication") +
+         "<IdentityCA>file:" + files.identity_ca +
+         "</IdentityCA><IdentityCertificate>file:" + files.certificate +
+         "</IdentityCertificate><PrivateKey>file:" + files.private_key +
+         "</PrivateKey></Authentication><AccessControl>" +
+         library(securityLibrary("dds_security_ac"), "init_access_control",
+                 "finalize_access_control") +
+         "<PermissionsCA>file:" + files.permissions_ca +
+         "</PermissionsCA><Governance>file:" + files.governance +
+         "</Governance><Permissions>file:" + files.permissions +
+         "</Permissions></AccessControl><Cryptographic>" +
+         library(securityLibrary("dds_security_crypto"), "init_crypto", "finalize_crypto") +
+         "</Cryptographic></Security>";
+}
 
 void check(dds_return_t rc, const std::string& what) {
   if (rc < 0) throw std::runtime_error("cyclonedds: " + what + ": " + dds_strretcode(rc));
@@ -42,8 +116,15 @@ void ensureCycloneDomain(int domain_id) {
   if (uri != nullptr && *uri != '\0') return;  // Cyclone reads the user's configuration itself
   std::lock_guard<std::mutex> lock(mutex);
   if (domains.count(domain_id)) return;
+  std::string config = kLoopbackConfig;
+  std::string security;
+  if (const std::optional<SecurityIdentity> identity = securityFromEnvironment()) {
+    if (const std::optional<SecurityFiles> files = resolveSecurity(*identity))
+      security = securityConfigXml(*files);
+  }
+  config.replace(config.find("%SECURITY%"), 10, security);
   const dds_entity_t domain =
-      dds_create_domain(static_cast<dds_domainid_t>(domain_id), kLoopbackConfig);
+      dds_create_domain(static_cast<dds_domainid_t>(domain_id), config.c_str());
   if (domain < 0 && domain != DDS_RETCODE_PRECONDITION_NOT_MET)
     check(domain, "create domain " + std::to_string(domain_id));
   domains[domain_id] = domain;
@@ -179,9 +260,18 @@ class CycloneParticipant : public Participant {
     const std::string user_data = participantUserData(Vendor::CYCLONEDDS, options.node_name);
     dds_qset_userdata(q.get(), user_data.data(), user_data.size());
     dds_qset_entity_name(q.get(), options.node_name.c_str());
+    const std::optional<SecurityFiles> security = participantSecurity(options);
+    if (security) {
+      for (const auto& [name, value] : securityProperties(*security))
+        dds_qset_prop(q.get(), name.c_str(), value.c_str());
+    }
     participant_ =
         dds_create_participant(static_cast<dds_domainid_t>(options.domain_id), q.get(), nullptr);
-    check(participant_, "create participant on domain " + std::to_string(options.domain_id));
+    check(participant_, "create participant on domain " + std::to_string(options.domain_id) +
+                            (security ? " with DDS Security (certificate " + security->certificate +
+                                            ", governance or permissions rejected; Cyclone logs "
+                                            "why when CYCLONEDDS_URI enables tracing)"
+                                      : std::string()));
   }
   ~CycloneParticipant() override { dds_delete(participant_); }
 

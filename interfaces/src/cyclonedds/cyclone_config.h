@@ -4,8 +4,9 @@
 namespace auv::interfaces::detail {
 
 /// Creates the Cyclone domain `domain_id` bound to loopback, unless CYCLONEDDS_URI is set
-/// (then Cyclone reads the user's configuration). Idempotent; call before creating a
-/// participant on that domain.
+/// (then Cyclone reads the user's configuration). With AUV_SECURITY_* set, the configuration
+/// also carries that identity's <Security> element (docs/security.md). Idempotent; call
+/// before creating a participant on that domain.
 void ensureCycloneDomain(int domain_id);
 
 }  // namespace auv::interfaces::detail

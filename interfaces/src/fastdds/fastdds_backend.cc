@@ -15,6 +15,7 @@
 #include <cstring>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 
 #include "auv/interfaces/backend.h"
@@ -172,6 +173,26 @@ class FastddsReader : public DataReader, public dds::DataReaderListener {
   dds::DataReader* reader_ = nullptr;
 };
 
+// The builtin DDS Security plugins of Fast DDS (PKI-DH, Access-Permissions, AES-GCM-GMAC)
+// configured by participant properties; docs/security.md.
+void addSecurityProperties(const SecurityFiles& files, dds::DomainParticipantQos& qos) {
+  auto& properties = qos.properties().properties();
+  // Fast DDS 2.9 accepts only "file://" + absolute path ("file:" alone is "unsupported").
+  const std::string file = "file://";
+  const auto add = [&properties](const std::string& name, const std::string& value) {
+    properties.emplace_back(name, value);
+  };
+  add("dds.sec.auth.plugin", "builtin.PKI-DH");
+  add("dds.sec.auth.builtin.PKI-DH.identity_ca", file + files.identity_ca);
+  add("dds.sec.auth.builtin.PKI-DH.identity_certificate", file + files.certificate);
+  add("dds.sec.auth.builtin.PKI-DH.private_key", file + files.private_key);
+  add("dds.sec.access.plugin", "builtin.Access-Permissions");
+  add("dds.sec.access.builtin.Access-Permissions.permissions_ca", file + files.permissions_ca);
+  add("dds.sec.access.builtin.Access-Permissions.governance", file + files.governance);
+  add("dds.sec.access.builtin.Access-Permissions.permissions", file + files.permissions);
+  add("dds.sec.crypto.plugin", "builtin.AES-GCM-GMAC");
+}
+
 }  // namespace
 
 dds::DomainParticipantQos fastddsParticipantQos(const ParticipantOptions& options) {
@@ -195,6 +216,8 @@ dds::DomainParticipantQos fastddsParticipantQos(const ParticipantOptions& option
     qos.transport().user_transports.push_back(udp);
     qos.transport().use_builtin_transports = false;
   }
+  if (const std::optional<SecurityFiles> security = participantSecurity(options))
+    addSecurityProperties(*security, qos);
   qos.name(options.node_name);
   const std::string user_data = participantUserData(Vendor::FASTDDS, options.node_name);
   qos.user_data().setValue(
@@ -213,7 +236,10 @@ class FastddsParticipant : public Participant {
         factory->create_participant(options.domain_id, fastddsParticipantQos(options));
     participant_ = domain_->participant;
     check(participant_ != nullptr,
-          "create participant on domain " + std::to_string(options.domain_id));
+          "create participant on domain " + std::to_string(options.domain_id) +
+              (participantSecurity(options) ? " with DDS Security (certificate, key, governance "
+                                              "or permissions rejected: see the log above)"
+                                            : ""));
     publisher_ = domain_->publisher = participant_->create_publisher(dds::PUBLISHER_QOS_DEFAULT);
     subscriber_ = domain_->subscriber =
         participant_->create_subscriber(dds::SUBSCRIBER_QOS_DEFAULT);

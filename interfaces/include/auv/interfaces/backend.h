@@ -8,7 +8,9 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
+#include <utility>
 
 #include "auv/interfaces/qos.h"
 #include "auv/msg/type_support.h"
@@ -61,11 +63,56 @@ class DataReader {
   virtual Guid guid() const = 0;
 };
 
-/// Identity a participant advertises in its USER_DATA so `auv node list` can show it.
+/// DDS Security for a participant: one identity of a keystore made by `auv security init`
+/// (layout and supported vendor pairings in docs/security.md).
+struct SecurityIdentity {
+  std::string keystore;  ///< The keystore folder; empty = no security.
+  std::string identity;  ///< Name of the identity, a folder under <keystore>/identities/.
+  /// Enforce: a missing or unreadable file is an error. Permissive: the participant runs
+  /// unsecured instead, with a warning on stderr (ROS 2's ROS_SECURITY_STRATEGY).
+  bool enforce = true;
+};
+
+/// The six files a secured participant uses (absolute paths, as file: URIs need them).
+struct SecurityFiles {
+  std::string identity_ca;     ///< <keystore>/ca.cert.pem: CA that signed every identity.
+  std::string permissions_ca;  ///< Same CA: it also signs governance and permissions.
+  std::string governance;      ///< <keystore>/governance.p7s
+  std::string certificate;     ///< <keystore>/identities/<name>/cert.pem
+  std::string private_key;     ///< <keystore>/identities/<name>/key.pem
+  std::string permissions;     ///< <keystore>/identities/<name>/permissions.p7s
+};
+
+/// The keystore layout: where `identity`'s files are (no check that they exist).
+SecurityFiles securityFiles(const std::string& keystore, const std::string& identity);
+
+/// Security chosen by AUV_SECURITY_KEYSTORE, AUV_SECURITY_IDENTITY and
+/// AUV_SECURITY_STRATEGY (Enforce, the default, or Permissive); nullopt when no keystore is
+/// set. Throws std::invalid_argument naming the variable for a missing identity or an
+/// unknown strategy.
+std::optional<SecurityIdentity> securityFromEnvironment();
+
+/// The files of `security` after checking that each is readable; nullopt when security is
+/// off (no keystore, or Permissive with a file missing). Throws std::runtime_error naming
+/// the file when it is missing or unreadable under Enforce.
+std::optional<SecurityFiles> resolveSecurity(const SecurityIdentity& security);
+
+/// How a participant is created: identity in USER_DATA, domain, security.
 struct ParticipantOptions {
+  // A constructor rather than an aggregate, so the common `{domain, name}` stays free of
+  // missing-initializer warnings.
+  ParticipantOptions(int domain = 0, std::string name = "")
+      : domain_id(domain), node_name(std::move(name)) {}
   int domain_id = 0;
   std::string node_name;  ///< Shown by `auv node list`.
+  /// Unset: from the environment (securityFromEnvironment()); set: this identity, or no
+  /// security when its keystore is empty (tests put secured and unsecured participants in
+  /// one process this way).
+  std::optional<SecurityIdentity> security;
 };
+
+/// The security `options` asks for, resolved (see ParticipantOptions::security).
+std::optional<SecurityFiles> participantSecurity(const ParticipantOptions& options);
 
 /// Called from a middleware thread when `reader` has samples. It must only signal or take
 /// from `reader`, never destroy it: deleting a reader waits for its running callbacks.
@@ -84,12 +131,12 @@ class Participant {
   /// Creates a reader; `on_data` is called from a middleware thread when samples arrive.
   virtual std::unique_ptr<DataReader> createReader(const std::string& topic,
                                                    const msg::TypeSupport& type,
-                                                   const QosProfile& qos,
-                                                   DataCallback on_data) = 0;
+                                                   const QosProfile& qos, DataCallback on_data) = 0;
 };
 
 /// Creates a participant of `vendor`. Unless the user set the vendor's own configuration
-/// (CYCLONEDDS_URI or FASTRTPS_DEFAULT_PROFILES_FILE), it binds to loopback only.
+/// (CYCLONEDDS_URI or FASTRTPS_DEFAULT_PROFILES_FILE), it binds to loopback only. With
+/// security (participantSecurity()) it authenticates, checks permissions and encrypts.
 std::unique_ptr<Participant> createParticipant(Vendor vendor, const ParticipantOptions& options);
 
 /// Topic names are given ROS-style ("/nav/odometry" or "nav/odometry"); DDS sees
