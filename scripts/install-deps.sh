@@ -19,6 +19,8 @@ PACKAGES=(
   libeigen3-dev libembree-dev libopen3d-dev libfmt-dev libopencv-dev ffmpeg
   # vehicle autonomy: maps, distance fields, planning
   liboctomap-dev libdynamicedt3d-dev octomap-tools libompl-dev
+  # recordings pull: SHA-256 (OpenSSL EVP), manifest JSON; rsync is the pull benchmark's anchor
+  libssl-dev nlohmann-json3-dev rsync
 )
 
 echo "install-deps: apt-get update"

@@ -1,0 +1,235 @@
+#include "auv/recorder/components/recorder_component.h"
+
+#include <cmath>
+
+#include "auv/interfaces/msg_time.h"
+#include "auv/recorder/recorder_names.h"
+#include "auv/recorder/sha256.h"
+
+namespace auv::recorder {
+namespace {
+
+msg::Time secondsToTime(double seconds) {
+  return interfaces::toMsgTime(static_cast<int64_t>(std::llround(seconds * 1e9)));
+}
+
+}  // namespace
+
+msg::RecordingInfo toRecordingInfo(const Recording& r) {
+  msg::RecordingInfo info;
+  info.camera_id(r.camera_id);
+  info.file_path(r.file_path);
+  info.size_bytes(r.size_bytes);
+  info.sha256(r.complete ? r.sha256 : "");
+  info.start_time(secondsToTime(r.start_time_s));
+  info.end_time(secondsToTime(r.end_time_s));
+  info.time_synchronised(false);  // the sidecar's camera_time_s: the camera's own clock
+  info.frame_count(r.frame_count);
+  info.sidecar_file(r.sidecar_file);
+  info.sidecar_size_bytes(r.sidecar_size_bytes);
+  info.sidecar_sha256(r.complete ? r.sidecar_sha256 : "");
+  info.complete(r.complete);
+  info.problem(r.problem);
+  return info;
+}
+
+void RecorderComponent::Options::check() const {
+  if (root.empty()) throw std::invalid_argument("parameter root: empty (the recordings folder)");
+  try {
+    checkVehicleName(vehicle_name);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("parameter vehicle_name: ") + e.what());
+  }
+  if (max_chunk_bytes < 4096 || max_chunk_bytes > kLargestMaxChunkBytes) {
+    throw std::invalid_argument("parameter max_chunk_bytes: " + std::to_string(max_chunk_bytes) +
+                                " is outside [4096, " + std::to_string(kLargestMaxChunkBytes) +
+                                "]");
+  }
+  CatalogueOptions catalogue{root, extensions};
+  try {
+    catalogue.check();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("parameter ") + e.what());
+  }
+}
+
+RecorderComponent::~RecorderComponent() { stopScanner(); }
+
+void RecorderComponent::configure(interfaces::Node& node) {
+  node_ = &node;
+  auto& p = node.parameters();
+  auto& o = options_;
+  o.root = p.declare<std::string>(
+      "root", o.root,
+      {"recordings root: <root>/<camera>/<name>.mp4 (+ .frames.csv)", "", {}, {}, {}, true});
+  o.vehicle_name = p.declare<std::string>(
+      "vehicle_name", o.vehicle_name,
+      {"prefix of the recorder's DDS names: <vehicle_name>/recorder/...", "", {}, {}, {}, true});
+  o.scan_period =
+      p.declare<double>("scan_period", o.scan_period,
+                        {"seconds between scans of the root (new and closed files are hashed once)",
+                         "s",
+                         0.05,
+                         3600.0,
+                         {},
+                         true});
+  o.max_chunk_bytes = p.declare<uint32_t>("max_chunk_bytes", o.max_chunk_bytes,
+                                          {"cap of one fetch_chunk reply's data",
+                                           "B",
+                                           4096.0,
+                                           static_cast<double>(kLargestMaxChunkBytes),
+                                           {},
+                                           true});
+  o.extensions = p.declare<std::vector<std::string>>(
+      "extensions", o.extensions,
+      {"file endings of recordings (with the dot)", "", {}, {}, {}, true});
+  o.check();
+  catalogue_ = std::make_unique<Catalogue>(CatalogueOptions{o.root, o.extensions});
+  reader_ = std::make_unique<ChunkReader>(o.root, o.max_chunk_bytes);
+  std::error_code error;
+  if (!std::filesystem::is_directory(o.root, error)) {
+    AUV_WARN(node.logger(), "recordings root '" << o.root
+                                                << "' is not a folder (yet): the catalogue "
+                                                   "stays empty until it appears");
+  }
+
+  feed_pub_ = node.createPublisher<msg::RecordingInfo>(recordingsTopic(o.vehicle_name),
+                                                       interfaces::latchedStateQos());
+  list_service_ = node.createService<msg::RecordingCatalogueRequest, msg::RecordingCatalogueReply>(
+      listRecordingsService(o.vehicle_name),
+      [this](const msg::RecordingCatalogueRequest& request, msg::RecordingCatalogueReply& reply) {
+        onList(request, reply);
+      },
+      interfaces::bulkTransferQos());
+  fetch_service_ = node.createService<msg::FileChunkRequest, msg::FileChunkReply>(
+      fetchChunkService(o.vehicle_name),
+      [this](const msg::FileChunkRequest& request, msg::FileChunkReply& reply) {
+        onFetch(request, reply);
+      },
+      interfaces::bulkTransferQos());
+}
+
+void RecorderComponent::activate() {
+  std::lock_guard<std::mutex> lock(scanner_mutex_);
+  if (scanner_.joinable()) return;
+  scanner_stop_ = false;
+  scanner_ = std::thread([this] { scanLoop(); });
+  AUV_INFO(node_->logger(),
+           "serving '" << options_.root << "' as " << options_.vehicle_name << "/recorder/*");
+}
+
+void RecorderComponent::deactivate() { stopScanner(); }
+
+void RecorderComponent::cleanup() {
+  stopScanner();
+  list_service_.reset();
+  fetch_service_.reset();
+  feed_pub_.reset();
+}
+
+void RecorderComponent::stopScanner() {
+  {
+    std::lock_guard<std::mutex> lock(scanner_mutex_);
+    scanner_stop_ = true;
+  }
+  scanner_wake_.notify_all();
+  if (scanner_.joinable()) scanner_.join();
+}
+
+void RecorderComponent::scanLoop() {
+  std::unique_lock<std::mutex> lock(scanner_mutex_);
+  while (!scanner_stop_) {
+    lock.unlock();
+    scanAndPublish();
+    lock.lock();
+    scanner_wake_.wait_for(lock, std::chrono::duration<double>(options_.scan_period),
+                           [this] { return scanner_stop_ || scan_requested_; });
+    scan_requested_ = false;
+  }
+}
+
+void RecorderComponent::scanNow() { scanAndPublish(); }
+
+void RecorderComponent::scanAndPublish() {
+  std::lock_guard<std::mutex> lock(publish_mutex_);
+  const ScanReport report = catalogue_->scan();
+  for (const auto& message : report.messages) AUV_WARN(node_->logger(), message);
+  if (!report.modified) return;
+  // The feed: one sample per recording whose metadata changed (keyed per file).
+  for (const Recording& r : catalogue_->list("", true)) {
+    msg::RecordingInfo info = toRecordingInfo(r);
+    auto it = published_.find(r.file_path);
+    if (it != published_.end() && it->second == info) continue;
+    feed_pub_->publish(info);
+    published_[r.file_path] = std::move(info);
+  }
+}
+
+void RecorderComponent::onList(const msg::RecordingCatalogueRequest& request,
+                               msg::RecordingCatalogueReply& reply) {
+  if (!request.camera_id().empty() && !catalogue_->hasCamera(request.camera_id())) {
+    throw interfaces::ServiceError(
+        msg::REPLY_CODE_NOT_FOUND,
+        "camera_id '" + request.camera_id() + "': no such camera folder in the recordings root");
+  }
+  std::vector<msg::RecordingInfo> recordings;
+  for (const Recording& r : catalogue_->list(request.camera_id(), request.include_incomplete())) {
+    recordings.push_back(toRecordingInfo(r));
+  }
+  reply.recordings(std::move(recordings));
+  reply.pending_files(catalogue_->walked() ? static_cast<uint32_t>(catalogue_->pendingFiles())
+                                           : 1u);
+  reply.max_chunk_bytes(options_.max_chunk_bytes);
+}
+
+void RecorderComponent::onFetch(const msg::FileChunkRequest& request, msg::FileChunkReply& reply) {
+  ++chunks_served_;
+  reply.file_path(request.file_path());
+  reply.offset(request.offset());
+  try {
+    const auto served = catalogue_->servedFile(request.file_path());
+    if (!served) {
+      checkRelativePath(request.file_path());  // a malformed path is named as such
+      throw ChunkError(ChunkError::Kind::NOT_FOUND,
+                       "file_path '" + request.file_path() +
+                           "': not a complete recording or sidecar in the catalogue");
+    }
+    if (served->relative_path != request.file_path()) {
+      throw ChunkError(ChunkError::Kind::NOT_FOUND,
+                       "file_path '" + request.file_path() + "': not a complete file");
+    }
+    Chunk chunk =
+        reader_->read(request.file_path(), request.offset(), request.length(), served->stamp);
+    reply.data_sha256(Sha256::of(chunk.data.data(), chunk.data.size()));
+    reply.total_size(chunk.total_size);
+    reply.eof(request.offset() + chunk.data.size() == chunk.total_size);
+    if (chunk_observer_) chunk_observer_(request.file_path(), request.offset(), chunk.data.size());
+    reply.data(std::move(chunk.data));
+  } catch (const ChunkError& e) {
+    switch (e.kind()) {
+      case ChunkError::Kind::INVALID_PATH:
+      case ChunkError::Kind::BAD_RANGE:
+        throw interfaces::ServiceError(msg::REPLY_CODE_INVALID_ARGUMENT, e.what());
+      case ChunkError::Kind::NOT_FOUND:
+        throw interfaces::ServiceError(msg::REPLY_CODE_NOT_FOUND, e.what());
+      case ChunkError::Kind::CHANGED: {
+        catalogue_->reportChanged(request.file_path(), e.what());
+        AUV_WARN(node_->logger(), e.what() << ": no longer served as complete");
+        {
+          std::lock_guard<std::mutex> lock(scanner_mutex_);
+          scan_requested_ = true;
+        }
+        scanner_wake_.notify_all();
+        throw interfaces::ServiceError(msg::REPLY_CODE_REJECTED, e.what());
+      }
+      case ChunkError::Kind::IO:
+        throw interfaces::ServiceError(msg::REPLY_CODE_IO_ERROR, e.what());
+    }
+    throw;
+  }
+}
+
+}  // namespace auv::recorder
+
+AUV_REGISTER_COMPONENT(auv::recorder::RecorderComponent, "recorder",
+                       "serves the vehicle's recordings (catalogue, file chunks) to the shore")

@@ -1,0 +1,213 @@
+// The catalogue of a recordings root (no DDS): what is listed, hashed once, noticed when it
+// changes after being catalogued, and how bad input is reported.
+#include "auv/recorder/catalogue.h"
+
+#include <gtest/gtest.h>
+
+#include "auv/recorder/sha256.h"
+#include "test_files.h"
+
+namespace auv::recorder {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::randomBytes;
+using testing::sidecarText;
+using testing::TempDir;
+using testing::writeFile;
+using testing::writeRecording;
+
+#define EXPECT_CONTAINS(text, part) \
+  EXPECT_NE(std::string(text).find(part), std::string::npos) << "'" << (text) << "'"
+
+TEST(Sha256, KnownVectors) {
+  EXPECT_EQ(Sha256::of("abc", 3),
+            "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  EXPECT_EQ(Sha256::of("", 0), "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+  Sha256 incremental;
+  incremental.update("a", 1);
+  incremental.update("bc", 2);
+  EXPECT_EQ(incremental.hexDigest(), Sha256::of("abc", 3));
+  EXPECT_TRUE(isSha256Hex(Sha256::of("x", 1)));
+  EXPECT_FALSE(isSha256Hex("ABC"));
+}
+
+TEST(Catalogue, MissingRootIsAnEmptyCatalogue) {
+  TempDir dir("missing");
+  Catalogue catalogue({dir.path() / "not_yet", {".mp4"}});
+  EXPECT_FALSE(catalogue.walked());
+  catalogue.scan();
+  EXPECT_TRUE(catalogue.walked());
+  EXPECT_TRUE(catalogue.list("", true).empty());
+}
+
+TEST(Catalogue, ListsClosedRecordingsWithDigestsAndFrameTimes) {
+  TempDir dir("closed");
+  const std::string left = writeRecording(dir.path(), "left", 1, 100000, 25, 1);
+  const std::string right = writeRecording(dir.path(), "right", 1, 5000, 3, 2);
+  writeFile(dir.path() / "left" / "notes.txt", "not a recording");
+  Catalogue catalogue({dir.path(), {".mp4"}});
+  const ScanReport report = catalogue.scan();
+  EXPECT_TRUE(report.modified);
+  EXPECT_EQ(report.hashed, 4u);  // two recordings, two sidecars
+  const auto all = catalogue.list("", false);
+  ASSERT_EQ(all.size(), 2u);
+  const Recording& r = all[0];
+  EXPECT_EQ(r.camera_id, "left");
+  EXPECT_EQ(r.file_path, left);
+  EXPECT_TRUE(r.complete);
+  EXPECT_TRUE(r.problem.empty()) << r.problem;
+  EXPECT_EQ(r.size_bytes, 100000u);
+  EXPECT_EQ(r.sha256, sha256OfFile(dir.path() / left));
+  EXPECT_EQ(r.sidecar_file, left + ".frames.csv");
+  EXPECT_EQ(r.sidecar_sha256, sha256OfFile(dir.path() / r.sidecar_file));
+  EXPECT_EQ(r.sidecar_size_bytes, fs::file_size(dir.path() / r.sidecar_file));
+  EXPECT_EQ(r.frame_count, 25u);
+  EXPECT_DOUBLE_EQ(r.start_time_s, 10.0);
+  EXPECT_NEAR(r.end_time_s, 12.4, 1e-6);
+  EXPECT_EQ(all[1].file_path, right);
+  EXPECT_EQ(catalogue.list("right", false).size(), 1u);
+  EXPECT_TRUE(catalogue.hasCamera("left"));
+  EXPECT_FALSE(catalogue.hasCamera("down"));
+  EXPECT_EQ(catalogue.pendingFiles(), 0u);
+}
+
+TEST(Catalogue, IncompleteFilesAreListedOnRequestAndCompletedWhenRenamed) {
+  TempDir dir("incomplete");
+  const fs::path camera = dir.path() / "forward";
+  writeFile(camera / "forward_0001.incomplete.mp4", randomBytes(3000, 3));
+  // The writer is half-way through line 3: only whole lines count.
+  writeFile(camera / "forward_0001.mp4.frames.csv.incomplete", sidecarText(2) + "2,100.2");
+  Catalogue catalogue({dir.path(), {".mp4"}});
+  catalogue.scan();
+  EXPECT_TRUE(catalogue.list("", false).empty());
+  auto open = catalogue.list("", true);
+  ASSERT_EQ(open.size(), 1u);
+  EXPECT_EQ(open[0].file_path, "forward/forward_0001.mp4");  // the final name is the key
+  EXPECT_FALSE(open[0].complete);
+  EXPECT_TRUE(open[0].sha256.empty());
+  EXPECT_EQ(open[0].frame_count, 2u);
+  EXPECT_EQ(open[0].size_bytes, 3000u);
+  EXPECT_FALSE(catalogue.servedFile("forward/forward_0001.mp4"));
+
+  // Closed as the simulator does: sidecar first, then the video.
+  fs::rename(camera / "forward_0001.mp4.frames.csv.incomplete",
+             camera / "forward_0001.mp4.frames.csv");
+  writeFile(camera / "forward_0001.mp4.frames.csv", sidecarText(3));
+  catalogue.scan();
+  EXPECT_TRUE(catalogue.list("", false).empty()) << "video still open";
+  fs::rename(camera / "forward_0001.incomplete.mp4", camera / "forward_0001.mp4");
+  catalogue.scan();
+  auto closed = catalogue.list("", false);
+  ASSERT_EQ(closed.size(), 1u);
+  EXPECT_TRUE(closed[0].complete);
+  EXPECT_EQ(closed[0].frame_count, 3u);
+  EXPECT_EQ(closed[0].sha256, sha256OfFile(camera / "forward_0001.mp4"));
+  const auto served = catalogue.servedFile("forward/forward_0001.mp4.frames.csv");
+  ASSERT_TRUE(served);
+  EXPECT_EQ(served->relative_path, "forward/forward_0001.mp4.frames.csv");
+}
+
+TEST(Catalogue, HashesEachFileOnceAndAgainOnlyWhenSizeOrTimeChange) {
+  TempDir dir("once");
+  const std::string path = writeRecording(dir.path(), "left", 1, 20000, 5, 4);
+  Catalogue catalogue({dir.path(), {".mp4"}});
+  EXPECT_EQ(catalogue.scan().hashed, 2u);
+  const uint64_t generation = catalogue.generation();
+  const ScanReport again = catalogue.scan();
+  EXPECT_EQ(again.hashed, 0u);
+  EXPECT_FALSE(again.modified);
+  EXPECT_EQ(catalogue.generation(), generation);
+
+  // Touched, same bytes: hashed again, still complete, nothing to report.
+  fs::last_write_time(dir.path() / path,
+                      fs::last_write_time(dir.path() / path) + std::chrono::seconds(5));
+  const ScanReport touched = catalogue.scan();
+  EXPECT_EQ(touched.hashed, 2u);
+  const auto list = catalogue.list("", false);
+  ASSERT_EQ(list.size(), 1u);
+  EXPECT_TRUE(list[0].complete);
+  EXPECT_TRUE(list[0].problem.empty()) << list[0].problem;
+}
+
+TEST(Catalogue, FileTruncatedAfterCataloguingIsReportedAndNotServed) {
+  TempDir dir("truncated");
+  const std::string path = writeRecording(dir.path(), "left", 1, 50000, 5, 5);
+  Catalogue catalogue({dir.path(), {".mp4"}});
+  catalogue.scan();
+  ASSERT_TRUE(catalogue.servedFile(path));
+  fs::resize_file(dir.path() / path, 20000);
+  const ScanReport report = catalogue.scan();
+  EXPECT_TRUE(report.modified);
+  ASSERT_EQ(report.messages.size(), 1u);
+  EXPECT_CONTAINS(report.messages[0], path);
+  EXPECT_CONTAINS(report.messages[0], "50000 -> 20000");
+  EXPECT_TRUE(catalogue.list("", false).empty());
+  const auto all = catalogue.list("", true);
+  ASSERT_EQ(all.size(), 1u);
+  EXPECT_FALSE(all[0].complete);
+  EXPECT_TRUE(all[0].sha256.empty());
+  EXPECT_CONTAINS(all[0].problem, "changed after it was catalogued complete");
+  EXPECT_FALSE(catalogue.servedFile(path));
+  EXPECT_FALSE(catalogue.servedFile(path + ".frames.csv"));
+  // Still flagged at the next scan (it is not the file that was catalogued).
+  EXPECT_FALSE(catalogue.scan().modified);
+  EXPECT_FALSE(catalogue.list("", true)[0].complete);
+}
+
+TEST(Catalogue, ChangeReportedByTheChunkServerIsRecheckedByTheNextScan) {
+  TempDir dir("reported");
+  const std::string path = writeRecording(dir.path(), "left", 1, 1000, 2, 6);
+  Catalogue catalogue({dir.path(), {".mp4"}});
+  catalogue.scan();
+  catalogue.reportChanged(path, "changed since it was catalogued");
+  EXPECT_FALSE(catalogue.servedFile(path));
+  catalogue.scan();  // same bytes after all: complete again
+  ASSERT_TRUE(catalogue.servedFile(path));
+  EXPECT_TRUE(catalogue.list("", false)[0].problem.empty());
+}
+
+TEST(Catalogue, MalformedSidecarIsNamedAndTheVideoStillServed) {
+  TempDir dir("sidecar");
+  const std::string path = writeRecording(dir.path(), "left", 1, 1000, 2, 7);
+  writeFile(dir.path() / (path + ".frames.csv"),
+            "frame,camera_time_s,sim_time_s\n0,1.0,0\n1,abc,0.1\n");
+  Catalogue catalogue({dir.path(), {".mp4"}});
+  catalogue.scan();
+  const auto list = catalogue.list("", false);
+  ASSERT_EQ(list.size(), 1u);
+  EXPECT_TRUE(list[0].complete);
+  EXPECT_CONTAINS(list[0].problem, "left_0001.mp4.frames.csv line 3");
+  EXPECT_CONTAINS(list[0].problem, "'abc'");
+  EXPECT_EQ(list[0].frame_count, 0u);
+}
+
+TEST(Catalogue, RemovedFilesLeaveAndSymlinksAreNotFollowed) {
+  TempDir dir("removed");
+  TempDir outside("outside");
+  const std::string path = writeRecording(dir.path(), "left", 1, 1000, 2, 8);
+  writeRecording(outside.path(), "secret", 1, 1000, 2, 9);
+  fs::create_directory_symlink(outside.path() / "secret", dir.path() / "secret");
+  fs::create_symlink(outside.path() / "secret" / "secret_0001.mp4",
+                     dir.path() / "left" / "left_0002.mp4");
+  Catalogue catalogue({dir.path(), {".mp4"}});
+  catalogue.scan();
+  ASSERT_EQ(catalogue.list("", true).size(), 1u);
+  fs::remove(dir.path() / path);
+  const ScanReport report = catalogue.scan();
+  EXPECT_TRUE(report.modified);
+  EXPECT_TRUE(catalogue.list("", true).empty());
+}
+
+TEST(Catalogue, OptionsNameTheBadField) {
+  try {
+    Catalogue catalogue({"/tmp", {"mp4"}});
+    FAIL() << "accepted an extension without a dot";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_CONTAINS(e.what(), "extensions");
+  }
+  EXPECT_THROW(Catalogue({"", {".mp4"}}), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace auv::recorder

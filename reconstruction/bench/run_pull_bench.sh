@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# Runs the pull benchmark on loopback (DDS domains 5 and 6) and writes the table to
+# bench_results/pull_bench_<time>.md in the workspace (not committed). Extra arguments go to
+# pull_bench (e.g. --files 4 --file-mb 32 --runs 3 --root auv_runs/demo-canyon/vehicle/recordings).
+set -euo pipefail
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+workspace="${AUV_WORKSPACE:-$(pwd)}"
+bench="$(command -v pull_bench || true)"
+[ -z "$bench" ] && [ -x "$here/pull_bench" ] && bench="$here/pull_bench"
+if [ -z "$bench" ]; then echo "run_pull_bench: pull_bench not found (source install/setup.bash)" >&2; exit 1; fi
+mkdir -p "$workspace/bench_results"
+out="$workspace/bench_results/pull_bench_$(date +%Y%m%d_%H%M%S).md"
+"$bench" --out "$out" "$@"
