@@ -28,8 +28,8 @@ guard=()
 set -euo pipefail
 step() { printf "\n\033[1m== %s\033[0m\n" "$*"; }
 rm -rf "$AUV_DEMO_RUN"
-step "auv launch bringup/launch/vehicle_sim.yaml world:=$AUV_DEMO_WORLD real_time_factor:=$AUV_DEMO_SPEED"
-auv launch bringup/launch/vehicle_sim.yaml world:=$AUV_DEMO_WORLD seed:=$AUV_DEMO_SEED \
+step "auv launch bringup/launch/vehicle.yaml world:=$AUV_DEMO_WORLD real_time_factor:=$AUV_DEMO_SPEED"
+auv launch bringup/launch/vehicle.yaml world:=$AUV_DEMO_WORLD seed:=$AUV_DEMO_SEED \
   real_time_factor:=$AUV_DEMO_SPEED domain:=42 run_dir:="$AUV_DEMO_RUN" > /tmp/auv-demo-vehicle.log 2>&1 &
 launch_pid=$!
 trap "kill -INT $launch_pid 2>/dev/null; wait $launch_pid || true" EXIT

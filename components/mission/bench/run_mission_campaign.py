@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Mission campaign (benchmark, not a test): the world's inspection mission over many seeds.
 
-For each world and seed it runs `auv launch bringup/launch/vehicle_sim.yaml auto_mission:=true`
+For each world and seed it runs `auv launch bringup/launch/vehicle.yaml auto_mission:=true`
 (simulator with navigation drift, mapping, planning, mission, controller), reads the mission
 report (`<run>/mission/summary.json`), and compares each completed query's executed true path
 with the oracle shortest path between the same two points on the world's true map at the
@@ -25,7 +25,7 @@ import time
 import yaml
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
-LAUNCH = os.path.join(ROOT, "bringup", "launch", "vehicle_sim.yaml")
+LAUNCH = os.path.join(ROOT, "bringup", "launch", "vehicle.yaml")
 CLEARANCE = 1.2  # m, the planner's hull_radius + safety_margin (planning defaults)
 ORACLE_GRID = 0.2  # m
 TRUE_MAP_RESOLUTION = 0.1  # m
@@ -132,7 +132,7 @@ def main():
                     shutil.rmtree(os.path.join(run_dir, sub), ignore_errors=True)
 
     lines = [f"# Mission campaign {stamp}", "",
-             f"vehicle_sim.yaml, auto_mission, objective {args.objective}, "
+             f"vehicle.yaml, auto_mission, objective {args.objective}, "
              f"real_time_factor {args.real_time_factor}, "
              f"navigation drift on (simulator defaults), clearance {CLEARANCE} m; oracle: "
              f"planning_oracle on the true map at {TRUE_MAP_RESOLUTION} m, grid {ORACLE_GRID} m, "

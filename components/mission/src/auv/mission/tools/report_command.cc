@@ -208,7 +208,7 @@ int reportMain(const std::vector<std::string>& args) {
   for (const fs::path& needed : {log / "events.csv", run / "ground_truth" / "trajectory.tum"}) {
     if (!fs::exists(needed)) {
       std::cerr << "auv mission report: " << needed.string()
-                << " is missing (a run folder of `auv launch bringup/launch/vehicle_sim.yaml`?)\n";
+                << " is missing (a run folder of `auv launch bringup/launch/vehicle.yaml`?)\n";
       return 1;
     }
   }
