@@ -22,7 +22,10 @@ constexpr const char* kUsage =
     "  interface list|show              message types and their fields\n"
     "  run <component>[:name] ...       run components (several: composed in one process)\n"
     "  launch <file.yaml>               start and supervise processes from a launch file\n"
-    "  sim generate|check|render|calibration   simulator tools (`auv sim --help`)\n"
+    "  sim generate|check|render|...    simulator tools (`auv sim --help`)\n"
+    "  mission start|status|abort|report   run and inspect missions (`auv mission --help`)\n"
+    "  recon pull                       shore: pull a vehicle's recordings (`auv recon --help`)\n"
+    "  security init|add|list|check     DDS Security keystores (`auv security --help`)\n"
     "Other commands run the program `auv-<command>` (next to `auv`, in a sibling install\n"
     "prefix, or on PATH), like git.\n"
     "Environment: AUV_DDS=cyclonedds|fastdds (default cyclonedds), AUV_DOMAIN_ID (default 0).\n";

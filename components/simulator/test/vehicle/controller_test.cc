@@ -128,6 +128,35 @@ TEST(LowLevelControllerTest, WaypointBehindTurnsAroundFirst) {
   EXPECT_LE((target - loop.state.position).norm(), 0.5);
 }
 
+// Going north at 0.3 m/s (the speed near waypoints), then a waypoint 4 m behind (a planner
+// turning back in a narrow passage): the sideways swing of the turn is what a passage must
+// have room for.
+double sidewaysSwingOfAUTurn(double turn_in_place_angle) {
+  ControllerOptions options;
+  options.turn_in_place_angle = turn_in_place_angle;
+  ClosedLoop loop(options);
+  loop.state.position = {0, 0, 2};
+  EXPECT_TRUE(loop.send(waypoint(1, {30, 0, 2}, 0.3)).accepted());
+  loop.run(20);
+  const Eigen::Vector3d turn_start = loop.state.position;
+  EXPECT_TRUE(loop.send(waypoint(2, turn_start - Eigen::Vector3d(4, 0, 0), 0.3, 0.5)).accepted());
+  double swing = 0;
+  loop.runUntil(
+      [&] {
+        swing = std::max(swing, std::abs(loop.state.position.y() - turn_start.y()));
+        return loop.status().reached;
+      },
+      60);
+  EXPECT_TRUE(loop.status().reached);
+  return swing;
+}
+
+TEST(LowLevelControllerTest, TurningRoundOnTheSpotSwingsLessSideways) {
+  const double on_the_spot = sidewaysSwingOfAUTurn(M_PI / 6);
+  const double cosine = sidewaysSwingOfAUTurn(M_PI / 2);
+  EXPECT_LT(on_the_spot, 0.6 * cosine) << "cos(error) speed swung " << cosine << " m";
+}
+
 TEST(LowLevelControllerTest, HeadingStepSettlesWithoutLargeOvershoot) {
   ClosedLoop loop;
   loop.state.position = {0, 0, 3};

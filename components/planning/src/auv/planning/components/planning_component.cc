@@ -60,7 +60,10 @@ struct PlanningComponent::ActiveQuery {
   int64_t solved_ns = 0;
   uint64_t active_waypoint_id = 0;  // 0: none issued since the (re)start
   msg::Waypoint active_waypoint;    // the one sent as active_waypoint_id, for repeated requests
-  uint64_t checked_revision = 0;    // field revision the tree was last re-checked against
+  // The waypoint the vehicle is still heading for when the active one was sent (the mission
+  // handler asks early): until the vehicle reaches it, its way to the root passes through it.
+  std::optional<Eigen::Vector3d> approach_via;
+  uint64_t checked_revision = 0;  // field revision the tree was last re-checked against
   bool no_solution_reported = false;
   uint64_t earlier_iterations = 0;  // iterations of the trees dropped by restarts
 };
@@ -450,6 +453,17 @@ bool PlanningComponent::hullPassesAlong(const Eigen::Vector3d& from,
   return true;
 }
 
+bool PlanningComponent::vehicleReachesRoot(ActiveQuery& q, const Eigen::Vector3d& vehicle,
+                                           const Eigen::Vector3d& root) const {
+  // The controller drives to the waypoint it has before the one just sent: checking the
+  // straight line to the root instead would cancel good waypoints round corners.
+  if (q.approach_via && (vehicle - *q.approach_via).norm() <= options_.waypoint_tolerance) {
+    q.approach_via.reset();
+  }
+  if (!q.approach_via) return hullPassesAlong(vehicle, root);
+  return hullPassesAlong(vehicle, *q.approach_via) && hullPassesAlong(*q.approach_via, root);
+}
+
 void PlanningComponent::planSlice() {
   if (!query_) return;
   ActiveQuery& q = *query_;
@@ -472,8 +486,8 @@ void PlanningComponent::planSlice() {
     changed_region_.setEmpty();
     // The vehicle drifts off the planned edges by its tracking error, which the safety margin
     // is there to absorb: the way to the root is blocked only when the hull itself would touch.
-    result.vehicle_to_root_blocked =
-        !hullPassesAlong(statePosition(vehicle.get()), statePosition(q.planner->root()->state));
+    result.vehicle_to_root_blocked = !vehicleReachesRoot(q, statePosition(vehicle.get()),
+                                                         statePosition(q.planner->root()->state));
     // Without an active waypoint the root is where the vehicle holds (the query's start or the
     // waypoint just reached): too close to a newly seen wall is no reason to restart there, and
     // the motion validator lets the tree leave it by moving away from the wall.
@@ -492,6 +506,7 @@ void PlanningComponent::planSlice() {
       q.earlier_iterations += q.planner->iterations();  // reset() zeroes the core's count
       q.planner->reset(vehicle.get());
       q.active_waypoint_id = 0;
+      q.approach_via.reset();
       q.solved_ns = node_->clock().nowNs();
     }
   }
@@ -554,6 +569,7 @@ void PlanningComponent::answerWaypointRequest() {
   waypoint.is_final((position - q.goal).norm() <= q.query.goal_tolerance());
   q.active_waypoint_id = waypoint.waypoint_id();
   q.active_waypoint = waypoint;
+  q.approach_via = from;
   pending_request_.reset();
   waypoint_pub_->publish(waypoint);
 }

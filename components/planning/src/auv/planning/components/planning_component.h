@@ -125,6 +125,10 @@ class PlanningComponent : public interfaces::Component {
   /// Whether the segment stays at least hull_radius from the map (no margin): the test of the
   /// way from the vehicle to the tree root.
   bool hullPassesAlong(const Eigen::Vector3d& from, const Eigen::Vector3d& to) const;
+  /// Whether the hull passes from `vehicle` to the tree's `root` the way the controller will
+  /// drive: through the waypoint it still heads for, if any (forgotten once within tolerance).
+  bool vehicleReachesRoot(ActiveQuery& q, const Eigen::Vector3d& vehicle,
+                          const Eigen::Vector3d& root) const;
   /// The vehicle's position as a state of the active query's space (clamped to its bounds).
   void vehicleState(ompl::base::State* state) const;
 

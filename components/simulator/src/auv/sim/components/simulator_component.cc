@@ -160,8 +160,8 @@ void SimulatorComponent::configure(interfaces::Node& node) {
   // The world's inspection mission, ready for `auv mission start <run>/mission.yaml`.
   MissionExportOptions mission;
   mission.objective = mission_objective_;
-  std::ofstream(fs::path(options_.run_dir) / "mission.yaml")
-      << missionYaml(scenario_, *mesh_, mission);
+  writeMissionFile((fs::path(options_.run_dir) / "mission.yaml").string(),
+                   missionYaml(scenario_, *mesh_, mission));
 
   clock_pub_ = node.createPublisher<msg::Clock>("clock", interfaces::clockQos());
   odometry_pub_ = node.createPublisher<msg::Odometry>("nav/odometry", interfaces::stateQos());

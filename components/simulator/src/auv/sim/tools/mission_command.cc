@@ -60,9 +60,7 @@ int missionMain(const std::vector<std::string>& args) {
       std::cout << yaml;
       return 0;
     }
-    const std::string partial = out + ".part";  // never a half-written mission file
-    std::ofstream(partial) << yaml;
-    std::filesystem::rename(partial, out);
+    writeMissionFile(out, yaml);
     std::cerr << "mission of " << scenario.name << " written to " << out << "\n";
     return 0;
   } catch (const std::exception& e) {

@@ -121,6 +121,10 @@ void ControllerOptions::check() const {
                         number(b.value));
     }
   }
+  if (!(turn_in_place_angle > 0 && turn_in_place_angle <= M_PI / 2)) {
+    throw ConfigError("controller.turn_in_place_angle: expected a number in (0, pi/2] rad, got " +
+                      number(turn_in_place_angle));
+  }
   if (min_approach_fraction > 1) {
     throw ConfigError("controller.min_approach_fraction: expected a number <= 1, got " +
                       number(min_approach_fraction));
@@ -390,8 +394,7 @@ LowLevelController::Targets LowLevelController::guidance() {
         const double ramp =
             std::clamp(range / options_.slow_down_radius, options_.min_approach_fraction, 1.0);
         // Turn first: full speed only when pointing at the target, none when it is abeam.
-        const double alignment = std::max(0.0, std::cos(wrapAngle(targets.yaw - nav.yaw)));
-        targets.surge_speed = command_.surge_speed * ramp * alignment;
+        targets.surge_speed = command_.surge_speed * ramp * underwayFraction(targets.yaw - nav.yaw);
       }
       return targets;
     }
@@ -413,8 +416,13 @@ LowLevelController::Targets LowLevelController::holdTargets() {
   }
   if (!returning_) return {hold_yaw_, hold_point_.z(), 0.0};
   const double yaw = std::atan2(offset.y(), offset.x());
-  const double alignment = std::max(0.0, std::cos(wrapAngle(yaw - nav.yaw)));
-  return {yaw, hold_point_.z(), options_.hold_speed * alignment};
+  return {yaw, hold_point_.z(), options_.hold_speed * underwayFraction(yaw - nav.yaw)};
+}
+
+double LowLevelController::underwayFraction(double heading_error) const {
+  const double limit = std::cos(options_.turn_in_place_angle);
+  const double alignment = std::cos(wrapAngle(heading_error));
+  return alignment <= limit ? 0.0 : (alignment - limit) / (1.0 - limit);
 }
 
 ThrusterCommand LowLevelController::regulate(const Targets& targets, double dt) {
@@ -455,7 +463,15 @@ ThrusterCommand LowLevelController::allocate(double surge_force, double yaw_mome
   // port = X/2 + N/s and starboard = X/2 - N/s give surge X and yaw moment s/2 (port -
   // starboard) = N. The moment comes first; surge gets what thrust is left.
   const double moment = std::clamp(yaw_moment, -m.maxYawMoment(), m.maxYawMoment());
-  const double differential = moment / m.thruster_spacing;
+  double differential = moment / m.thruster_spacing;
+  if (surge_force <= 0.0) {
+    // Except when stopping: the thrusters push harder forward than in reverse, so a full
+    // differential drives the vehicle on while it turns and swings it wide by its turning
+    // radius. It stops first, then turns on the spot.
+    const double braking = std::max(surge_force, -2.0 * m.max_thrust_reverse);
+    const double cap = m.max_thrust_reverse + 0.5 * braking;
+    differential = std::clamp(differential, -cap, cap);
+  }
   const double lowest = 2.0 * (-m.max_thrust_reverse + std::abs(differential));
   const double highest = 2.0 * (m.max_thrust_forward - std::abs(differential));
   const double surge = std::clamp(surge_force, lowest, highest);

@@ -139,8 +139,12 @@ struct ControllerOptions {
   double default_tolerance = 1.0;       ///< m, WAYPOINT tolerance when 0; HOLD radius
   double slow_down_radius = 3.0;        ///< m, horizontal distance where WAYPOINT speed ramps down
   double min_approach_fraction = 0.25;  ///< of the commanded speed, floor of the ramp
-  double hold_speed = 0.2;              ///< m/s, speed to return to a held position
-  double surface_depth = 0.3;           ///< m, SURFACE is reached at or above this depth
+  /// rad, in (0, pi/2]: with a larger heading error the vehicle turns on the spot; below, the
+  /// speed grows to full at zero error. Why: moving while turning round swings it sideways by
+  /// its turning radius, which a narrow passage does not have (pi/2: speed * cos(error)).
+  double turn_in_place_angle = M_PI / 6;
+  double hold_speed = 0.2;     ///< m/s, speed to return to a held position
+  double surface_depth = 0.3;  ///< m, SURFACE is reached at or above this depth
 
   // Safety.
   double max_depth = 50.0;          ///< m, deeper starts the MAX_DEPTH manoeuvre
@@ -158,7 +162,8 @@ struct ControllerOptions {
 
 /// Modes and states:
 ///   WAYPOINT  ACTIVE: line-of-sight heading to the target, speed ramped down inside
-///             slow_down_radius and scaled by cos(heading error) (it turns before it goes);
+///             slow_down_radius and scaled down with the heading error, to zero beyond
+///             turn_in_place_angle (it turns before it goes);
 ///             within `tolerance` (3-D) -> reached, HOLDING at the target.
 ///   HOLD      HOLDING at the position of the moment: stopped, heading and depth kept; drifted
 ///             further than default_tolerance it drives back at hold_speed.
@@ -200,6 +205,8 @@ class LowLevelController {
   void startHolding(const Eigen::Vector3d& point, double radius, double yaw);
   Targets guidance();
   Targets holdTargets();
+  /// Fraction of the speed to make good with `heading_error` (see turn_in_place_angle).
+  double underwayFraction(double heading_error) const;
   ThrusterCommand regulate(const Targets& targets, double dt);
   ThrusterCommand allocate(double surge_force, double yaw_moment, double heave_force) const;
   void resetIntegrals(bool depth_too);

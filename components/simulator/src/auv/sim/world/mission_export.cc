@@ -1,7 +1,10 @@
 #include "auv/sim/world/mission_export.h"
 
 #include <algorithm>
+#include <filesystem>
+#include <fstream>
 #include <sstream>
+#include <stdexcept>
 
 #include <Eigen/Geometry>
 
@@ -38,6 +41,18 @@ std::string missionYaml(const Scenario& scenario, const Mesh& world_mesh,
         << q.goal.z() << "], goal_tolerance: " << q.tolerance << "}\n";
   }
   return out.str();
+}
+
+void writeMissionFile(const std::string& path, const std::string& yaml) {
+  const std::string partial = path + ".part";
+  {
+    std::ofstream out(partial);
+    out << yaml;
+    if (!out.flush()) throw std::runtime_error(partial + ": cannot write the mission file");
+  }
+  std::error_code error;
+  std::filesystem::rename(partial, path, error);
+  if (error) throw std::runtime_error(path + ": cannot write the mission file: " + error.message());
 }
 
 }  // namespace auv::sim

@@ -23,4 +23,9 @@ struct MissionExportOptions {
 std::string missionYaml(const Scenario& scenario, const Mesh& world_mesh,
                         const MissionExportOptions& options = {});
 
+/// Writes `yaml` to `path` through a temporary file and a rename: `auv mission start --wait`
+/// polls for the file and must never read it half-written. Throws std::runtime_error naming
+/// the file when it cannot be written.
+void writeMissionFile(const std::string& path, const std::string& yaml);
+
 }  // namespace auv::sim
