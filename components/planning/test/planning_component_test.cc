@@ -63,6 +63,31 @@ TEST(PlanningComponentTest, WaypointsCrossTheWallKeepingTheClearance) {
   EXPECT_VIEWS_WELL_FORMED(harness);
 }
 
+// A query starting inside the clearance (the vehicle drifted within 1 m of a rock): OMPL's
+// start-state input skips such starts, which once left the planner without a tree and crashed
+// the process at the next map update. The tree is rooted there anyway and leaves the rock.
+TEST(PlanningComponentTest, StartInsideTheClearanceStillPlansAwayFromTheRock) {
+  PlanningHarness harness(Vendor::CYCLONEDDS, Vendor::FASTDDS, 150);
+  octomap::OcTree map = wallMap();
+  addColumn(map, kStart + Eigen::Vector3d(0.75, 0.75, 0.0));  // the cell [2.5, 3) x [0.5, 1)
+  const auto rock = [](const Eigen::Vector3d& p) {            // distance to that cell's box
+    return Eigen::Vector2d(std::max({2.5 - p.x(), 0.0, p.x() - 3.0}),
+                           std::max({0.5 - p.y(), 0.0, p.y() - 1.0}))
+        .norm();
+  };
+  ASSERT_GT(rock(kStart), kHullRadius);
+  ASSERT_LT(rock(kStart), kClearance);
+  ASSERT_TRUE(harness.startQuery(map));
+  // A map update re-checks the tree (where the crash was), then the vehicle goes to the goal.
+  octomap::OcTree grown = map;
+  addColumn(grown, {10.0, -6.0, kDepth});
+  ASSERT_TRUE(harness.publishMapAndWait(makeUpdate(grown, 2, 1)));
+  std::vector<Eigen::Vector3d> visited{kStart};
+  ASSERT_TRUE(harness.followToGoal(1, 0, &visited));
+  EXPECT_LE((visited.back() - kGoal).norm(), 1.0);
+  EXPECT_GE(rock(visited[1]), rock(kStart)) << "the first waypoint goes towards the rock";
+}
+
 TEST(PlanningComponentTest, ObstacleOnTheWayToTheActiveWaypointCancelsIt) {
   PlanningHarness harness(Vendor::FASTDDS, Vendor::CYCLONEDDS, 91);
   const octomap::OcTree map = wallMap();

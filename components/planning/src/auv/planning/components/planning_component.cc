@@ -406,6 +406,10 @@ void PlanningComponent::startQuery(const msg::PlannerQuery& query) {
     active->planner->setGoalTolerance(query.goal_tolerance());
     active->planner->setProblemDefinition(active->pdef);
     active->planner->setup();
+    // Root the tree at the start even when it is inside the clearance (a vehicle that drifted
+    // close to a wall): OMPL's start-state input skips invalid starts and would leave no tree,
+    // while the motion validator lets the tree leave such a root by moving away from the wall.
+    active->planner->reset(start_state.get());
   } catch (const std::exception& error) {
     query_ = std::move(active);  // for the query id of the cancel
     cancel(0, msg::CANCEL_REASON_PLANNER_ERROR, std::string("query rejected: ") + error.what());
@@ -469,7 +473,7 @@ void PlanningComponent::planSlice() {
   ActiveQuery& q = *query_;
   // Re-check the tree only when the map changed: between changes the tree stays valid, and the
   // vehicle moves along the root edge the tree already holds.
-  if (field_->revision() != q.checked_revision) {
+  if (field_->revision() != q.checked_revision && q.planner->root() != nullptr) {
     q.checked_revision = field_->revision();
     ob::ScopedState<> vehicle(q.si);
     vehicleState(vehicle.get());
