@@ -5,12 +5,15 @@ For each world and seed it runs `auv launch bringup/launch/vehicle.yaml auto_mis
 (simulator with navigation drift, mapping, planning, mission, controller), reads the mission
 report (`<run>/mission/summary.json`), and compares each completed query's executed true path
 with the oracle shortest path between the same two points on the world's true map at the
-planner's clearance (`planning_oracle` on `auv sim octomap`). Figures: success, collisions,
-minimum true clearance, navigation error, path length / oracle, wall time. Results go to
-bench_results/mission_campaign_<stamp>.{md,json}.
+planner's clearance (`planning_oracle` on `auv sim octomap`), twice: on a fine true map (0.1 m)
+and on the true map at the planner's own resolution (0.5 m: what the planner could do knowing
+the world in advance; narrow gaps that 0.5 m cells close are closed for both). Figures: success,
+collisions, minimum true clearance, navigation error, path length / oracle, wall time. Results go
+to bench_results/mission_campaign_<stamp>.{md,json}.
 
   components/mission/bench/run_mission_campaign.py [--worlds canyon,breakwater,dead_end_bay]
       [--seeds 20] [--first-seed 1] [--real-time-factor 8] [--domain 45] [--keep-runs]
+  components/mission/bench/run_mission_campaign.py --evaluate RUN_DIR...   # finished runs again
 """
 import argparse
 import datetime
@@ -29,6 +32,7 @@ LAUNCH = os.path.join(ROOT, "bringup", "launch", "vehicle.yaml")
 CLEARANCE = 1.2  # m, the planner's hull_radius + safety_margin (planning defaults)
 ORACLE_GRID = 0.2  # m
 TRUE_MAP_RESOLUTION = 0.1  # m
+MAP_RESOLUTION = 0.5  # m, the mapping component's default
 
 
 def find_program(name):
@@ -54,13 +58,38 @@ def oracle_length(true_map, start, goal):
     return float(out.stdout.strip().split()[0]), ""
 
 
-def true_map_for(world, seed, cache):
-    path = os.path.join(cache, f"{world}-{seed}-true.bt")
+def true_map_for(world, seed, cache, resolution):
+    suffix = "" if resolution == TRUE_MAP_RESOLUTION else f"-{resolution}"
+    path = os.path.join(cache, f"{world}-{seed}-true{suffix}.bt")
     if not os.path.exists(path):
         subprocess.run([find_program("auv"), "sim", "octomap", world, "--seed", str(seed),
-                        "--resolution", str(TRUE_MAP_RESOLUTION), "--out", path], check=True,
+                        "--resolution", str(resolution), "--out", path], check=True,
                        stdout=subprocess.DEVNULL)
     return path
+
+
+def evaluate(row, world, seed, run_dir, summary, cache):
+    """Adds the summary's figures and the path ratios against both oracles to `row`."""
+    row.update({k: summary[k] for k in ("state", "message", "duration_s", "collisions",
+                                        "min_true_clearance_m", "max_navigation_error_m",
+                                        "executed_length_m")})
+    mission = yaml.safe_load(open(os.path.join(run_dir, "mission.yaml")))["mission"]
+    for key, resolution in (("path_ratios", TRUE_MAP_RESOLUTION),
+                            ("path_ratios_map_res", MAP_RESOLUTION)):
+        true_map = true_map_for(world, seed, cache, resolution)
+        ratios = []
+        for query in summary["queries"]:
+            if not query["succeeded"]:
+                continue
+            # Same end points as the vehicle: start and end of the executed query.
+            length, error = oracle_length(true_map, query["start"], query["end"])
+            if length:
+                ratios.append(query["executed_length_m"] / length)
+            else:
+                row.setdefault("oracle_errors", []).append(error)
+        row[key] = [round(r, 3) for r in ratios]
+    row["queries"] = f'{sum(q["succeeded"] for q in summary["queries"])}/' \
+                     f'{len(mission["queries"])}'
 
 
 def run_mission(world, seed, args, runs_dir):
@@ -82,6 +111,65 @@ def run_mission(world, seed, args, runs_dir):
     return run_dir, code, wall, summary
 
 
+def write_results(rows, worlds, stamp, setup):
+    """The campaign table (per world) and every run, as .md and .json in bench_results/."""
+    results_dir = os.path.join(ROOT, "bench_results")
+    lines = [f"# Mission campaign {stamp}", "",
+             f"{setup}; navigation drift on (simulator defaults), clearance {CLEARANCE} m; "
+             f"oracle: planning_oracle on the true map at {TRUE_MAP_RESOLUTION} m and at the "
+             f"planner's {MAP_RESOLUTION} m, grid {ORACLE_GRID} m, between the executed query's "
+             "true start and end.", "",
+             "| world | runs | succeeded | collisions (runs with any) | min true clearance (m) | "
+             f"path / oracle {TRUE_MAP_RESOLUTION} m median (max) | path / oracle "
+             f"{MAP_RESOLUTION} m median (max) | max nav error (m) | wall s / run |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for world in worlds:
+        mine = [r for r in rows if r["world"] == world]
+        done = [r for r in mine if r.get("state") == "SUCCEEDED"]
+        collided = [r for r in mine if r.get("collisions", 0) > 0]
+        clearances = [r["min_true_clearance_m"] for r in mine
+                      if r.get("min_true_clearance_m") is not None]
+        ratios = [x for r in mine for x in r.get("path_ratios", [])]
+        ratios_map_res = [x for r in mine for x in r.get("path_ratios_map_res", [])]
+        nav = [r["max_navigation_error_m"] for r in mine if r.get("max_navigation_error_m")]
+        walls = [r["wall_s"] for r in mine if r.get("wall_s") is not None]
+        def cell(values, text):
+            return text(values) if values else "-"
+        def median_max(v):
+            return f"{statistics.median(v):.3f} ({max(v):.3f})"
+        lines.append(" | ".join([
+            f"| {world}", str(len(mine)), str(len(done)),
+            f"{sum(r.get('collisions', 0) for r in mine)} ({len(collided)})",
+            cell(clearances, lambda v: f"{min(v):.2f}"), cell(ratios, median_max),
+            cell(ratios_map_res, median_max), cell(nav, lambda v: f"{max(v):.2f}"),
+            cell(walls, lambda v: f"{statistics.mean(v):.0f}")]) + " |")
+    lines += ["", "Per run:", "", "```"] + [json.dumps(r) for r in rows] + ["```"]
+    md = os.path.join(results_dir, f"mission_campaign_{stamp}.md")
+    open(md, "w").write("\n".join(lines) + "\n")
+    json.dump(rows, open(os.path.join(results_dir, f"mission_campaign_{stamp}.json"), "w"),
+              indent=1)
+    print("\n".join(lines[:len(worlds) + 6]))
+    print(f"results: {md}")
+
+
+def evaluate_runs(run_dirs):
+    """Path ratios of finished runs (<world>-<seed> folders with mission/summary.json)."""
+    rows = []
+    for run_dir in run_dirs:
+        run_dir = os.path.abspath(run_dir)
+        world, _, seed = os.path.basename(run_dir.rstrip("/")).rpartition("-")
+        summary_path = os.path.join(run_dir, "mission", "summary.json")
+        if not world or not seed.isdigit() or not os.path.exists(summary_path):
+            sys.exit(f"run_mission_campaign: {run_dir}: not a <world>-<seed> run folder with "
+                     "mission/summary.json")
+        row = {"world": world, "seed": int(seed), "run": run_dir}
+        evaluate(row, world, int(seed), run_dir, json.load(open(summary_path)),
+                 os.path.dirname(run_dir))
+        rows.append(row)
+        print(json.dumps(row), flush=True)
+    return rows
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--worlds", default="canyon,breakwater,dead_end_bay")
@@ -92,37 +180,26 @@ def main():
     parser.add_argument("--timeout", type=float, default=3600.0, help="s of wall time per mission")
     parser.add_argument("--objective", default="visibility", choices=["visibility", "path_length"])
     parser.add_argument("--keep-runs", action="store_true", help="keep the run folders")
+    parser.add_argument("--evaluate", nargs="+", metavar="RUN_DIR",
+                        help="only evaluate finished run folders (no missions are run)")
     args = parser.parse_args()
 
     stamp = datetime.datetime.now().strftime("%Y%m%d_%H%M%S")
-    results_dir = os.path.join(ROOT, "bench_results")
-    runs_dir = os.path.join(results_dir, f"mission_campaign_{stamp}")
+    if args.evaluate:
+        rows = evaluate_runs(args.evaluate)
+        worlds = list(dict.fromkeys(r["world"] for r in rows))
+        write_results(rows, worlds, stamp, f"evaluation of {len(rows)} finished runs")
+        return
+    runs_dir = os.path.join(ROOT, "bench_results", f"mission_campaign_{stamp}")
     os.makedirs(runs_dir, exist_ok=True)
     rows = []
-    for world in args.worlds.split(","):
+    worlds = args.worlds.split(",")
+    for world in worlds:
         for seed in range(args.first_seed, args.first_seed + args.seeds):
             run_dir, code, wall, summary = run_mission(world, seed, args, runs_dir)
             row = {"world": world, "seed": seed, "exit": code, "wall_s": round(wall, 1)}
             if summary:
-                row.update({k: summary[k] for k in ("state", "message", "duration_s", "collisions",
-                                                    "min_true_clearance_m",
-                                                    "max_navigation_error_m",
-                                                    "executed_length_m")})
-                mission = yaml.safe_load(open(os.path.join(run_dir, "mission.yaml")))["mission"]
-                true_map = true_map_for(world, seed, runs_dir)
-                ratios = []
-                for query in summary["queries"]:
-                    if not query["succeeded"]:
-                        continue
-                    # Same end points as the vehicle: start and end of the executed query.
-                    length, error = oracle_length(true_map, query["start"], query["end"])
-                    if length:
-                        ratios.append(query["executed_length_m"] / length)
-                    else:
-                        row.setdefault("oracle_errors", []).append(error)
-                row["path_ratios"] = [round(r, 3) for r in ratios]
-                row["queries"] = f'{sum(q["succeeded"] for q in summary["queries"])}/' \
-                                 f'{len(mission["queries"])}'
+                evaluate(row, world, seed, run_dir, summary, runs_dir)
             else:
                 row["state"] = "NO REPORT"
             rows.append(row)
@@ -130,40 +207,9 @@ def main():
             if not args.keep_runs:
                 for sub in ("ground_truth",):
                     shutil.rmtree(os.path.join(run_dir, sub), ignore_errors=True)
-
-    lines = [f"# Mission campaign {stamp}", "",
-             f"vehicle.yaml, auto_mission, objective {args.objective}, "
-             f"real_time_factor {args.real_time_factor}, "
-             f"navigation drift on (simulator defaults), clearance {CLEARANCE} m; oracle: "
-             f"planning_oracle on the true map at {TRUE_MAP_RESOLUTION} m, grid {ORACLE_GRID} m, "
-             "between the executed query's true start and end.", "",
-             "| world | runs | succeeded | collisions (runs with any) | min true clearance (m) | "
-             "path / oracle median (max) | max nav error (m) | wall s / run |",
-             "|---|---|---|---|---|---|---|---|"]
-    for world in args.worlds.split(","):
-        mine = [r for r in rows if r["world"] == world]
-        done = [r for r in mine if r.get("state") == "SUCCEEDED"]
-        collided = [r for r in mine if r.get("collisions", 0) > 0]
-        clearances = [r["min_true_clearance_m"] for r in mine
-                      if r.get("min_true_clearance_m") is not None]
-        ratios = [x for r in mine for x in r.get("path_ratios", [])]
-        nav = [r["max_navigation_error_m"] for r in mine if r.get("max_navigation_error_m")]
-        def cell(values, text):
-            return text(values) if values else "-"
-        lines.append(" | ".join([
-            f"| {world}", str(len(mine)), str(len(done)),
-            f"{sum(r.get('collisions', 0) for r in mine)} ({len(collided)})",
-            cell(clearances, lambda v: f"{min(v):.2f}"),
-            cell(ratios, lambda v: f"{statistics.median(v):.3f} ({max(v):.3f})"),
-            cell(nav, lambda v: f"{max(v):.2f}"),
-            cell(mine, lambda v: f"{statistics.mean(r['wall_s'] for r in v):.0f}")]) + " |")
-    lines += ["", "Per run:", "", "```"] + [json.dumps(r) for r in rows] + ["```"]
-    md = os.path.join(results_dir, f"mission_campaign_{stamp}.md")
-    open(md, "w").write("\n".join(lines) + "\n")
-    json.dump(rows, open(os.path.join(results_dir, f"mission_campaign_{stamp}.json"), "w"),
-              indent=1)
-    print("\n".join(lines[:len(args.worlds.split(",")) + 6]))
-    print(f"results: {md}")
+    write_results(rows, worlds, stamp,
+                  f"vehicle.yaml, auto_mission, objective {args.objective}, "
+                  f"real_time_factor {args.real_time_factor}")
 
 
 if __name__ == "__main__":
