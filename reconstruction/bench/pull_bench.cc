@@ -113,6 +113,22 @@ uint64_t folderBytes(const fs::path& folder) {
   return total;
 }
 
+/// CPU seconds (user + system, all threads) a process used so far: where the time goes.
+double cpuSeconds(pid_t pid) {
+  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+  std::string text((std::istreambuf_iterator<char>(stat)), std::istreambuf_iterator<char>());
+  const size_t end_of_name = text.rfind(')');
+  if (end_of_name == std::string::npos) return 0;
+  std::istringstream fields(text.substr(end_of_name + 2));
+  std::string field;
+  double utime = 0, stime = 0;
+  for (int i = 3; i <= 15 && fields >> field; ++i) {  // fields 14 and 15: utime, stime
+    if (i == 14) utime = std::stod(field);
+    if (i == 15) stime = std::stod(field);
+  }
+  return (utime + stime) / static_cast<double>(sysconf(_SC_CLK_TCK));
+}
+
 double median(std::vector<double> values) {
   std::sort(values.begin(), values.end());
   return values[values.size() / 2];
@@ -122,11 +138,12 @@ struct PullRun {
   double seconds = 0;
   uint64_t bytes = 0;
   auv::recon::transfer::PullStats stats;
+  double shore_cpu_s = 0, vehicle_cpu_s = 0;  // CPU time of each process during the pull
 };
 
 /// One pull into a fresh survey; the clock starts once the vehicle is matched.
 PullRun pull(Vendor shore_vendor, int domain, const fs::path& survey, const Options& o,
-             double stop_fraction = 0) {
+             pid_t vehicle, double stop_fraction = 0) {
   auv::interfaces::Node node("bench_shore", auv::interfaces::nodeOptions(shore_vendor, domain));
   auv::recon::transfer::PullOptions options;
   options.vehicle = "bench";
@@ -145,9 +162,12 @@ PullRun pull(Vendor shore_vendor, int domain, const fs::path& survey, const Opti
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   const auto start = Clock::now();
+  const double shore_cpu = cpuSeconds(getpid()), vehicle_cpu = cpuSeconds(vehicle);
   const auto result = puller.run();
   PullRun run;
   run.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  run.shore_cpu_s = cpuSeconds(getpid()) - shore_cpu;
+  run.vehicle_cpu_s = cpuSeconds(vehicle) - vehicle_cpu;
   run.stats = puller.stats();
   run.bytes = run.stats.bytes_received;
   if (stop_fraction == 0 && result != auv::recon::transfer::PullResult::COMPLETE) {
@@ -267,27 +287,31 @@ int main(int argc, char** argv) {
     const pid_t vehicle =
         spawn({self, "--serve", root.string(), auv::interfaces::toString(pair.vehicle),
                std::to_string(pair.domain), std::to_string(o.chunk_bytes)});
+    // Untimed warm-up: the recorder has catalogued (hashed) every file and is discovered.
+    fs::remove_all(work / "survey");
+    pull(pair.shore, pair.domain, work / "survey", o, vehicle);
     std::vector<double> pull_rates, rsync_rates;
     size_t repeats = 0, corrupted = 0;
     for (int r = 0; r < o.runs; ++r) {
       rsync_rates.push_back(total / rsyncOnce() / 1e6);
       const fs::path survey = work / "survey";
       fs::remove_all(survey);
-      const PullRun run = pull(pair.shore, pair.domain, survey, o);
+      const PullRun run = pull(pair.shore, pair.domain, survey, o, vehicle);
       if (run.bytes != total) throw std::runtime_error("pull received a different size");
       pull_rates.push_back(total / run.seconds / 1e6);
       std::cerr << "  run " << r + 1 << ": " << auv::interfaces::toString(pair.vehicle) << " -> "
                 << auv::interfaces::toString(pair.shore) << " pull " << pull_rates.back()
-                << " MB/s (" << run.stats.requests_timed_out << " repeats), rsync "
-                << rsync_rates.back() << " MB/s\n";
+                << " MB/s (" << run.stats.requests_timed_out << " repeats; " << run.seconds
+                << " s, CPU shore " << run.shore_cpu_s << " s, vehicle " << run.vehicle_cpu_s
+                << " s), rsync " << rsync_rates.back() << " MB/s\n";
       repeats += run.stats.requests_timed_out;
       corrupted += run.stats.chunks_corrupted;
     }
     // Resume: interrupted at 40%, then pulled again.
     const fs::path survey = work / "survey";
     fs::remove_all(survey);
-    pull(pair.shore, pair.domain, survey, o, 0.4);
-    const PullRun resumed = pull(pair.shore, pair.domain, survey, o);
+    pull(pair.shore, pair.domain, survey, o, vehicle, 0.4);
+    const PullRun resumed = pull(pair.shore, pair.domain, survey, o, vehicle);
     const double overhead =
         static_cast<double>(resumed.stats.bytes_received) / resumed.stats.bytes_missing;
     stop(vehicle);

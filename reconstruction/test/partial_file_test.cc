@@ -116,6 +116,32 @@ TEST(PartialFile, WrongWholeFileDigestIsNeverRenamed) {
   EXPECT_FALSE(fs::exists(PartialFile::partPath(final_path)));
 }
 
+TEST(PartialFile, WholeFileMismatchNamesTheCorruptedChunkAndKeepsTheRest) {
+  // Chunks are written with the vehicle's digest and not hashed on arrival: the whole-file
+  // check in finish() finds a damaged one, which alone is dropped and fetched again.
+  TempDir dir;
+  const std::string bytes = randomBytes(10000, 5);
+  const fs::path final_path = dir.path() / "a.mp4";
+  PartialFile file(final_path, {"a.mp4", bytes.size(), recorder::Sha256::of(bytes.data(), 10000)},
+                   4096);
+  writeChunk(file, bytes, 0);
+  std::string damaged = bytes.substr(4096, 4096);
+  const std::string vehicle_digest = recorder::Sha256::of(damaged.data(), damaged.size());
+  damaged[7] ^= 0x01;
+  file.writeChunk(1, reinterpret_cast<const uint8_t*>(damaged.data()), damaged.size(),
+                  vehicle_digest);
+  writeChunk(file, bytes, 2);
+  EXPECT_EQ(file.finish(), std::vector<size_t>{1});
+  EXPECT_FALSE(fs::exists(final_path));
+  EXPECT_FALSE(file.has(1));
+  EXPECT_TRUE(file.has(0));
+  EXPECT_TRUE(file.has(2));
+  EXPECT_EQ(file.missingBytes(), 4096u);
+  writeChunk(file, bytes, 1);
+  EXPECT_TRUE(file.finish().empty());
+  EXPECT_EQ(readFile(final_path), bytes);
+}
+
 TEST(Manifest, RoundTripsAndNamesABrokenFile) {
   TempDir dir;
   const fs::path path = dir.path() / "manifest.json";

@@ -8,7 +8,9 @@
 #
 # Options (environment): AUV_BENCH_FILE_MB (size of each of 3 recordings, 32), AUV_BENCH_RUNS
 # (repetitions, median reported, 3), AUV_BENCH_IN_FLIGHT (8), AUV_BENCH_CHUNK_BYTES (1048576),
-# AUV_BENCH_RATE (tc rate of the vehicle -> shore link, e.g. 100mbit; empty = the bare veth).
+# AUV_BENCH_RATE (tc rate of the vehicle -> shore link, e.g. 100mbit; empty = the bare veth),
+# AUV_BENCH_DOMAIN (DDS domain inside the namespaces, 7), AUV_BENCH_NS_PREFIX (namespace names,
+# auvtest-bench).
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 repo=$(cd "$here/../../.." && pwd)
@@ -17,13 +19,15 @@ runs=${AUV_BENCH_RUNS:-3}
 in_flight=${AUV_BENCH_IN_FLIGHT:-8}
 chunk_bytes=${AUV_BENCH_CHUNK_BYTES:-1048576}
 rate=${AUV_BENCH_RATE:-}
+domain=${AUV_BENCH_DOMAIN:-7}
+ns_prefix=${AUV_BENCH_NS_PREFIX:-auvtest-bench}
 command -v auv-recon > /dev/null || { echo "bench: auv-recon not on PATH (source install/setup.bash)" >&2; exit 2; }
 command -v rsync > /dev/null || { echo "bench: rsync missing (scripts/install-deps.sh)" >&2; exit 2; }
 [ "$(id -u)" = 0 ] || { echo "bench: needs root for network namespaces" >&2; exit 2; }
 
 id=$$
-veh=auvtest-bench-$id-veh
-sho=auvtest-bench-$id-shore
+veh=$ns_prefix-$id-veh
+sho=$ns_prefix-$id-shore
 vv=auvb${id}v
 vs=auvb${id}s
 net=10.231.$((id % 256))
@@ -69,7 +73,7 @@ for cam in left right forward; do
 done
 total_bytes=$(du -sb "$rec" | cut -f1)
 
-export AUV_DOMAIN_ID=7
+export AUV_DOMAIN_ID=$domain
 ip netns exec $veh env AUV_DDS=cyclonedds CYCLONEDDS_URI="file://$work/vehicle-cyclonedds.xml" \
   auv run recorder -p root:="$rec" -p vehicle_name:=bench > "$work/recorder.log" 2>&1 &
 cat > "$work/rsyncd.conf" << EOF

@@ -193,6 +193,21 @@ std::shared_ptr<Subscription<T>> Node::createSubscription(const std::string& top
       options);
 }
 
+/// The QoS of a service's reply writer and a client's request writer: keep-all becomes
+/// keep-last as deep as the profile's sample limit. A keep-all writer blocks, then fails, once
+/// its history is full of samples a reader has not acknowledged yet: a client gone but still
+/// matched (Fast DDS 2.9 writers keep vanished Cyclone clients for a while), or requests sent
+/// faster than acknowledgements come back (a Fast DDS client pulling 256 KiB chunks at
+/// ~250 MB/s from a Cyclone service); then every caller waits. A request or reply lost that
+/// way is repeated by the client.
+inline QosProfile serviceWriterQos(QosProfile qos) {
+  if (qos.history == History::KEEP_ALL) {
+    qos.history = History::KEEP_LAST;
+    qos.depth = qos.max_samples > 0 ? qos.max_samples : 256;
+  }
+  return qos;
+}
+
 template <class Req, class Rep>
 std::shared_ptr<Service<Req, Rep>> Node::createService(const std::string& name,
                                                        typename Service<Req, Rep>::Handler handler,
@@ -205,8 +220,9 @@ std::shared_ptr<Service<Req, Rep>> Node::createService(const std::string& name,
                                                raw->markReady();
                                                waker->notify();
                                              });
-  service->attach(std::move(requests),
-                  participant_->createWriter(name + "/reply", typeSupport<Rep>(), qos));
+  service->attach(
+      std::move(requests),
+      participant_->createWriter(name + "/reply", typeSupport<Rep>(), serviceWriterQos(qos)));
   addWaitable(service);
   return service;
 }
@@ -218,8 +234,9 @@ std::shared_ptr<Client<Req, Rep>> Node::createClient(const std::string& name,
   Client<Req, Rep>* raw = client.get();  // owns the reader: see createSubscription
   auto replies = participant_->createReader(name + "/reply", typeSupport<Rep>(), qos,
                                             [raw](DataReader& reader) { raw->onReplies(reader); });
-  client->attach(participant_->createWriter(name + "/request", typeSupport<Req>(), qos),
-                 std::move(replies));
+  client->attach(
+      participant_->createWriter(name + "/request", typeSupport<Req>(), serviceWriterQos(qos)),
+      std::move(replies));
   return client;
 }
 

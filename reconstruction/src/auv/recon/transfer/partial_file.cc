@@ -123,6 +123,7 @@ bool PartialFile::loadRecord() {
   chunk_bytes_ = chunk_bytes;
   const size_t count = remote_.size == 0 ? 0 : (remote_.size + chunk_bytes_ - 1) / chunk_bytes_;
   have_.assign(count, false);
+  digests_.assign(count, std::string());
   missing_chunks_ = count;
   // Re-verify every recorded chunk from disk: the record may be ahead of the data after a
   // crash, or the .part may have been damaged.
@@ -137,6 +138,7 @@ bool PartialFile::loadRecord() {
     }
     if (actual == digest) {
       have_[index] = true;
+      digests_[index] = digest;
       --missing_chunks_;
       ++reused_chunks_;
     } else {
@@ -169,6 +171,7 @@ void PartialFile::startFresh() {
   if (record_fd_ < 0) ioError(record, "cannot create");
   const size_t count = remote_.size == 0 ? 0 : (remote_.size + chunk_bytes_ - 1) / chunk_bytes_;
   have_.assign(count, false);
+  digests_.assign(count, std::string());
   missing_chunks_ = count;
   reused_chunks_ = 0;
   dropped_chunks_ = 0;
@@ -196,6 +199,7 @@ void PartialFile::writeChunk(size_t index, const uint8_t* data, size_t size,
   // (and a resumed pull re-verifies anyway, in case the data never reached the disk).
   appendRecord("chunk " + std::to_string(index) + " " + sha256 + "\n");
   have_[index] = true;
+  digests_[index] = sha256;
   --missing_chunks_;
   advanceWholeDigest(data, index);
 }
@@ -227,7 +231,7 @@ void PartialFile::advanceWholeDigest(const uint8_t* written, size_t index) {
   }
 }
 
-void PartialFile::finish() {
+std::vector<size_t> PartialFile::finish() {
   if (!allChunks()) throw std::logic_error(remote_.path + ": finish() with chunks missing");
   const fs::path part = partPath(final_path_);
   // The digest so far covers [0, hashed_to_); the rest (chunks reused on resume) is read.
@@ -249,6 +253,25 @@ void PartialFile::finish() {
   actual = whole_->hexDigest();
   whole_.reset();
   if (actual != remote_.sha256) {
+    // Which chunks? Each against the digest it was recorded with (one more pass, only here).
+    std::vector<size_t> bad;
+    for (size_t i = 0; i < have_.size(); ++i) {
+      std::string chunk;
+      try {
+        chunk = recorder::sha256OfRange(fd_, chunkOffset(i), chunkLength(i), part.string());
+      } catch (const std::exception&) {
+        chunk.clear();
+      }
+      if (chunk != digests_[i]) bad.push_back(i);
+    }
+    if (!bad.empty()) {
+      for (size_t i : bad) {
+        have_[i] = false;
+        ++missing_chunks_;
+      }
+      hashed_to_ = 0;  // digested again from the start once the chunks are back
+      return bad;
+    }
     discard();
     throw VerifyError(remote_.path + ": SHA-256 of the pulled file is " + actual +
                       ", the vehicle catalogued " + remote_.sha256 + "; partial file discarded");
@@ -263,6 +286,7 @@ void PartialFile::finish() {
   ::close(record_fd_);
   record_fd_ = -1;
   fs::remove(progressPath(final_path_), error);
+  return {};
 }
 
 void PartialFile::discard() {

@@ -67,13 +67,17 @@ class PartialFile {
   /// Why an existing record was not used (empty when resumed or new).
   const std::string& startNote() const { return start_note_; }
 
-  /// Writes chunk `index` (its full length) and records its digest.
+  /// Writes chunk `index` (its full length) and records `sha256` as its digest: the digest the
+  /// vehicle sent with it, checked by finish() (or computed here by the caller).
   void writeChunk(size_t index, const uint8_t* data, size_t size, const std::string& sha256);
   /// With every chunk on disk: checks the whole file's SHA-256, then renames it to the final
-  /// name and removes the record. Throws VerifyError (after discarding) on a mismatch. The
-  /// digest covers the bytes as written (chunks arriving in order are hashed as they are
-  /// written, the rest is read back here), so a pull in order needs no second pass.
-  void finish();
+  /// name, removes the record and returns an empty list. The digest covers the bytes as
+  /// written (chunks arriving in order are hashed as they are written, the rest is read back
+  /// here), so a pull in order needs no second pass. On a mismatch every chunk is checked
+  /// against its recorded digest: the ones that fail are dropped and returned, to be fetched
+  /// again; if none fails (the vehicle's digests disagree with each other), the partial file
+  /// is discarded and VerifyError thrown.
+  std::vector<size_t> finish();
   /// Removes the partial file and its record.
   void discard();
 
@@ -88,6 +92,7 @@ class PartialFile {
   RemoteFile remote_;
   uint32_t chunk_bytes_;
   std::vector<bool> have_;
+  std::vector<std::string> digests_;  // recorded digest per chunk on disk
   size_t missing_chunks_ = 0;
   size_t reused_chunks_ = 0;
   size_t dropped_chunks_ = 0;

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstring>
 #include <deque>
+#include <future>
 #include <map>
 #include <optional>
 #include <set>
@@ -17,6 +18,7 @@
 #include "auv/interfaces/msg_time.h"
 #include "auv/recon/transfer/manifest.h"
 #include "auv/recon/transfer/partial_file.h"
+#include "auv/recorder/bulk_allocator.h"
 #include "auv/recorder/chunk_reader.h"
 #include "auv/recorder/recorder_names.h"
 #include "auv/recorder/sha256.h"
@@ -112,6 +114,7 @@ void PullOptions::check() const {
 Puller::Puller(interfaces::Node& node, PullOptions options)
     : impl_(std::make_unique<Impl>()), options_(std::move(options)) {
   options_.check();
+  recorder::keepChunkBuffersInHeap();  // every chunk received allocates multi-MiB buffers
   impl_->list = node.createClient<msg::RecordingCatalogueRequest, msg::RecordingCatalogueReply>(
       recorder::listRecordingsService(options_.vehicle), interfaces::bulkTransferQos());
   impl_->fetch = node.createClient<msg::FileChunkRequest, msg::FileChunkReply>(
@@ -364,7 +367,23 @@ PullResult Puller::run() {
         return;
       }
       try {
-        file.partial->finish();
+        const std::vector<size_t> bad = file.partial->finish();
+        if (!bad.empty()) {
+          // Found by the whole-file check: fetch those chunks again, alone.
+          for (size_t index : bad) {
+            const uint64_t offset = file.partial->chunkOffset(index);
+            ++stats_.chunks_corrupted;
+            ++file.corrupted;
+            message(file.partial->remote().path + ": chunk at offset " + std::to_string(offset) +
+                    " arrived corrupted (SHA-256 mismatch); fetching it again");
+            queue.push_front(Work{&file, index, offset, file.partial->chunkLength(index)});
+          }
+          if (file.corrupted > kMaxCorruptedChunksPerFile) {
+            failTask(file, std::to_string(file.corrupted) +
+                               " chunks arrived corrupted (SHA-256 mismatch); giving up");
+          }
+          return;
+        }
         file.done = true;
         ++stats_.files_pulled;
         --file.task->files_left;
@@ -385,6 +404,11 @@ PullResult Puller::run() {
     auto rate_since = Clock::now();
     uint64_t rate_bytes = 0;
     bool service_was_ready = impl_->fetch->serviceReady();
+    // Until the recorder has answered one fetch_chunk request, its reply writer may not have
+    // discovered our reader yet (discovery is asymmetric) and would drop what it writes: the
+    // first request goes out alone with call(), which repeats it every 500 ms; the rest are
+    // pipelined with callAsync(). Again after the vehicle comes back (new writers).
+    bool fetch_answered = false;
     while (!queue.empty() || !flight.empty()) {
       if (stop_) {
         stats_.seconds = secondsSince(start);
@@ -400,12 +424,14 @@ PullResult Puller::run() {
           ++stats_.vehicle_restarts;
           message("vehicle '" + options_.vehicle + "' is back; resuming");
         }
+        fetch_answered = false;
         service_was_ready = ready;
       }
       progress.waiting = ready ? "" : "waiting for vehicle '" + options_.vehicle + "'";
       // Fill the window.
       const auto now = Clock::now();
-      while (ready && flight.size() < static_cast<size_t>(options_.in_flight) && !queue.empty()) {
+      const size_t window = fetch_answered ? static_cast<size_t>(options_.in_flight) : 1;
+      while (ready && flight.size() < window && !queue.empty()) {
         auto it = std::find_if(queue.begin(), queue.end(),
                                [&](const Work& w) { return w.not_before <= now; });
         if (it == queue.end()) break;
@@ -417,6 +443,19 @@ PullResult Puller::run() {
         request.offset(work.offset);
         request.length(work.length);
         stats_.bytes_requested += work.length;
+        if (!fetch_answered) {
+          msg::FileChunkReply first;
+          if (impl_->fetch->call(request, &first, 2000ms) != interfaces::CallStatus::OK) {
+            queue.push_front(work);  // --timeout (last_alive) decides when to give up
+            break;
+          }
+          fetch_answered = true;
+          std::promise<msg::FileChunkReply> answered;
+          answered.set_value(std::move(first));
+          ++work.file->in_flight;
+          flight.push_back(InFlight{work, answered.get_future(), Clock::now()});
+          continue;
+        }
         ++work.file->in_flight;
         flight.push_back(InFlight{work, impl_->fetch->callAsync(request), Clock::now()});
       }
@@ -495,8 +534,16 @@ PullResult Puller::run() {
                              std::to_string(work.offset));
           continue;
         }
-        const std::string digest = recorder::Sha256::of(data.data(), data.size());
-        if (digest != reply.data_sha256()) {
+        const uint64_t chunk_start = file.partial->chunkOffset(work.chunk);
+        const uint32_t chunk_length = file.partial->chunkLength(work.chunk);
+        const bool whole_chunk = work.offset == chunk_start && data.size() == chunk_length;
+        // A whole chunk is written with the digest the vehicle sent and checked by the
+        // whole-file SHA-256 in finish(), which names the chunks to fetch again if it fails:
+        // one hashing pass on shore instead of two. Pieces of a chunk are checked now.
+        const bool corrupted =
+            !recorder::isSha256Hex(reply.data_sha256()) ||
+            (!whole_chunk && recorder::Sha256::of(data.data(), data.size()) != reply.data_sha256());
+        if (corrupted) {
           ++stats_.chunks_corrupted;
           if (++file.corrupted > kMaxCorruptedChunksPerFile) {
             failTask(file, std::to_string(file.corrupted) +
@@ -509,10 +556,8 @@ PullResult Puller::run() {
           continue;
         }
         progress.current_file = remote.path;
-        const uint64_t chunk_start = file.partial->chunkOffset(work.chunk);
-        const uint32_t chunk_length = file.partial->chunkLength(work.chunk);
-        if (work.offset == chunk_start && data.size() == chunk_length) {
-          file.partial->writeChunk(work.chunk, data.data(), data.size(), digest);
+        if (whole_chunk) {
+          file.partial->writeChunk(work.chunk, data.data(), data.size(), reply.data_sha256());
         } else {
           std::vector<uint8_t>& buffer = file.buffers[work.chunk];
           buffer.resize(chunk_length);

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "auv/interfaces/msg_time.h"
+#include "auv/recorder/bulk_allocator.h"
 #include "auv/recorder/recorder_names.h"
 #include "auv/recorder/sha256.h"
 
@@ -84,6 +85,7 @@ void RecorderComponent::configure(interfaces::Node& node) {
       "extensions", o.extensions,
       {"file endings of recordings (with the dot)", "", {}, {}, {}, true});
   o.check();
+  keepChunkBuffersInHeap();  // every chunk served allocates multi-MiB buffers
   catalogue_ = std::make_unique<Catalogue>(CatalogueOptions{o.root, o.extensions});
   reader_ = std::make_unique<ChunkReader>(o.root, o.max_chunk_bytes);
   std::error_code error;
