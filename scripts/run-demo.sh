@@ -6,7 +6,9 @@
 #   2. the canyon inspection mission (traverse, go round the outer rock, traverse again) run
 #      autonomously with `auv mission start`, faster than real time, ending with the mission
 #      figure and summary (collisions, clearance, navigation error, path lengths);
-#   3. the cameras' videos of part of the mission rendered from the true trajectory.
+#   3. the cameras' videos of part of the mission rendered from the true trajectory;
+#   4. the shore's side after recovery: `auv recon pull` (Fast DDS) fetches and verifies the
+#      recordings from the vehicle's recorder (Cyclone DDS) into a survey folder.
 # The 3D reconstruction comes with a later issue.
 # Options: AUV_DEMO_WORLD (canyon), AUV_DEMO_SEED (1), AUV_DEMO_SPEED (real-time factor, 8),
 #          AUV_DEMO_SCALE (video resolution scale, 0.5 of 960x720),
@@ -21,6 +23,7 @@ export AUV_DEMO_WORLD=${AUV_DEMO_WORLD:-canyon} AUV_DEMO_SEED=${AUV_DEMO_SEED:-1
 export AUV_DEMO_SPEED=${AUV_DEMO_SPEED:-8} AUV_DEMO_SCALE=${AUV_DEMO_SCALE:-0.5}
 export AUV_DEMO_VIDEO_SECONDS=${AUV_DEMO_VIDEO_SECONDS:-60}
 export AUV_DEMO_RUN=${AUV_DEMO_RUN:-auv_runs/demo-$AUV_DEMO_WORLD}
+export AUV_DEMO_SURVEY=${AUV_DEMO_SURVEY:-auv_runs/survey-$AUV_DEMO_WORLD}
 guard=()
 [ -x ../shared/tools/no-external-traffic ] && guard=(../shared/tools/no-external-traffic)
 
@@ -56,6 +59,14 @@ end=""
 step "auv sim render $AUV_DEMO_RUN --scale $AUV_DEMO_SCALE $end   (cameras from the true trajectory)"
 auv sim render "$AUV_DEMO_RUN" --scale "$AUV_DEMO_SCALE" $end --quiet
 find "$AUV_DEMO_RUN" -type f -not -name "tree_*" | sort | sed "s/^/  /"
+step "auv recon pull --vehicle auv --into $AUV_DEMO_SURVEY   (shore on Fast DDS; the recorder on Cyclone DDS)"
+rm -rf "$AUV_DEMO_SURVEY"
+auv run recorder -p root:="$AUV_DEMO_RUN/vehicle/recordings" -p vehicle_name:=auv \
+  > /tmp/auv-demo-recorder.log 2>&1 &
+recorder_pid=$!
+AUV_DDS=fastdds auv recon pull --vehicle auv --into "$AUV_DEMO_SURVEY" --timeout 30 || status=$?
+kill -INT $recorder_pid; wait $recorder_pid || true
+find "$AUV_DEMO_SURVEY" -type f | sort | sed "s/^/  /"
 step "mission figure: $AUV_DEMO_RUN/mission/report.png (and .svg); summary: $AUV_DEMO_RUN/mission/summary.json"
 exit $status
 '
