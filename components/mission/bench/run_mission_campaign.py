@@ -185,6 +185,8 @@ def main():
     args = parser.parse_args()
 
     stamp = datetime.datetime.now().strftime("%Y%m%d_%H%M%S")
+    if not args.evaluate:
+        stamp += f"_d{args.domain}"  # campaigns started together on other domains differ
     if args.evaluate:
         rows = evaluate_runs(args.evaluate)
         worlds = list(dict.fromkeys(r["world"] for r in rows))
