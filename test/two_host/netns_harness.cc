@@ -1,7 +1,6 @@
 #include "netns_harness.h"
 
 #include <fcntl.h>
-#include <openssl/evp.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -13,6 +12,8 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+
+#include "auv/recorder/sha256.h"
 
 namespace auv::system_tests {
 namespace fs = std::filesystem;
@@ -228,26 +229,11 @@ unsigned long long folderBytes(const std::string& folder) {
 }
 
 std::string fileSha256(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return "";
-  EVP_MD_CTX* ctx = EVP_MD_CTX_new();
-  EVP_DigestInit_ex(ctx, EVP_sha256(), nullptr);
-  std::array<char, 1 << 16> buffer;
-  while (in) {
-    in.read(buffer.data(), buffer.size());
-    EVP_DigestUpdate(ctx, buffer.data(), static_cast<size_t>(in.gcount()));
+  try {
+    return recorder::sha256OfFile(path);
+  } catch (const std::exception&) {
+    return "";  // unreadable: compares unequal to any digest
   }
-  std::array<unsigned char, EVP_MAX_MD_SIZE> digest;
-  unsigned int length = 0;
-  EVP_DigestFinal_ex(ctx, digest.data(), &length);
-  EVP_MD_CTX_free(ctx);
-  std::string hex;
-  char byte[3];
-  for (unsigned int i = 0; i < length; ++i) {
-    std::snprintf(byte, sizeof byte, "%02x", digest[i]);
-    hex += byte;
-  }
-  return hex;
 }
 
 std::vector<std::string> listFiles(const std::string& folder) {

@@ -107,7 +107,7 @@ bool waitUntil(double seconds, Condition condition) {
 /// Total bytes of the regular files below `folder` (0 if it does not exist).
 unsigned long long folderBytes(const std::string& folder);
 
-/// SHA-256 of a file (OpenSSL EVP), 64 lowercase hex digits; empty if it cannot be read.
+/// SHA-256 of a file (the recorder's), 64 lowercase hex digits; empty if it cannot be read.
 std::string fileSha256(const std::string& path);
 
 /// Relative paths of the regular files below `folder`, sorted.
