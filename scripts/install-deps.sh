@@ -21,6 +21,9 @@ PACKAGES=(
   liboctomap-dev libdynamicedt3d-dev octomap-tools libompl-dev
   # recordings pull: SHA-256 (OpenSSL EVP), manifest JSON; rsync is the pull benchmark's anchor
   libssl-dev nlohmann-json3-dev rsync
+  # reconstruction: bundle adjustment (Ceres); COLMAP is the SfM benchmark's anchor, opencv-doc
+  # ships real chessboard photos for the calibration tests
+  libceres-dev colmap opencv-doc
 )
 
 echo "install-deps: apt-get update"

@@ -270,7 +270,15 @@ Recording Catalogue::refresh(const Found& found, const std::optional<Recording>&
   if (stampOf(options_.root / found.disk_path) != std::optional<FileStamp>(found.stamp) ||
       (has_sidecar && stampOf(options_.root / found.sidecar_disk_path) !=
                           std::optional<FileStamp>(found.sidecar_stamp))) {
-    return r;  // still being written: not complete, nothing to report
+    if (r.catalogued_sha256.empty()) return r;  // still being written: nothing to report
+    // Closed and catalogued complete before: being modified is a change, not a recording in
+    // progress (waiting for a stable state would serve it as "being written" until the next
+    // scan, and a pull would skip it without a word).
+    r.changed = true;
+    r.problem = "file changed after it was catalogued complete: being modified (size " +
+                std::to_string(r.catalogued_size) + " -> " + std::to_string(r.size_bytes) +
+                " bytes)";
+    return r;
   }
   r.stamp = found.stamp;
   r.sidecar_stamp = found.sidecar_stamp;

@@ -8,7 +8,7 @@
 #include <thread>
 
 #include "auv/interfaces/executor.h"
-#include "auv/recon/tools/recon_cli.h"
+#include "auv/recon/tools/command.h"
 #include "auv/recon/transfer/progress_display.h"
 #include "auv/recon/transfer/puller.h"
 
@@ -28,8 +28,8 @@ const char* kPullUsage =
     "Exit: 0 every complete recording verified on disk; 1 some recording failed (listed) or a\n"
     "local error; 2 bad usage; 3 vehicle not found / gone for --timeout; 130 interrupted.\n";
 
-constexpr int kExitFailed = 1;
-constexpr int kExitUsage = 2;
+using tools::kExitFailed;
+using tools::kExitUsage;
 constexpr int kExitVehicleLost = 3;
 constexpr int kExitInterrupted = 130;
 
@@ -63,8 +63,6 @@ std::string summary(const transfer::PullStats& s, const std::string& result) {
   if (s.vehicle_restarts > 0) out << ", vehicle came back " << s.vehicle_restarts << " times";
   return out.str();
 }
-
-}  // namespace
 
 int pullMain(const std::vector<std::string>& args) {
   transfer::PullOptions options;
@@ -155,5 +153,10 @@ int pullMain(const std::vector<std::string>& args) {
   }
   return kExitFailed;
 }
+
+}  // namespace
+
+AUV_RECON_COMMAND("pull", 0, "--vehicle <name> --into <survey>/   pull the vehicle's recordings",
+                  pullMain);
 
 }  // namespace auv::recon

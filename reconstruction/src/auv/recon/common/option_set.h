@@ -1,0 +1,71 @@
+#pragma once
+// Binds a stage's Options fields to command-line flags and to a section of a YAML file, with
+// one declaration per field:
+//
+//   OptionSet set("keyframes");
+//   set.add("min_motion_px", &options.min_motion_px, "px: mean feature motion for a new keyframe");
+//   set.parse(args);   // --min-motion-px 40, --config recon.yaml (section `keyframes:`)
+//
+// Flags are the names with '-' for '_' (both spellings accepted). Values are checked for type
+// here and for range by the stage's Options::check(); errors name the flag or the file and key.
+
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace YAML {
+class Node;
+}
+
+namespace auv::recon {
+
+class OptionSet {
+ public:
+  /// `section`: the YAML key holding this set's values (the command's name).
+  explicit OptionSet(std::string section);
+
+  /// Supported T: double, float, int, unsigned, size_t, int64_t, bool, std::string,
+  /// std::vector<std::string> (repeatable flag; a YAML list). The variable's current value is
+  /// the default shown in help.
+  template <class T>
+  void add(const std::string& name, T* value, const std::string& help);
+
+  /// Positional arguments, in order; `required` ones missing are a usage error.
+  void positional(const std::string& name, std::string* value, const std::string& help,
+                  bool required = true);
+
+  /// Applies `--config <file>` first (wherever it stands), then the flags in order. Returns
+  /// false when `--help` was asked for (the help is printed to stdout). Throws
+  /// std::invalid_argument naming the flag, file or key.
+  bool parse(const std::vector<std::string>& args);
+
+  /// Applies the `section_` key of a YAML file (absent section: nothing). Unknown keys are
+  /// errors naming the file and the key.
+  void applyConfigFile(const std::filesystem::path& file);
+  void applyYaml(const YAML::Node& section, const std::string& where);
+
+  /// Options and positionals with help and defaults.
+  std::string help() const;
+  const std::string& section() const { return section_; }
+
+ private:
+  struct Entry {
+    std::string name, help, default_text, type;
+    bool is_flag = false, repeatable = false;
+    std::function<void(const std::string&)> set;                          // from text
+    std::function<void(const YAML::Node&, const std::string&)> set_yaml;  // from YAML
+  };
+  struct Positional {
+    std::string name, help;
+    std::string* value;
+    bool required;
+  };
+  Entry* find(const std::string& name);
+
+  std::string section_;
+  std::vector<Entry> entries_;
+  std::vector<Positional> positionals_;
+};
+
+}  // namespace auv::recon

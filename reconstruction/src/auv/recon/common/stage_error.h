@@ -1,0 +1,45 @@
+#pragma once
+// Errors of the reconstruction stages and the checks of their options (STYLE.md rules 4, 6).
+
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+namespace auv::recon {
+
+/// A stage cannot do its work with what it was given (too few registered images, an empty
+/// cloud, a truncated video, ...). The message names the stage and the cause; the CLI prints it
+/// and exits 1. Earlier outputs in the survey stay untouched (StagedOutput).
+class StageError : public std::runtime_error {
+ public:
+  StageError(const std::string& stage, const std::string& cause)
+      : std::runtime_error(stage + ": " + cause), stage_(stage) {}
+  const std::string& stage() const { return stage_; }
+
+ private:
+  std::string stage_;
+};
+
+/// An option value outside its range: "<field> = <value>: <requirement>".
+class OptionError : public std::invalid_argument {
+ public:
+  using std::invalid_argument::invalid_argument;
+};
+
+namespace detail {
+template <class T>
+[[noreturn]] void throwOptionError(const char* field, const T& value, const char* requirement) {
+  std::ostringstream message;
+  message << field << " = " << value << ": " << requirement;
+  throw OptionError(message.str());
+}
+}  // namespace detail
+
+}  // namespace auv::recon
+
+/// For `Options::check()`: throws OptionError naming the field and its value when `cond` fails,
+/// e.g. `AUV_RECON_CHECK_OPTION(min_features > 0, min_features, "must be > 0");`.
+#define AUV_RECON_CHECK_OPTION(cond, field, requirement)                             \
+  do {                                                                               \
+    if (!(cond)) ::auv::recon::detail::throwOptionError(#field, field, requirement); \
+  } while (false)
