@@ -1,0 +1,74 @@
+#pragma once
+// `auv recon match <survey>`: candidate pairs (pair_selection.h), descriptor matching with
+// Lowe's ratio test and a mutual check (descriptor_matcher.h), geometric verification of each
+// pair with AC-RANSAC (paper section 3.4.1): essential matrix when both cameras are calibrated
+// (corrected/<camera>.yaml), else the fundamental matrix. Writes features/matches/ (match_store.h).
+
+#include <string>
+
+#include "auv/recon/common/survey.h"
+#include "auv/recon/estimators/ac_ransac.h"
+#include "auv/recon/features/descriptor_matcher.h"
+#include "auv/recon/features/feature_store.h"
+#include "auv/recon/features/match_store.h"
+#include "auv/recon/features/pair_selection.h"
+#include "auv/recon/scene/camera.h"
+
+namespace auv::recon {
+class OptionSet;
+}
+
+namespace auv::recon::features {
+
+struct VerificationOptions {
+  /// Pairs with fewer geometric inliers are dropped.
+  int min_inliers = 30;
+  /// Upper bound of AC-RANSAC's adaptive threshold, px.
+  double max_threshold_px = 4.0;
+  /// AC-RANSAC minimal samples per pair.
+  int max_iterations = 4096;
+  /// Also fit a homography to record homography_inliers (planarity of the pair).
+  bool estimate_homography = true;
+  /// Use the fundamental matrix even when both cameras are calibrated.
+  bool force_fundamental = false;
+
+  void check() const;
+};
+
+/// Verifies one pair of putative matches. Returns the verified pair or, when it fails, an
+/// empty inlier list (the caller drops it). `calibrated`: both cameras pinhole-calibrated.
+struct PairGeometryInput {
+  const ImageFeatures* features1 = nullptr;
+  const ImageFeatures* features2 = nullptr;
+  const scene::Camera* camera1 = nullptr;  ///< nullptr: uncalibrated
+  const scene::Camera* camera2 = nullptr;
+  std::vector<MatchIndices> putative;
+};
+VerifiedPair verifyPair(const PairGeometryInput& input, const VerificationOptions& options);
+
+struct MatchStageOptions {
+  MatchingOptions matching;
+  PairSelectionOptions pairs;
+  VerificationOptions verification;
+  /// Pairs matched at once (0: the machine's cores).
+  int threads = 0;
+
+  void check() const;
+  void bind(OptionSet& set);
+};
+
+struct MatchSummary {
+  size_t images = 0;
+  size_t candidate_pairs = 0;
+  size_t verified_pairs = 0;
+  size_t verified_matches = 0;
+  size_t essential_pairs = 0, fundamental_pairs = 0;
+  double seconds = 0;
+};
+
+/// Reads features/ (FeatureStore), selects, matches and verifies pairs and writes
+/// features/matches/ (StagedOutput) and the `match` section of report.json. Throws StageError
+/// naming what is missing (features/, a feature file) or when no pair verifies.
+MatchSummary matchSurvey(const Survey& survey, const MatchStageOptions& options);
+
+}  // namespace auv::recon::features

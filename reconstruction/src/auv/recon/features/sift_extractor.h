@@ -1,0 +1,74 @@
+#pragma once
+// SIFT extraction (paper section 3.4.1: SIFT keypoints and descriptors, here OpenCV's CPU
+// cv::SIFT instead of SiftGPU) over the survey's corrected images, with RootSIFT descriptors
+// (Arandjelovic & Zisserman, "Three things everyone should know to improve object retrieval",
+// CVPR 2012: L1-normalise, square root; Euclidean distance then compares like the Hellinger
+// kernel, which matches better than raw SIFT).
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "auv/recon/common/survey.h"
+#include "auv/recon/features/feature_store.h"
+
+namespace auv::recon {
+class OptionSet;
+}
+
+namespace auv::recon::features {
+
+struct SiftOptions {
+  /// Most keypoints kept per image (strongest DoG response first); 0: all.
+  int max_features = 8000;
+  /// DoG contrast threshold (cv::SIFT contrastThreshold, divided by the octave layers inside
+  /// OpenCV). OpenCV's 0.04 finds too few keypoints on low-contrast underwater frames.
+  double contrast_threshold = 0.02;
+  /// Edge response threshold (ratio of principal curvatures).
+  double edge_threshold = 10.0;
+  /// Gaussian sigma of the first octave, px.
+  double sigma = 1.6;
+  /// Scales per octave.
+  int octave_layers = 3;
+  /// Images whose larger side exceeds this are downscaled for the detection, px (0: never);
+  /// keypoints are returned in full-resolution pixels.
+  int max_image_size = 3200;
+  /// RootSIFT descriptors (else plain SIFT, L2-normalised); both stored as uint8 x 512.
+  bool root_sift = true;
+
+  void check() const;
+};
+
+/// SIFT of one image (BGR or grey, 8 bit). `image_name` goes into the result. Keypoints sorted
+/// by decreasing response, capped at max_features.
+ImageFeatures extractSift(const cv::Mat& image, const std::string& image_name,
+                          const SiftOptions& options);
+
+struct ExtractionOptions {
+  SiftOptions sift;
+  /// Only these cameras (folders of corrected/); empty: all.
+  std::vector<std::string> cameras;
+  /// Images extracted at once (0: the machine's cores); memory grows with it.
+  int threads = 0;
+
+  void check() const;
+  /// Binds the fields to flags / the `features:` section of a config file.
+  void bind(OptionSet& set);
+};
+
+struct ExtractionSummary {
+  size_t images = 0;
+  size_t features = 0;  ///< total over the images
+  size_t min_features = 0, max_features = 0;
+  double seconds = 0;
+};
+
+/// `auv recon features <survey>`: extracts every image of corrected/<camera>/ into
+/// <survey>/features/ (StagedOutput: a failure leaves an earlier features/ intact), with a
+/// progress bar, and writes the `features` section of report.json. Throws StageError naming the
+/// missing corrected/ folder or the unreadable image.
+ExtractionSummary extractSurveyFeatures(const Survey& survey, const ExtractionOptions& options);
+
+}  // namespace auv::recon::features
