@@ -1,0 +1,126 @@
+#include "auv/recon/mesh/mesh_stage.h"
+
+#include <chrono>
+#include <iostream>
+
+#include <open3d/io/PointCloudIO.h>
+#include <open3d/io/TriangleMeshIO.h>
+#include <nlohmann/json.hpp>
+
+#include "auv/recon/common/progress.h"
+#include "auv/recon/common/report.h"
+#include "auv/recon/common/stage_error.h"
+#include "auv/recon/common/staged_output.h"
+#include "auv/recon/scene/ply.h"
+
+namespace fs = std::filesystem;
+namespace o3d = open3d::geometry;
+
+namespace auv::recon::mesh {
+
+o3d::PointCloud readCloud(const fs::path& file) {
+  Survey::requireExists(file, "mesh", "dense");
+  o3d::PointCloud cloud;
+  if (!open3d::io::ReadPointCloud(file.string(), cloud, {"auto", true, true, false})) {
+    throw StageError("mesh", file.string() + ": cannot read the point cloud (not a PLY?)");
+  }
+  return cloud;
+}
+
+void writeMeshPly(const fs::path& file, const o3d::TriangleMesh& mesh) {
+  scene::PlyData ply;
+  ply.positions = mesh.vertices_;
+  if (mesh.HasVertexNormals()) ply.normals = mesh.vertex_normals_;
+  if (mesh.HasVertexColors()) {
+    ply.colors.reserve(mesh.vertex_colors_.size());
+    for (const auto& c : mesh.vertex_colors_) {
+      ply.colors.push_back(
+          (c.cwiseMax(0.0).cwiseMin(1.0) * 255.0).array().round().cast<uint8_t>().matrix());
+    }
+  }
+  ply.triangles.reserve(mesh.triangles_.size());
+  for (const auto& t : mesh.triangles_) {
+    ply.triangles.push_back(
+        {static_cast<uint32_t>(t(0)), static_cast<uint32_t>(t(1)), static_cast<uint32_t>(t(2))});
+  }
+  scene::writePly(file, ply);
+}
+
+o3d::TriangleMesh readMesh(const fs::path& file, const std::string& stage) {
+  Survey::requireExists(file, stage, "mesh");
+  o3d::TriangleMesh mesh;
+  open3d::io::ReadTriangleMeshOptions options;
+  options.enable_post_processing = false;
+  if (!open3d::io::ReadTriangleMesh(file.string(), mesh, options)) {
+    throw StageError(stage, file.string() + ": cannot read the mesh");
+  }
+  if (mesh.triangles_.empty()) {
+    throw StageError(stage, file.string() + ": the mesh has no triangles");
+  }
+  return mesh;
+}
+
+MeshStageSummary runMeshStage(const Survey& survey, const MeshStageOptions& options) {
+  options.check();
+  const auto start = std::chrono::steady_clock::now();
+  const fs::path input = survey.dense() / "fused.ply";
+  const o3d::PointCloud cloud = readCloud(input);
+  MeshStageSummary summary;
+  summary.cloud_points = cloud.points_.size();
+  std::cerr << "mesh: " << cloud.points_.size() << " points from " << input.string()
+            << ", Poisson depth " << options.surface.poisson_depth << std::endl;
+
+  Progress progress("mesh", "steps", 3);
+  SurfaceResult result;
+  try {
+    result = reconstructSurface(cloud, options.surface);
+  } catch (const StageError& e) {
+    const std::string cause = std::string(e.what()).substr(e.stage().size() + 2);
+    throw StageError("mesh", input.string() + ": " + cause);
+  }
+  progress.advance(2);
+  summary.stats = result.stats;
+  summary.area_untrimmed = surfaceArea(*result.untrimmed);
+  summary.area = surfaceArea(*result.trimmed);
+
+  StagedOutput staged(survey.mesh());
+  writeMeshPly(staged.path() / "mesh.ply", *result.trimmed);
+  if (options.write_untrimmed)
+    writeMeshPly(staged.path() / "mesh_untrimmed.ply", *result.untrimmed);
+  staged.commit();
+  progress.advance();
+  progress.finish();
+  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  const SurfaceOptions& o = options.surface;
+  const TrimStats& s = summary.stats;
+  nlohmann::json section = {{"input", "dense/fused.ply"},
+                            {"cloud_points", summary.cloud_points},
+                            {"poisson_vertices", s.poisson_vertices},
+                            {"poisson_triangles", s.poisson_triangles},
+                            {"removed_long_edge_triangles", s.removed_long_edges},
+                            {"removed_low_density_triangles", s.removed_low_density},
+                            {"removed_small_component_triangles", s.removed_components},
+                            {"vertices", s.vertices},
+                            {"triangles", s.triangles},
+                            {"area_untrimmed_m2", summary.area_untrimmed},
+                            {"area_m2", summary.area},
+                            {"finest_cell_m", s.finest_cell},
+                            {"median_point_spacing_m", s.median_spacing},
+                            {"density_threshold", s.density_threshold},
+                            {"seconds", summary.seconds},
+                            {"options",
+                             {{"poisson_depth", o.poisson_depth},
+                              {"poisson_scale", o.poisson_scale},
+                              {"poisson_linear_fit", o.poisson_linear_fit},
+                              {"max_edge_factor", o.max_edge_factor},
+                              {"spacing_neighbors", o.spacing_neighbors},
+                              {"density_quantile", o.density_quantile},
+                              {"density_drop_levels", o.density_drop_levels},
+                              {"min_component_fraction", o.min_component_fraction},
+                              {"min_points", o.min_points}}}};
+  updateReport(survey.report(), "mesh", section);
+  return summary;
+}
+
+}  // namespace auv::recon::mesh
