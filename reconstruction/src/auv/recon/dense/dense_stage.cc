@@ -1,0 +1,311 @@
+#include "auv/recon/dense/dense_stage.h"
+
+#include <chrono>
+#include <fstream>
+#include <iomanip>
+#include <list>
+#include <sstream>
+#include <unordered_map>
+
+#include "auv/recon/common/progress.h"
+#include "auv/recon/common/report.h"
+#include "auv/recon/common/stage_error.h"
+#include "auv/recon/common/staged_output.h"
+#include "auv/recon/dense/depth_map.h"
+#include "auv/recon/dense/memory.h"
+#include "auv/recon/scene/colmap_text.h"
+#include "auv/recon/scene/ply.h"
+
+namespace fs = std::filesystem;
+
+namespace auv::recon::dense {
+
+namespace {
+constexpr const char* kStage = "dense";
+using Clock = std::chrono::steady_clock;
+
+/// A few loaded items by image id, least recently used dropped first.
+template <class T>
+class LruCache {
+ public:
+  explicit LruCache(size_t capacity) : capacity_(std::max<size_t>(capacity, 1)) {}
+  template <class Load>
+  T& get(uint32_t id, const Load& load) {
+    const auto found = index_.find(id);
+    if (found != index_.end()) {
+      order_.splice(order_.begin(), order_, found->second);
+      return found->second->second;
+    }
+    order_.emplace_front(id, load());
+    index_[id] = order_.begin();
+    if (order_.size() > capacity_) {
+      index_.erase(order_.back().first);
+      order_.pop_back();
+    }
+    return order_.front().second;
+  }
+
+ private:
+  size_t capacity_;
+  std::list<std::pair<uint32_t, T>> order_;
+  std::unordered_map<uint32_t, typename std::list<std::pair<uint32_t, T>>::iterator> index_;
+};
+
+/// Starts a sub-stage's time and peak memory.
+class SubStage {
+ public:
+  explicit SubStage(SubStageFigures& figures) : figures_(figures), start_(Clock::now()) {
+    resetPeakMemory();
+  }
+  ~SubStage() {
+    figures_.seconds = std::chrono::duration<double>(Clock::now() - start_).count();
+    figures_.peak_memory_bytes = peakMemoryBytes();
+  }
+
+ private:
+  SubStageFigures& figures_;
+  Clock::time_point start_;
+};
+
+fs::path depthMapPath(const fs::path& folder, const std::string& image_name) {
+  fs::path relative(image_name);
+  relative.replace_extension(".depth.bin");
+  return folder / "depth_maps" / relative;
+}
+
+nlohmann::json figures(const SubStageFigures& f) {
+  return {{"seconds", f.seconds}, {"peak_memory_mb", f.peak_memory_bytes / 1048576.0}};
+}
+}  // namespace
+
+void DenseOptions::check() const {
+  AUV_RECON_CHECK_OPTION(max_image_size == 0 || max_image_size >= 64, max_image_size,
+                         "must be 0 (full size) or >= 64 px");
+  AUV_RECON_CHECK_OPTION(min_registered_images >= 2, min_registered_images, "must be >= 2");
+  AUV_RECON_CHECK_OPTION(min_points >= 0, min_points, "must be >= 0");
+  AUV_RECON_CHECK_OPTION(image_cache >= 1, image_cache, "must be >= 1");
+  neighbours.check();
+  matcher.check();
+  fusion.check();
+}
+
+nlohmann::json DenseOptions::toJson() const {
+  const MatcherOptions& m = matcher;
+  const NeighbourOptions& n = neighbours;
+  return {{"max_image_size", max_image_size},
+          {"min_registered_images", min_registered_images},
+          {"min_points", min_points},
+          {"neighbours",
+           {{"max_neighbours", n.max_neighbours},
+            {"min_shared_points", n.min_shared_points},
+            {"min_angle_deg", n.min_angle_deg},
+            {"max_angle_deg", n.max_angle_deg},
+            {"good_angle_deg", n.good_angle_deg},
+            {"depth_percentile", n.depth_percentile},
+            {"depth_margin", n.depth_margin}}},
+          {"matcher",
+           {{"pyramid_levels", m.pyramid_levels},
+            {"window_radius", m.window_radius},
+            {"best_k", m.best_k},
+            {"label_px", m.label_px},
+            {"max_labels", m.max_labels},
+            {"search_labels", m.search_labels},
+            {"range_margin", m.range_margin},
+            {"p1", m.p1},
+            {"p2", m.p2},
+            {"p2_edge_grey", m.p2_edge_grey},
+            {"directions", m.directions},
+            {"min_ncc", m.min_ncc},
+            {"uniqueness", m.uniqueness},
+            {"min_texture_grey", m.min_texture_grey},
+            {"speckle_size", m.speckle_size}}},
+          {"fusion",
+           {{"min_consistent", fusion.min_consistent},
+            {"depth_tolerance", fusion.depth_tolerance},
+            {"reprojection_px", fusion.reprojection_px}}}};
+}
+
+nlohmann::json DenseSummary::toJson() const {
+  return {{"registered_images", registered_images},
+          {"masters", masters},
+          {"depth_maps", depth_maps},
+          {"depth_map_size", {width, height}},
+          {"depth_pixels", depth_pixels},
+          {"depths_fused", depths_fused},
+          {"depths_inconsistent", depths_inconsistent},
+          {"points", points},
+          {"seconds", seconds},
+          {"neighbours", figures(neighbours)},
+          {"matching", figures(matching)},
+          {"fusion", figures(fusion)},
+          {"writing", figures(writing)}};
+}
+
+DenseSummary densify(const scene::Reconstruction& model, const fs::path& image_folder,
+                     const fs::path& output_folder, const DenseOptions& options) {
+  options.check();
+  const auto start = Clock::now();
+  DenseSummary summary;
+  summary.registered_images = model.images.size();
+  if (static_cast<int>(model.images.size()) < options.min_registered_images) {
+    throw StageError(kStage, "the sparse model has " + std::to_string(model.images.size()) +
+                                 " registered images (at least " +
+                                 std::to_string(options.min_registered_images) +
+                                 " needed for dense matching)");
+  }
+  std::vector<MasterSelection> selections;
+  {
+    SubStage figures(summary.neighbours);
+    selections = selectNeighbours(model, options.neighbours);
+  }
+  for (const MasterSelection& s : selections) summary.masters += s.usable() ? 1 : 0;
+  if (summary.masters == 0) {
+    throw StageError(kStage, "no registered image has a neighbour sharing >= " +
+                                 std::to_string(options.neighbours.min_shared_points) +
+                                 " sparse points at a triangulation angle in [" +
+                                 std::to_string(options.neighbours.min_angle_deg) + ", " +
+                                 std::to_string(options.neighbours.max_angle_deg) +
+                                 "] deg and a depth range (" + std::to_string(model.points.size()) +
+                                 " sparse points)");
+  }
+
+  StagedOutput output(output_folder);
+  std::map<uint32_t, View> views;  // at the matching size, no images
+  for (const auto& [id, image] : model.images) {
+    View view = View::fromImage(model, image);
+    const cv::Size size = limitedSize(view.width, view.height, options.max_image_size);
+    views.emplace(id, view.scaled(size.width, size.height));
+  }
+  LruCache<View> loaded(options.image_cache);
+  const auto loadedView = [&](uint32_t id) -> View& {
+    return loaded.get(id, [&] {
+      View view = views.at(id);
+      loadImages(view, image_folder.string());
+      return view;
+    });
+  };
+
+  {  // neighbours.csv: what each master was matched with
+    std::ostringstream csv;
+    csv << "master,neighbours,shared_points,angles_deg,depth_min,depth_max\n";
+    for (const MasterSelection& s : selections) {
+      csv << model.images.at(s.master).name << ",";
+      for (size_t i = 0; i < s.neighbours.size(); ++i) {
+        csv << (i ? " " : "") << model.images.at(s.neighbours[i]).name;
+      }
+      csv << ",";
+      for (size_t i = 0; i < s.neighbours.size(); ++i) csv << (i ? " " : "") << s.shared_points[i];
+      csv << ",";
+      for (size_t i = 0; i < s.neighbours.size(); ++i) {
+        csv << (i ? " " : "") << std::fixed << std::setprecision(2) << s.angle_deg[i];
+      }
+      csv << "," << std::setprecision(6) << s.depth_min << "," << s.depth_max << "\n";
+    }
+    writeFileAtomically(output.path() / "neighbours.csv", csv.str());
+  }
+
+  std::map<uint32_t, bool> has_depth;
+  {
+    SubStage figures(summary.matching);
+    Progress progress("dense: depth maps", "images", summary.masters);
+    for (const MasterSelection& s : selections) {
+      if (!s.usable()) continue;
+      std::vector<View> neighbours;
+      for (const uint32_t id : s.neighbours) neighbours.push_back(loadedView(id));
+      const View& master = loadedView(s.master);
+      const DepthMapResult result =
+          computeDepthMap(master, neighbours, s.depth_min, s.depth_max, options.matcher);
+      const fs::path file = depthMapPath(output.path(), master.name);
+      fs::create_directories(file.parent_path());
+      writeDenseArray(file, result.depth);
+      has_depth[s.master] = true;
+      ++summary.depth_maps;
+      summary.depth_pixels += result.valid_pixels;
+      if (summary.width == 0) {
+        summary.width = result.depth.cols;
+        summary.height = result.depth.rows;
+      }
+      progress.advance();
+    }
+  }
+
+  FusedCloud cloud;
+  {
+    SubStage figures(summary.fusion);
+    // Holds a master and all its neighbours at once (their references stay valid).
+    LruCache<FusionView> fusion_views(
+        std::max(options.image_cache, options.neighbours.max_neighbours + 1));
+    const auto fusionView = [&](uint32_t id) -> FusionView& {
+      return fusion_views.get(id, [&] {
+        FusionView fv;
+        fv.view = loadedView(id);
+        fv.view.grey.release();
+        const View& plain = views.at(id);
+        if (has_depth.count(id)) {
+          fv.depth = readDenseArray(depthMapPath(output.path(), plain.name));
+        } else {
+          fv.depth = cv::Mat(plain.height, plain.width, CV_32F, cv::Scalar(0));
+        }
+        fv.normals = normalsFromDepth(fv.depth, fv.view, options.fusion.normal_step);
+        return fv;
+      });
+    };
+    Fuser fuser(options.fusion);
+    Progress progress("dense: fusion", "images", summary.depth_maps);
+    for (const MasterSelection& s : selections) {
+      if (!has_depth.count(s.master)) continue;
+      // Load the neighbours first: the master must stay in the cache while they are used.
+      std::vector<const FusionView*> neighbours;
+      for (const uint32_t id : s.neighbours) {
+        if (has_depth.count(id)) neighbours.push_back(&fusionView(id));
+      }
+      const FusionView& master = fusionView(s.master);
+      const FusionStats stats = fuser.add(master, neighbours);
+      summary.depths_fused += stats.depths;
+      summary.depths_inconsistent += stats.inconsistent;
+      progress.advance();
+    }
+    cloud = fuser.release();
+  }
+  summary.points = cloud.size();
+  if (static_cast<int>(cloud.size()) < options.min_points || cloud.size() == 0) {
+    throw StageError(kStage, "the fused cloud has " + std::to_string(cloud.size()) +
+                                 " points (min_points = " + std::to_string(options.min_points) +
+                                 "; " + std::to_string(summary.depth_pixels) + " depths in " +
+                                 std::to_string(summary.depth_maps) + " depth maps, " +
+                                 std::to_string(summary.depths_inconsistent) +
+                                 " dropped as inconsistent across views)");
+  }
+  {
+    SubStage figures(summary.writing);
+    scene::PlyData ply;
+    ply.positions = std::move(cloud.positions);
+    ply.normals = std::move(cloud.normals);
+    ply.colors = std::move(cloud.colors);
+    scene::writePly(output.path() / "fused.ply", ply);
+    writeFusedViews(output.path() / "fused_views.bin", cloud.images);
+    if (!options.keep_depth_maps) fs::remove_all(output.path() / "depth_maps");
+    output.commit();
+  }
+  summary.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  return summary;
+}
+
+DenseSummary runDense(const Survey& survey, const DenseOptions& options) {
+  options.check();
+  Survey::requireExists(survey.sparse() / "images.txt", kStage, "sfm");
+  Survey::requireExists(survey.corrected(), kStage, "correct");
+  scene::Reconstruction model;
+  try {
+    model = scene::readColmapText(survey.sparse());
+  } catch (const std::exception& e) {
+    throw StageError(kStage, std::string("cannot read the sparse model: ") + e.what());
+  }
+  const DenseSummary summary = densify(model, survey.corrected(), survey.dense(), options);
+  nlohmann::json section = summary.toJson();
+  section["options"] = options.toJson();
+  updateReport(survey.report(), kStage, section);
+  return summary;
+}
+
+}  // namespace auv::recon::dense

@@ -1,0 +1,70 @@
+#pragma once
+// `auv recon dense`: sparse model + undistorted images -> depth maps and a fused, coloured,
+// oriented point cloud (PAPER.md 3.5). See README.md beside this file.
+//
+//   dense/
+//     depth_maps/<image name without extension>.depth.bin   per master (depth_map.h format)
+//     neighbours.csv                                        the images each master was matched with
+//     fused.ply                                             xyz, normals, rgb (binary PLY)
+//     fused_views.bin                                       contributing image ids per point
+
+#include <cstddef>
+#include <filesystem>
+
+#include <nlohmann/json.hpp>
+
+#include "auv/recon/common/survey.h"
+#include "auv/recon/dense/fusion.h"
+#include "auv/recon/dense/matcher.h"
+#include "auv/recon/dense/neighbours.h"
+#include "auv/recon/scene/reconstruction.h"
+
+namespace auv::recon::dense {
+
+struct DenseOptions {
+  int max_image_size = 1600;      ///< px: longer image side depth maps are computed at (0: full)
+  int min_registered_images = 2;  ///< fewer registered images in the model: StageError
+  int min_points = 1000;          ///< a fused cloud with fewer points: StageError
+  int image_cache = 12;           ///< images (and depth maps) kept in memory between masters
+  bool keep_depth_maps = true;    ///< leave dense/depth_maps/ in the output
+  NeighbourOptions neighbours;
+  MatcherOptions matcher;
+  FusionOptions fusion;
+
+  /// Checks every field, the sub-stages' included.
+  void check() const;
+  nlohmann::json toJson() const;
+};
+
+/// Time and peak resident memory of a sub-stage.
+struct SubStageFigures {
+  double seconds = 0;
+  size_t peak_memory_bytes = 0;
+};
+
+struct DenseSummary {
+  size_t registered_images = 0;
+  size_t masters = 0;              ///< images with neighbours and a depth range
+  size_t depth_maps = 0;           ///< depth maps computed
+  size_t depth_pixels = 0;         ///< valid depths over all maps
+  size_t depths_fused = 0;         ///< depths considered by fusion (not already part of a point)
+  size_t depths_inconsistent = 0;  ///< of these, dropped by the consistency check
+  size_t points = 0;
+  int width = 0, height = 0;  ///< size of the first depth map, px
+  SubStageFigures neighbours, matching, fusion, writing;
+  double seconds = 0;
+
+  nlohmann::json toJson() const;
+};
+
+/// Dense matching of `model` (PINHOLE cameras) with images under `image_folder` (the model's
+/// image names are relative to it), written through a StagedOutput to `output_folder`.
+/// Throws StageError("dense", ...) for too few registered images, no image to match or a
+/// cloud below min_points (the previous `output_folder` then stays as it was).
+DenseSummary densify(const scene::Reconstruction& model, const std::filesystem::path& image_folder,
+                     const std::filesystem::path& output_folder, const DenseOptions& options);
+
+/// The survey's sparse/ and corrected/ -> dense/, and the "dense" section of report.json.
+DenseSummary runDense(const Survey& survey, const DenseOptions& options);
+
+}  // namespace auv::recon::dense
