@@ -68,8 +68,57 @@ def true_map_for(world, seed, cache, resolution):
     return path
 
 
+def estimated_at(events, t, after):
+    """The navigation estimate the mission log recorded nearest to `t` (first event at or after
+    it when `after`, else the last one at or before it)."""
+    rows = [e for e in events if (e[0] >= t - 1e-6 if after else e[0] <= t + 1e-6)]
+    if not rows:
+        return None
+    return (rows[0] if after else rows[-1])[1]
+
+
+def own_map_ratios(run_dir, summary):
+    """Executed length / the shortest path on the map the vehicle had at the end (its mission
+    log's map.bt, in the navigation frame, unknown = free) between the navigation estimates at
+    the query's start and end: what hindsight on its own map allows. The oracle keeps its
+    clearance from voxel centres; the planner keeps CLEARANCE from the voxel's box, i.e. up to
+    half a voxel more, so the oracle gets CLEARANCE + MAP_RESOLUTION / 2."""
+    map_path = os.path.join(run_dir, "mission", "map.bt")
+    events_path = os.path.join(run_dir, "mission", "events.csv")
+    if not os.path.exists(map_path) or not os.path.exists(events_path):
+        return [], ["no mission/map.bt or events.csv"]
+    events = []
+    with open(events_path) as lines:
+        next(lines)
+        for line in lines:
+            fields = line.split(",")
+            try:
+                events.append((float(fields[0]), [float(v) for v in fields[5:8]]))
+            except (ValueError, IndexError):
+                continue
+    ratios, errors = [], []
+    for query in summary["queries"]:
+        if not query["succeeded"]:
+            continue
+        start = estimated_at(events, query["start_t"], True)
+        end = estimated_at(events, query["end_t"], False)
+        if start is None or end is None:
+            errors.append(f"query {query['index']}: no navigation estimate in events.csv")
+            continue
+        out = subprocess.run(
+            [find_program("planning_oracle"), "--map", map_path,
+             "--start", ",".join(map(str, start)), "--goal", ",".join(map(str, end)),
+             "--clearance", str(CLEARANCE + 0.5 * MAP_RESOLUTION), "--fixed-depth", "--pad", "30",
+             "--grid", str(ORACLE_GRID), "--quiet"], capture_output=True, text=True)
+        if out.returncode != 0:
+            errors.append(f"query {query['index']}: {out.stderr.strip()}")
+            continue
+        ratios.append(query["executed_length_m"] / float(out.stdout.strip().split()[0]))
+    return [round(r, 3) for r in ratios], errors
+
+
 def evaluate(row, world, seed, run_dir, summary, cache):
-    """Adds the summary's figures and the path ratios against both oracles to `row`."""
+    """Adds the summary's figures and the path ratios against the oracles to `row`."""
     row.update({k: summary[k] for k in ("state", "message", "duration_s", "collisions",
                                         "min_true_clearance_m", "max_navigation_error_m",
                                         "executed_length_m")})
@@ -88,6 +137,9 @@ def evaluate(row, world, seed, run_dir, summary, cache):
             else:
                 row.setdefault("oracle_errors", []).append(error)
         row[key] = [round(r, 3) for r in ratios]
+    row["path_ratios_own_map"], own_errors = own_map_ratios(run_dir, summary)
+    if own_errors:
+        row["own_map_errors"] = own_errors
     row["queries"] = f'{sum(q["succeeded"] for q in summary["queries"])}/' \
                      f'{len(mission["queries"])}'
 
@@ -118,11 +170,14 @@ def write_results(rows, worlds, stamp, setup):
              f"{setup}; navigation drift on (simulator defaults), clearance {CLEARANCE} m; "
              f"oracle: planning_oracle on the true map at {TRUE_MAP_RESOLUTION} m and at the "
              f"planner's {MAP_RESOLUTION} m, grid {ORACLE_GRID} m, between the executed query's "
-             "true start and end.", "",
+             "true start and end; on the vehicle's final map (mission/map.bt, navigation frame) "
+             f"at clearance {CLEARANCE} m + half a voxel between the navigation estimates at "
+             "the query's start and end.", "",
              "| world | runs | succeeded | collisions (runs with any) | min true clearance (m) | "
              f"path / oracle {TRUE_MAP_RESOLUTION} m median (max) | path / oracle "
-             f"{MAP_RESOLUTION} m median (max) | max nav error (m) | wall s / run |",
-             "|---|---|---|---|---|---|---|---|---|"]
+             f"{MAP_RESOLUTION} m median (max) | path / oracle on the vehicle's final map "
+             "median (max) | max nav error (m) | wall s / run |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for world in worlds:
         mine = [r for r in rows if r["world"] == world]
         done = [r for r in mine if r.get("state") == "SUCCEEDED"]
@@ -131,6 +186,7 @@ def write_results(rows, worlds, stamp, setup):
                       if r.get("min_true_clearance_m") is not None]
         ratios = [x for r in mine for x in r.get("path_ratios", [])]
         ratios_map_res = [x for r in mine for x in r.get("path_ratios_map_res", [])]
+        ratios_own = [x for r in mine for x in r.get("path_ratios_own_map", [])]
         nav = [r["max_navigation_error_m"] for r in mine if r.get("max_navigation_error_m")]
         walls = [r["wall_s"] for r in mine if r.get("wall_s") is not None]
         def cell(values, text):
@@ -141,7 +197,8 @@ def write_results(rows, worlds, stamp, setup):
             f"| {world}", str(len(mine)), str(len(done)),
             f"{sum(r.get('collisions', 0) for r in mine)} ({len(collided)})",
             cell(clearances, lambda v: f"{min(v):.2f}"), cell(ratios, median_max),
-            cell(ratios_map_res, median_max), cell(nav, lambda v: f"{max(v):.2f}"),
+            cell(ratios_map_res, median_max), cell(ratios_own, median_max),
+            cell(nav, lambda v: f"{max(v):.2f}"),
             cell(walls, lambda v: f"{statistics.mean(v):.0f}")]) + " |")
     lines += ["", "Per run:", "", "```"] + [json.dumps(r) for r in rows] + ["```"]
     md = os.path.join(results_dir, f"mission_campaign_{stamp}.md")

@@ -2,8 +2,8 @@
 // planner, the controller and navigation: stale navigation aborts a running mission to a depth
 // hold; a goal inside a known obstacle is refused by mission/start; mission/abort stops a
 // running mission and refuses when none runs; the final mission/status is latched for late
-// joiners; the mission log is complete when the mission ends. Each test on its own domain id
-// (151..159, test/README.md).
+// joiners; the mission log is complete when the mission ends; navigation arriving while the
+// executor is busy is not stale. Each test on its own domain id (151..159, test/README.md).
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -64,8 +64,10 @@ msg::PlannerQuery queryTo(const Eigen::Vector3d& goal) {
 /// controller and navigation, spun by one executor.
 class MissionHarness {
  public:
+  /// `before_activate` may add waitables to the mission's node that run before its tick.
   MissionHarness(Vendor mission_vendor, Vendor player_vendor, int domain,
-                 std::vector<std::string> extra_parameters = {})
+                 std::vector<std::string> extra_parameters = {},
+                 const std::function<void(Node&)>& before_activate = {})
       : mission_node_("mission", nodeOptions(mission_vendor, domain,
                                              missionParameters(std::move(extra_parameters)))),
         player_("player", nodeOptions(player_vendor, domain)) {
@@ -102,6 +104,7 @@ class MissionHarness {
     controller.state(msg::CONTROLLER_STATE_IDLE);
     executor_.add(mission_node_);
     executor_.add(player_);
+    if (before_activate) before_activate(mission_node_);
     mission.activate();
   }
 
@@ -216,6 +219,8 @@ class MissionHarness {
   std::vector<msg::ControllerCommand> commands;
   std::vector<msg::MissionStatus> statuses;
   Node& player() { return player_; }
+  /// One odometry message at `vehicle` (callable from any thread).
+  void publishOdometryNow() { publishOdometry(); }
 
  private:
   void publishOdometry() {
@@ -313,6 +318,52 @@ INSTANTIATE_TEST_SUITE_P(Vendors, StaleNavigationTest,
                                                   ? "MissionOnCyclone"
                                                   : "MissionOnFastdds");
                          });
+
+// Navigation that keeps arriving while the executor is busy elsewhere (components composed in
+// one process share its thread) is not stale: mission campaigns on a loaded machine aborted
+// with "navigation stale" after a long callback, the tick running before the queued odometry.
+TEST(MissionComponentTest, NavigationArrivingWhileTheExecutorIsBusyIsNotStale) {
+  // A callback of the mission's node that runs after its odometry and before its tick (as a
+  // long map update or log write would) holds the executor for three odometry_timeouts (0.5 s
+  // each), once it is asked to.
+  std::atomic<bool> block{false};
+  std::atomic<bool> blocked{false};
+  std::shared_ptr<interfaces::Timer> blocker;
+  MissionHarness harness(Vendor::CYCLONEDDS, Vendor::FASTDDS, 156, {}, [&](Node& node) {
+    blocker = node.createTimer(0.01, [&] {
+      if (!block || blocked) return;
+      std::this_thread::sleep_for(1500ms);
+      blocked = true;
+    });
+  });
+  ASSERT_TRUE(harness.discovered());
+  ASSERT_EQ(harness.start("busy", {queryTo({20, 0, 5})}).status().code(), msg::REPLY_CODE_OK);
+  ASSERT_NE(harness.answerFirstRequest({6, 0, 5}, false).query_id(), 0u);
+  ASSERT_TRUE(harness.reachesState("busy", msg::MISSION_STATE_EXECUTING));
+
+  // Navigation now comes from a thread of its own (a sensor process), every 50 ms.
+  harness.publish_odometry = false;
+  std::atomic<bool> publishing{true};
+  std::thread navigation([&] {
+    while (publishing) {
+      harness.publishOdometryNow();
+      std::this_thread::sleep_for(50ms);
+    }
+  });
+  block = true;
+  harness.spinUntil([&] { return blocked.load(); });
+  harness.spinUntil([] { return false; }, 1s);  // ticks after the block
+  publishing = false;
+  navigation.join();
+  EXPECT_TRUE(blocked);
+  EXPECT_EQ(harness.mission.status().state(), msg::MISSION_STATE_EXECUTING)
+      << harness.mission.status().message();
+
+  // Without navigation it still goes stale: the freshness is the arrival's, not the tick's.
+  ASSERT_TRUE(harness.reachesState("busy", msg::MISSION_STATE_ABORTED));
+  EXPECT_CONTAINS(harness.statusOf("busy")->message(), "navigation stale");
+  blocker->cancel();
+}
 
 // ---- (b) goal inside a known obstacle -------------------------------------------------------
 

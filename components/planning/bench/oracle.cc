@@ -69,6 +69,9 @@ void OracleOptions::check() const {
     throw OracleError("oracle: fixed_depth must be finite");
   }
   if (!std::isfinite(min_depth)) throw OracleError("oracle: min_depth must be finite");
+  if (!(padding >= 0.0) || !std::isfinite(padding)) {
+    throw OracleError("oracle: padding must be >= 0 m");
+  }
 }
 
 double polylineLength(const std::vector<Eigen::Vector3d>& points) {
@@ -87,6 +90,10 @@ ShortestPathOracle::ShortestPathOracle(const octomap::OcTree& map, const OracleO
   const_cast<octomap::OcTree&>(map).getMetricMax(x1, y1, z1);
   const double g = options_.grid;
   Eigen::Vector3d low(x0, y0, z0), high(x1, y1, z1);
+  low.array() -= options_.padding;
+  high.array() += options_.padding;
+  z0 = low.z();
+  z1 = high.z();
   if (options_.fixed_depth) {
     const double depth = *options_.fixed_depth;
     if (depth < z0 || depth > z1 || depth < options_.min_depth) {

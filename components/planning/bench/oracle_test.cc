@@ -62,6 +62,26 @@ void expectFree(const ShortestPathOracle& oracle, const OraclePath& path) {
   }
 }
 
+// A vehicle's own map ends where its sonar saw: a start outside the known box is an error,
+// and with padding the box grows as free space (straight line, exact length).
+TEST(ShortestPathOracle, PaddingGrowsTheSearchableBoxAsFreeSpace) {
+  const auto map = wallWithGap();
+  OracleOptions options;
+  options.clearance = kClearance;
+  options.grid = 0.1;
+  options.fixed_depth = 2.05;
+  const Eigen::Vector3d start(-9.0, -8.0, 2.05), goal(-9.0, -2.0, 2.05);  // y -8: outside
+  EXPECT_THROW(ShortestPathOracle(*map, options).shortestPath(start, goal), OracleError);
+  options.padding = 3.0;
+  const ShortestPathOracle padded(*map, options);
+  EXPECT_LE(padded.minCorner().y(), -8.95 + 1e-9);
+  const OraclePath path = padded.shortestPath(start, goal);
+  ASSERT_TRUE(path.found);
+  EXPECT_NEAR(path.length, 6.0, 1e-9);
+  options.padding = -1.0;
+  EXPECT_THROW(ShortestPathOracle(*map, options), OracleError);
+}
+
 TEST(ShortestPathOracle, GoesRoundTheWallEndAtFixedDepth) {
   const auto map = wallWithGap();
   OracleOptions options;

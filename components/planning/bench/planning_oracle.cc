@@ -2,7 +2,8 @@
 // map (oracle.h), for "executed path length / shortest possible" figures.
 //
 //   planning_oracle --map true.bt --start x,y,z --goal x,y,z --clearance planner|M
-//                   [--fixed-depth] [--grid 0.2] [--min-depth 0] [--csv path.csv] [--quiet]
+//                   [--fixed-depth] [--grid 0.2] [--min-depth 0] [--pad 0] [--csv path.csv]
+//                   [--quiet]
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -27,7 +28,8 @@ using auv::planning::bench::ShortestPathOracle;
 
 const char* kUsage =
     "usage: planning_oracle --map true.bt --start x,y,z --goal x,y,z --clearance planner|M\n"
-    "                       [--fixed-depth] [--grid M] [--min-depth M] [--csv FILE] [--quiet]\n"
+    "                       [--fixed-depth] [--grid M] [--min-depth M] [--pad M] [--csv FILE]\n"
+    "                       [--quiet]\n"
     "Prints the length of the shortest path start -> goal keeping --clearance metres from every\n"
     "occupied voxel of a fully known map (`auv sim octomap`); unknown space counts as free.\n"
     "  --clearance M   metres, or `planner`: the planning component's hull_radius +\n"
@@ -35,6 +37,8 @@ const char* kUsage =
     "  --fixed-depth   stay in the horizontal plane at the start's depth (goal moved onto it)\n"
     "  --grid M        search grid step (default 0.2; a multiple of the map resolution is best)\n"
     "  --min-depth M   no point above this depth (default 0, the surface)\n"
+    "  --pad M         grow the map's known box by M (free space): for a vehicle's own map,\n"
+    "                  whose start may lie just outside what its sonar saw (default 0)\n"
     "  --csv FILE      also write the polyline (x,y,z per line, NED m)\n"
     "  --quiet         print the length only\n"
     "Exit status: 0 found, 1 no path or a map/query problem, 2 bad arguments.\n";
@@ -105,6 +109,9 @@ int main(int argc, char** argv) {
         if (!(options.grid >= 0.01 && options.grid <= 10.0)) {
           throw UsageError("--grid: expected metres in [0.01, 10]");
         }
+      } else if (arg == "--pad") {
+        options.padding = parseNumber(arg, value());
+        if (options.padding < 0.0) throw UsageError("--pad: expected metres >= 0");
       } else if (arg == "--min-depth") {
         options.min_depth = parseNumber(arg, value());
       } else if (arg == "--fixed-depth") {

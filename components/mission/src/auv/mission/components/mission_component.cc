@@ -114,8 +114,9 @@ void MissionComponent::configure(interfaces::Node& node) {
       node.createPublisher<msg::ControllerCommand>("control/waypoint", interfaces::commandQos());
   status_pub_ =
       node.createPublisher<msg::MissionStatus>("mission/status", interfaces::latchedStateQos());
-  odometry_sub_ = node.createSubscription<msg::Odometry>("nav/odometry", interfaces::stateQos(),
-                                                         bind(&MissionComponent::onOdometry, this));
+  odometry_sub_ = node.createSubscription<msg::Odometry>(
+      "nav/odometry", interfaces::stateQos(), bind(&MissionComponent::onOdometry, this),
+      interfaces::SubscriptionOptions{interfaces::CallbackThread::MIDDLEWARE});
   controller_sub_ = node.createSubscription<msg::ControllerStatus>(
       "control/status", interfaces::stateQos(),
       std::function<void(const msg::ControllerStatus&)>([this](const msg::ControllerStatus& s) {
@@ -206,6 +207,7 @@ double MissionComponent::now() const { return node_->clock().nowSeconds(); }
 
 std::string MissionComponent::startMission(const std::string& requested_id, const MissionPlan& plan,
                                            const std::string& source) {
+  feedOdometry();  // the checks use the newest position
   const auto& position = executive_->vehiclePosition();
   try {
     for (const MissionQuery& query : plan.queries) {
@@ -273,8 +275,24 @@ void MissionComponent::onAbort(const msg::TriggerRequest& request, msg::TriggerR
 void MissionComponent::onOdometry(const msg::Odometry& odometry) {
   const auto& pose = odometry.pose().pose();
   const Eigen::Vector3d position(pose.position().x(), pose.position().y(), pose.position().z());
-  if (!position.allFinite()) return;  // a broken estimate is no navigation: staleness decides
-  executive_->onOdometry(position, yawOf(pose.orientation()), now());
+  const double yaw = yawOf(pose.orientation());
+  if (!position.allFinite() || !std::isfinite(yaw)) return;  // no navigation: staleness decides
+  std::lock_guard<std::mutex> lock(odometry_mutex_);
+  latest_odometry_.position = position;
+  latest_odometry_.yaw = yaw;
+  latest_odometry_.arrival = now();
+  ++latest_odometry_.count;
+}
+
+void MissionComponent::feedOdometry() {
+  LatestOdometry latest;
+  {
+    std::lock_guard<std::mutex> lock(odometry_mutex_);
+    latest = latest_odometry_;
+  }
+  if (latest.count == fed_odometry_count_) return;
+  fed_odometry_count_ = latest.count;
+  executive_->onOdometry(latest.position, latest.yaw, latest.arrival);
   flush("odometry");
 }
 
@@ -289,6 +307,7 @@ void MissionComponent::tick() {
       ++missions_started_;  // refused once, not retried every tick
     }
   }
+  feedOdometry();
   executive_->setPlannerPresent(query_pub_->matchedSubscriptions() > 0);
   executive_->tick(now());
   flush("tick");

@@ -4,11 +4,16 @@
 // `map/update` (to refuse goals inside known obstacles), and `planner/path` / `planner/tree`
 // (only for the mission log); publishes `mission/query`, `planner/waypoint_request`,
 // `control/waypoint` and `mission/status` (latched); serves `mission/start` and
-// `mission/abort`. All callbacks run on the executor thread, so the executive needs no lock.
+// `mission/abort`. All callbacks but the odometry's run on the executor thread, so the
+// executive needs no lock; odometry is taken in the middleware thread (see onOdometry).
 
+#include <cstdint>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
+
+#include <Eigen/Core>
 
 #include "auv/interfaces/component.h"
 #include "auv/mapping/map_replica.h"
@@ -47,7 +52,13 @@ class MissionComponent : public interfaces::Component {
                            const std::string& source);
   void onStart(const msg::StartMissionRequest& request, msg::StartMissionReply& reply);
   void onAbort(const msg::TriggerRequest& request, msg::TriggerReply& reply);
+  /// Middleware thread: keeps the newest estimate and the time it arrived. Freshness must not
+  /// depend on the executor: components composed in one process share its thread, and after a
+  /// long callback elsewhere the tick ran before the queued odometry and aborted a mission on
+  /// "stale navigation" that had arrived in time (campaigns on a loaded machine).
   void onOdometry(const msg::Odometry& odometry);
+  /// Executor thread: hands the newest estimate that arrived to the executive.
+  void feedOdometry();
   void tick();
   /// Publishes what the executive produced, logs transitions, closes the log at the end.
   void flush(const std::string& event, const std::string& detail = "");
@@ -62,6 +73,16 @@ class MissionComponent : public interfaces::Component {
   std::optional<MissionPlan> configured_plan_;
   uint64_t missions_started_ = 0;
   msg::MissionState logged_state_ = msg::MISSION_STATE_IDLE;
+
+  struct LatestOdometry {
+    Eigen::Vector3d position = Eigen::Vector3d::Zero();
+    double yaw = 0.0;
+    double arrival = 0.0;  // s, node clock when it arrived
+    uint64_t count = 0;    // estimates received so far
+  };
+  std::mutex odometry_mutex_;
+  LatestOdometry latest_odometry_;   // guarded by odometry_mutex_
+  uint64_t fed_odometry_count_ = 0;  // executor thread
 
   std::shared_ptr<interfaces::Publisher<msg::PlannerQuery>> query_pub_;
   std::shared_ptr<interfaces::Publisher<msg::WaypointRequest>> request_pub_;

@@ -159,7 +159,8 @@ void ControllerComponent::configure(interfaces::Node& node) {
           [this](const msg::ControllerCommand& m) { onCommand(m); }));
   odometry_sub_ = node.createSubscription<msg::Odometry>(
       "nav/odometry", interfaces::stateQos(),
-      std::function<void(const msg::Odometry&)>([this](const msg::Odometry& m) { onOdometry(m); }));
+      std::function<void(const msg::Odometry&)>([this](const msg::Odometry& m) { onOdometry(m); }),
+      interfaces::SubscriptionOptions{interfaces::CallbackThread::MIDDLEWARE});
 }
 
 void ControllerComponent::activate() {
@@ -189,6 +190,21 @@ void ControllerComponent::cleanup() {
 }
 
 void ControllerComponent::onOdometry(const msg::Odometry& odometry) {
+  std::lock_guard<std::mutex> lock(odometry_mutex_);
+  latest_odometry_ = odometry;
+  latest_odometry_arrival_ = node_->clock().nowSeconds();
+}
+
+void ControllerComponent::applyOdometry() {
+  msg::Odometry odometry;
+  double arrival = 0.0;
+  {
+    std::lock_guard<std::mutex> lock(odometry_mutex_);
+    if (!latest_odometry_) return;
+    odometry = std::move(*latest_odometry_);
+    latest_odometry_.reset();
+    arrival = latest_odometry_arrival_;
+  }
   const auto& pose = odometry.pose().pose();
   const auto& q = pose.orientation();
   const auto& twist = odometry.twist().twist();
@@ -207,7 +223,7 @@ void ControllerComponent::onOdometry(const msg::Odometry& odometry) {
   const double norm = orientation.coeffs().norm();
   // A zero quaternion (an unset orientation) has no yaw: treat it as a broken estimate.
   const bool orientation_ok = std::isfinite(norm) && std::abs(norm - 1.0) < 0.1;
-  if (!orientation_ok || !controller_->setNavigation(nav, node_->clock().nowSeconds())) {
+  if (!orientation_ok || !controller_->setNavigation(nav, arrival)) {
     // Throttled: at 10-50 Hz a broken source would flood the log.
     if (bad_odometry_count_++ % 100 == 0) {
       AUV_WARN(node_->logger(),
@@ -258,6 +274,7 @@ void ControllerComponent::onCommand(const msg::ControllerCommand& m) {
 
 void ControllerComponent::controlStep() {
   if (!node_->clock().valid()) return;  // simulation time not started yet
+  applyOdometry();
   publishThrusters(controller_->update(node_->clock().nowSeconds()));
   reportChanges();
 }

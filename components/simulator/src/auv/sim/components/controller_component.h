@@ -5,7 +5,10 @@
 // (ControllerStatus) at status_rate and on every change of state. Runs on the node clock, so
 // `use_sim_time` makes it follow the simulator.
 
+#include <cstdint>
 #include <memory>
+#include <mutex>
+#include <optional>
 
 #include "auv/interfaces/component.h"
 #include "auv/sim/vehicle/controller.h"
@@ -34,7 +37,13 @@ class ControllerComponent : public interfaces::Component {
   const Options& options() const { return options_; }
 
  private:
+  /// Middleware thread: keeps the newest estimate with its arrival time. Navigation age must
+  /// not depend on the executor: components composed in one process share its thread, and
+  /// after a long callback elsewhere the control step ran before the queued odometry and saw
+  /// navigation older than it was (mission campaigns on a loaded machine).
   void onOdometry(const msg::Odometry& odometry);
+  /// Executor thread: hands the newest estimate that arrived to the controller.
+  void applyOdometry();
   void onCommand(const msg::ControllerCommand& command);
   void controlStep();
   void publishThrusters(const ThrusterCommand& command);
@@ -47,6 +56,9 @@ class ControllerComponent : public interfaces::Component {
   std::unique_ptr<LowLevelController> controller_;
   ControllerStatusReport last_reported_;
   int64_t bad_odometry_count_ = 0;  // for throttled warnings
+  std::mutex odometry_mutex_;
+  std::optional<msg::Odometry> latest_odometry_;  // guarded by odometry_mutex_
+  double latest_odometry_arrival_ = 0.0;          // s, node clock; guarded by odometry_mutex_
 
   std::shared_ptr<interfaces::Subscription<msg::ControllerCommand>> command_sub_;
   std::shared_ptr<interfaces::Subscription<msg::Odometry>> odometry_sub_;
