@@ -1,0 +1,356 @@
+#include "auv/recon/sfm/bundle_adjustment.h"
+
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <memory>
+#include <stdexcept>
+
+#include <ceres/ceres.h>
+#include <ceres/rotation.h>
+#include <Eigen/Dense>
+
+#include "auv/recon/common/stage_error.h"
+
+namespace auv::recon::sfm {
+
+std::string lossFunctionName(LossFunction loss) {
+  switch (loss) {
+    case LossFunction::TRIVIAL:
+      return "trivial";
+    case LossFunction::HUBER:
+      return "huber";
+    case LossFunction::CAUCHY:
+      return "cauchy";
+    case LossFunction::SOFT_L1:
+      return "soft_l1";
+  }
+  return "?";
+}
+
+LossFunction lossFunctionFromName(const std::string& name) {
+  for (LossFunction l : {LossFunction::TRIVIAL, LossFunction::HUBER, LossFunction::CAUCHY,
+                         LossFunction::SOFT_L1}) {
+    if (lossFunctionName(l) == name) return l;
+  }
+  throw std::invalid_argument("loss '" + name + "' is not one of trivial, huber, cauchy, soft_l1");
+}
+
+void BundleAdjustmentOptions::check() const {
+  AUV_RECON_CHECK_OPTION(loss_scale_px > 0, loss_scale_px, "must be > 0 px");
+  AUV_RECON_CHECK_OPTION(max_iterations > 0, max_iterations, "must be > 0");
+  AUV_RECON_CHECK_OPTION(function_tolerance > 0 && function_tolerance < 1, function_tolerance,
+                         "must be in (0, 1)");
+  AUV_RECON_CHECK_OPTION(num_threads > 0, num_threads, "must be > 0");
+}
+
+namespace {
+
+/// Pinhole reprojection residual (px) of a world point in a camera with fixed intrinsics;
+/// pose as a unit quaternion (Ceres order w, x, y, z) and a translation, world -> camera.
+struct ReprojectionError {
+  ReprojectionError(const Eigen::Vector2d& observed, const scene::Camera& camera)
+      : u(observed.x()), v(observed.y()), fx(camera.fx), fy(camera.fy), cx(camera.cx),
+        cy(camera.cy) {}
+
+  template <class T>
+  bool operator()(const T* q, const T* t, const T* x, T* residual) const {
+    T p[3];
+    ceres::UnitQuaternionRotatePoint(q, x, p);
+    p[0] += t[0];
+    p[1] += t[1];
+    p[2] += t[2];
+    residual[0] = T(fx) * p[0] / p[2] + T(cx) - T(u);
+    residual[1] = T(fy) * p[1] / p[2] + T(cy) - T(v);
+    return true;
+  }
+
+  static ceres::CostFunction* create(const Eigen::Vector2d& observed,
+                                     const scene::Camera& camera) {
+    return new ceres::AutoDiffCostFunction<ReprojectionError, 2, 4, 3, 3>(
+        new ReprojectionError(observed, camera));
+  }
+
+  double u, v, fx, fy, cx, cy;
+};
+
+ceres::LossFunction* makeLoss(const BundleAdjustmentOptions& options) {
+  const double s = options.loss_scale_px;
+  switch (options.loss) {
+    case LossFunction::TRIVIAL:
+      return nullptr;
+    case LossFunction::HUBER:
+      return new ceres::HuberLoss(s);
+    case LossFunction::CAUCHY:
+      return new ceres::CauchyLoss(s);
+    case LossFunction::SOFT_L1:
+      return new ceres::SoftLOneLoss(s);
+  }
+  return nullptr;
+}
+
+struct PoseBlock {
+  std::array<double, 4> q;  // w, x, y, z
+  std::array<double, 3> t;
+};
+
+PoseBlock toBlock(const Eigen::Quaterniond& q, const Eigen::Vector3d& t) {
+  const Eigen::Quaterniond n = q.normalized();
+  return {{n.w(), n.x(), n.y(), n.z()}, {t.x(), t.y(), t.z()}};
+}
+
+void fromBlock(const PoseBlock& b, Eigen::Quaterniond& q, Eigen::Vector3d& t) {
+  q = Eigen::Quaterniond(b.q[0], b.q[1], b.q[2], b.q[3]).normalized();
+  t = Eigen::Vector3d(b.t[0], b.t[1], b.t[2]);
+}
+
+void configureSolver(ceres::Solver::Options& solver, const BundleAdjustmentOptions& options,
+                     size_t variable_images) {
+  solver.max_num_iterations = options.max_iterations;
+  solver.function_tolerance = options.function_tolerance;
+  solver.gradient_tolerance = 1e-10;
+  solver.parameter_tolerance = 1e-8;
+  solver.num_threads = options.num_threads;
+  solver.minimizer_progress_to_stdout = false;
+  solver.logging_type = ceres::SILENT;
+  // Schur complement on the points: dense for a few cameras, sparse (SuiteSparse) beyond.
+  solver.linear_solver_type =
+      variable_images <= 40 ? ceres::DENSE_SCHUR : ceres::SPARSE_SCHUR;
+}
+
+}  // namespace
+
+BundleAdjustmentSummary bundleAdjust(scene::Reconstruction& rec,
+                                     const BundleAdjustmentConfig& config,
+                                     const BundleAdjustmentOptions& options) {
+  options.check();
+  const auto start = std::chrono::steady_clock::now();
+  BundleAdjustmentSummary summary;
+
+  // The points of the problem.
+  std::set<uint64_t> points = config.points;
+  for (uint32_t id : config.images) {
+    auto it = rec.images.find(id);
+    if (it == rec.images.end()) {
+      throw std::invalid_argument("bundle adjustment: image " + std::to_string(id) +
+                                  " is not registered");
+    }
+    if (!config.points.empty()) continue;
+    for (int64_t p : it->second.point3d_ids) {
+      if (p != scene::kNoPoint3D) points.insert(static_cast<uint64_t>(p));
+    }
+  }
+
+  std::map<uint32_t, PoseBlock> poses;
+  ceres::Problem::Options problem_options;
+  problem_options.loss_function_ownership = ceres::TAKE_OWNERSHIP;
+  problem_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
+  problem_options.manifold_ownership = ceres::TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+  struct Residual {
+    uint32_t image;
+    uint64_t point;
+    Eigen::Vector2d observed;
+  };
+  std::vector<Residual> residuals;
+  std::set<uint32_t> fixed_pose_images;
+
+  for (uint64_t point_id : points) {
+    auto pit = rec.points.find(point_id);
+    if (pit == rec.points.end()) {
+      throw std::invalid_argument("bundle adjustment: point " + std::to_string(point_id) +
+                                  " does not exist");
+    }
+    scene::Point3D& point = pit->second;
+    for (const auto& obs : point.track) {
+      const scene::Image& image = rec.images.at(obs.image_id);
+      auto [pose, inserted] = poses.try_emplace(obs.image_id);
+      if (inserted) pose->second = toBlock(image.q_cw, image.t_cw);
+      const Eigen::Vector2d& observed = image.points2d[obs.point2d_idx];
+      problem.AddResidualBlock(ReprojectionError::create(observed, rec.cameraOf(image)),
+                               makeLoss(options), pose->second.q.data(), pose->second.t.data(),
+                               point.xyz.data());
+      residuals.push_back({obs.image_id, point_id, observed});
+    }
+    if (config.constant_points.count(point_id)) problem.SetParameterBlockConstant(point.xyz.data());
+  }
+  if (residuals.empty()) {
+    summary.usable = true;
+    return summary;
+  }
+
+  // Poses: refined for `images` minus `constant_images`, fixed for the rest.
+  std::vector<uint32_t> variable;
+  for (auto& [id, pose] : poses) {
+    if (config.images.count(id) && !config.constant_images.count(id)) {
+      problem.SetManifold(pose.q.data(), new ceres::QuaternionManifold);
+      variable.push_back(id);
+    } else {
+      problem.SetParameterBlockConstant(pose.q.data());
+      problem.SetParameterBlockConstant(pose.t.data());
+      fixed_pose_images.insert(id);
+    }
+  }
+  if (config.fix_gauge && fixed_pose_images.size() < 2 && !variable.empty()) {
+    size_t next = 0;
+    if (fixed_pose_images.empty()) {
+      const uint32_t first = variable[next++];
+      problem.SetParameterBlockConstant(poses[first].q.data());
+      problem.SetParameterBlockConstant(poses[first].t.data());
+      fixed_pose_images.insert(first);
+    }
+    if (next < variable.size()) {
+      // Scale about the fixed camera's centre moves t_cw of another camera along
+      // R (c - c_fixed): fixing its largest component, in the camera farthest from the fixed
+      // one, fixes the scale.
+      const uint32_t fixed = *fixed_pose_images.begin();
+      const scene::Image& a = rec.images.at(fixed);
+      uint32_t other = variable[next];
+      double farthest = -1;
+      for (size_t i = next; i < variable.size(); ++i) {
+        const double d = (rec.images.at(variable[i]).center() - a.center()).norm();
+        if (d > farthest) {
+          farthest = d;
+          other = variable[i];
+        }
+      }
+      const scene::Image& b = rec.images.at(other);
+      const Eigen::Vector3d direction = b.q_cw * (b.center() - a.center());
+      int k = 0;
+      direction.cwiseAbs().maxCoeff(&k);
+      problem.SetManifold(poses[other].t.data(), new ceres::SubsetManifold(3, {k}));
+    }
+  }
+
+  auto rms = [&]() {
+    double sum = 0;
+    for (const Residual& r : residuals) {
+      const scene::Image& image = rec.images.at(r.image);
+      const PoseBlock& pose = poses.at(r.image);
+      Eigen::Quaterniond q;
+      Eigen::Vector3d t;
+      fromBlock(pose, q, t);
+      const Eigen::Vector3d p = q * rec.points.at(r.point).xyz + t;
+      const Eigen::Vector2d e = rec.cameraOf(image).project(p) - r.observed;
+      sum += p.z() > 0 ? e.squaredNorm() : 1e6;
+    }
+    return std::sqrt(sum / residuals.size());
+  };
+  summary.initial_rms_px = rms();
+
+  ceres::Solver::Options solver;
+  configureSolver(solver, options, variable.size());
+  ceres::Solver::Summary ceres_summary;
+  ceres::Solve(solver, &problem, &ceres_summary);
+
+  summary.usable = ceres_summary.IsSolutionUsable();
+  summary.iterations = static_cast<int>(ceres_summary.iterations.size());
+  summary.residuals = residuals.size();
+  summary.variable_images = variable.size();
+  summary.constant_pose_images = fixed_pose_images.size();
+  summary.variable_points = points.size() - config.constant_points.size();
+  summary.final_rms_px = rms();
+  for (uint32_t id : variable) {
+    scene::Image& image = rec.images.at(id);
+    fromBlock(poses.at(id), image.q_cw, image.t_cw);
+  }
+  summary.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return summary;
+}
+
+bool refineAbsolutePose(const scene::Camera& camera, const std::vector<Eigen::Vector3d>& points,
+                        const std::vector<Eigen::Vector2d>& pixels,
+                        const std::vector<uint32_t>& inliers,
+                        const BundleAdjustmentOptions& options, Eigen::Quaterniond& q_cw,
+                        Eigen::Vector3d& t_cw) {
+  options.check();
+  if (inliers.size() < 3) return false;
+  PoseBlock pose = toBlock(q_cw, t_cw);
+  std::vector<Eigen::Vector3d> fixed(inliers.size());
+  ceres::Problem problem;
+  for (size_t i = 0; i < inliers.size(); ++i) {
+    fixed[i] = points.at(inliers[i]);
+    problem.AddResidualBlock(ReprojectionError::create(pixels.at(inliers[i]), camera),
+                             makeLoss(options), pose.q.data(), pose.t.data(), fixed[i].data());
+    problem.SetParameterBlockConstant(fixed[i].data());
+  }
+  problem.SetManifold(pose.q.data(), new ceres::QuaternionManifold);
+  ceres::Solver::Options solver;
+  solver.max_num_iterations = options.max_iterations;
+  solver.function_tolerance = options.function_tolerance;
+  solver.linear_solver_type = ceres::DENSE_QR;
+  solver.logging_type = ceres::SILENT;
+  solver.num_threads = 1;
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver, &problem, &summary);
+  if (!summary.IsSolutionUsable()) return false;
+  fromBlock(pose, q_cw, t_cw);
+  return true;
+}
+
+namespace {
+/// Sampson distance of one correspondence (normalised coordinates) to the epipolar geometry
+/// E = [t]x R, scaled to pixels by `focal`.
+struct SampsonError {
+  SampsonError(const Eigen::Vector2d& a, const Eigen::Vector2d& b, double focal)
+      : xa(a), xb(b), f(focal) {}
+
+  template <class T>
+  bool operator()(const T* q, const T* t, T* residual) const {
+    T r[9];
+    ceres::QuaternionToRotation(q, r);  // row major
+    const Eigen::Map<const Eigen::Matrix<T, 3, 3, Eigen::RowMajor>> rotation(r);
+    Eigen::Matrix<T, 3, 3> tx;
+    tx << T(0), -t[2], t[1], t[2], T(0), -t[0], -t[1], t[0], T(0);
+    const Eigen::Matrix<T, 3, 3> e = tx * rotation;
+    const Eigen::Matrix<T, 3, 1> a(T(xa.x()), T(xa.y()), T(1)), b(T(xb.x()), T(xb.y()), T(1));
+    const Eigen::Matrix<T, 3, 1> ea = e * a, eb = e.transpose() * b;
+    const T num = b.dot(ea);
+    const T den = ea(0) * ea(0) + ea(1) * ea(1) + eb(0) * eb(0) + eb(1) * eb(1);
+    residual[0] = T(f) * num / ceres::sqrt(den + T(1e-30));
+    return true;
+  }
+
+  Eigen::Vector2d xa, xb;
+  double f;
+};
+}  // namespace
+
+bool refineRelativePose(const scene::Camera& camera_a, const scene::Camera& camera_b,
+                        const std::vector<Eigen::Vector2d>& pixels_a,
+                        const std::vector<Eigen::Vector2d>& pixels_b,
+                        const std::vector<uint32_t>& inliers,
+                        const BundleAdjustmentOptions& options, Eigen::Matrix3d& rotation,
+                        Eigen::Vector3d& translation) {
+  options.check();
+  if (inliers.size() < 6) return false;
+  const Eigen::Quaterniond q0(rotation);
+  std::array<double, 4> q = {q0.w(), q0.x(), q0.y(), q0.z()};
+  Eigen::Vector3d t = translation.normalized();
+  const double focal = 0.25 * (camera_a.fx + camera_a.fy + camera_b.fx + camera_b.fy);
+  ceres::Problem problem;
+  for (uint32_t i : inliers) {
+    problem.AddResidualBlock(
+        new ceres::AutoDiffCostFunction<SampsonError, 1, 4, 3>(
+            new SampsonError(camera_a.pixelToNormalized(pixels_a.at(i)),
+                             camera_b.pixelToNormalized(pixels_b.at(i)), focal)),
+        makeLoss(options), q.data(), t.data());
+  }
+  problem.SetManifold(q.data(), new ceres::QuaternionManifold);
+  problem.SetManifold(t.data(), new ceres::SphereManifold<3>);
+  ceres::Solver::Options solver;
+  solver.max_num_iterations = options.max_iterations;
+  solver.function_tolerance = options.function_tolerance;
+  solver.linear_solver_type = ceres::DENSE_QR;
+  solver.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver, &problem, &summary);
+  if (!summary.IsSolutionUsable() || !t.allFinite()) return false;
+  rotation = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
+  translation = t.normalized();
+  return true;
+}
+
+}  // namespace auv::recon::sfm
