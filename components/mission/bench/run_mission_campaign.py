@@ -137,6 +137,12 @@ def evaluate(row, world, seed, run_dir, summary, cache):
             else:
                 row.setdefault("oracle_errors", []).append(error)
         row[key] = [round(r, 3) for r in ratios]
+    events_path = os.path.join(run_dir, "mission", "events.csv")
+    if os.path.exists(events_path):
+        # Planner cancels of the active waypoint (blocked root or approach): each holds the
+        # vehicle and replans from where it is.
+        with open(events_path) as events:
+            row["cancels"] = sum(1 for line in events if "/cancel," in line)
     row["path_ratios_own_map"], own_errors = own_map_ratios(run_dir, summary)
     if own_errors:
         row["own_map_errors"] = own_errors
