@@ -1,0 +1,154 @@
+#include "auv/recon/texture/texture_stage.h"
+
+#include <chrono>
+#include <iostream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "auv/recon/common/report.h"
+#include "auv/recon/common/stage_error.h"
+#include "auv/recon/common/staged_output.h"
+#include "auv/recon/mesh/mesh_stage.h"
+#include "auv/recon/scene/colmap_text.h"
+#include "auv/recon/texture/image_cache.h"
+
+namespace fs = std::filesystem;
+
+namespace auv::recon::texture {
+
+void TextureStageOptions::check() const {
+  texture.check();
+  AUV_RECON_CHECK_OPTION(image_cache >= 1, image_cache, "must be >= 1");
+}
+
+TextureStageSummary runTextureStage(const Survey& survey, const TextureStageOptions& options) {
+  options.check();
+  const auto start = std::chrono::steady_clock::now();
+  const fs::path mesh_file = survey.mesh() / "mesh.ply";
+  const open3d::geometry::TriangleMesh input = mesh::readMesh(mesh_file, "texture");
+  Survey::requireExists(survey.sparse() / "images.txt", "texture", "sfm");
+  scene::Reconstruction model;
+  try {
+    model = scene::readColmapText(survey.sparse());
+  } catch (const std::exception& e) {
+    throw StageError("texture", e.what());
+  }
+  if (model.images.empty()) {
+    throw StageError("texture",
+                     (survey.sparse() / "images.txt").string() + ": no registered images");
+  }
+
+  std::vector<ViewGeometry> views;
+  std::vector<std::string> names;
+  std::vector<fs::path> files;
+  std::vector<cv::Size> sizes;
+  for (const auto& [id, image] : model.images) {
+    const scene::Camera& camera = model.cameraOf(image);
+    if (camera.hasDistortion()) {
+      throw StageError("texture", "camera " + std::to_string(camera.id) + " of " +
+                                      (survey.sparse() / "cameras.txt").string() + " is " +
+                                      scene::cameraModelName(camera.model) +
+                                      " with distortion: texturing needs the undistorted "
+                                      "pinhole cameras of the corrected images");
+    }
+    const fs::path file = survey.corrected() / image.name;
+    if (!fs::exists(file)) {
+      throw StageError("texture", file.string() + ": image of " + image.name +
+                                      " not found (run `auv recon correct` first)");
+    }
+    ViewGeometry view;
+    view.camera = camera;
+    view.world_to_camera = image.worldToCamera();
+    views.push_back(view);
+    names.push_back(image.name);
+    files.push_back(file);
+    sizes.emplace_back(camera.width, camera.height);
+  }
+
+  FaceMesh mesh;
+  mesh.vertices = input.vertices_;
+  mesh.faces = input.triangles_;
+  mesh.computeFaceNormals(input.vertex_normals_);
+  std::cerr << "texture: " << mesh.faces.size() << " faces from " << mesh_file.string() << ", "
+            << views.size() << " views" << std::endl;
+
+  ImageCache cache(files, sizes, options.image_cache);
+  const ImageLoader loader = [&cache](int view) { return cv::Mat(cache.get(view)); };
+  TextureResult result;
+  try {
+    result = textureMesh(mesh, views, loader, options.texture);
+  } catch (const StageError& e) {
+    if (!cache.errors().empty()) throw StageError("texture", cache.errors().front());
+    const std::string cause = std::string(e.what()).substr(e.stage().size() + 2);
+    throw StageError("texture", mesh_file.string() + ": " + cause);
+  }
+  const std::vector<std::string> errors = cache.errors();
+  if (!errors.empty()) {
+    throw StageError(
+        "texture",
+        errors.front() + (errors.size() > 1
+                              ? " (and " + std::to_string(errors.size() - 1) + " more images)"
+                              : ""));
+  }
+
+  StagedOutput staged(survey.textured());
+  writeObj(result.model, staged.path(), "model");
+  std::ostringstream face_views;
+  face_views << "face,image\n";
+  for (size_t f = 0; f < result.labels.size(); ++f) {
+    face_views << f << ',' << (result.labels[f] == kNoLabel ? "" : names[result.labels[f]]) << '\n';
+  }
+  writeFileAtomically(staged.path() / "face_views.csv", face_views.str());
+  staged.commit();
+
+  TextureStageSummary summary;
+  summary.stats = result.stats;
+  summary.views = views.size();
+  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const TextureStats& s = summary.stats;
+  const ViewSelectionOptions& o = options.texture.selection;
+  nlohmann::json section = {
+      {"input", {{"mesh", "mesh/mesh.ply"}, {"sparse", "sparse/"}, {"images", "corrected/"}}},
+      {"faces", s.faces},
+      {"faces_seen", s.faces_seen},
+      {"faces_unseen", s.faces_unseen},
+      {"views", s.views},
+      {"views_used", s.views_used},
+      {"observations", s.observations},
+      {"observations_rejected_photo_consistency", s.rejected_observations},
+      {"mrf_energy", s.energy},
+      {"greedy_energy", s.greedy_energy},
+      {"seams", s.seams},
+      {"greedy_seams", s.greedy_seams},
+      {"mrf_cycles", s.cycles},
+      {"leveling_variables", s.leveling.variables},
+      {"leveling_mean_jump_before", s.leveling.mean_jump_before},
+      {"leveling_mean_jump_after", s.leveling.mean_jump_after},
+      {"patches", s.atlas.patches},
+      {"atlas_pages", s.atlas.pages},
+      {"atlas_page_size", s.atlas.page_size},
+      {"atlas_fill_ratio", s.atlas.fill_ratio},
+      {"blended_texels", s.atlas.blended_texels},
+      {"image_reads", cache.reads()},
+      {"seconds",
+       {{"visibility", s.seconds_visibility},
+        {"selection", s.seconds_selection},
+        {"leveling", s.seconds_leveling},
+        {"atlas", s.seconds_atlas},
+        {"total", summary.seconds}}},
+      {"options",
+       {{"data_term", o.data_term},
+        {"smoothness", o.smoothness},
+        {"min_view_cosine", o.min_view_cosine},
+        {"photo_consistency", o.photo_consistency},
+        {"photo_consistency_sigma", o.photo_consistency_sigma},
+        {"global_leveling", options.texture.global_leveling},
+        {"local_blending", options.texture.atlas.local_blending},
+        {"blend_width", options.texture.atlas.blend_width},
+        {"max_page_size", options.texture.atlas.max_page_size}}}};
+  updateReport(survey.report(), "texture", section);
+  return summary;
+}
+
+}  // namespace auv::recon::texture

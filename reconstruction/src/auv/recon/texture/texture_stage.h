@@ -1,0 +1,32 @@
+#pragma once
+// `auv recon texture`: <survey>/mesh/mesh.ply + sparse/ (posed pinhole cameras) + corrected/
+// images -> <survey>/textured/model.obj, model.mtl, model_<page>.png and face_views.csv (the
+// image that textures each face, for the per-camera figure); report.json section "texture".
+
+#include <cstddef>
+
+#include "auv/recon/common/survey.h"
+#include "auv/recon/texture/texturer.h"
+
+namespace auv::recon::texture {
+
+struct TextureStageOptions {
+  TextureOptions texture;
+  /// Images kept in memory at once (each 2704x2028 BGR is 16 MB).
+  size_t image_cache = 24;
+
+  void check() const;
+};
+
+struct TextureStageSummary {
+  TextureStats stats;
+  size_t views = 0;
+  double seconds = 0;
+};
+
+/// The whole stage. textured/ is replaced only when everything is written (StagedOutput).
+/// StageError("texture", ...) naming the file for a missing mesh, sparse model or image, a
+/// camera that is not pinhole, or a mesh no view sees.
+TextureStageSummary runTextureStage(const Survey& survey, const TextureStageOptions& options);
+
+}  // namespace auv::recon::texture
