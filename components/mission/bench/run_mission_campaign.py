@@ -169,7 +169,7 @@ def run_mission(world, seed, args, runs_dir):
     return run_dir, code, wall, summary
 
 
-def write_results(rows, worlds, stamp, setup):
+def write_results(rows, worlds, stamp, setup, quiet=False):
     """The campaign table (per world) and every run, as .md and .json in bench_results/."""
     results_dir = os.path.join(ROOT, "bench_results")
     lines = [f"# Mission campaign {stamp}", "",
@@ -211,8 +211,9 @@ def write_results(rows, worlds, stamp, setup):
     open(md, "w").write("\n".join(lines) + "\n")
     json.dump(rows, open(os.path.join(results_dir, f"mission_campaign_{stamp}.json"), "w"),
               indent=1)
-    print("\n".join(lines[:len(worlds) + 6]))
-    print(f"results: {md}")
+    if not quiet:
+        print("\n".join(lines[:len(worlds) + 6]))
+        print(f"results: {md}")
 
 
 def evaluate_runs(run_dirs):
@@ -243,6 +244,8 @@ def main():
     parser.add_argument("--timeout", type=float, default=3600.0, help="s of wall time per mission")
     parser.add_argument("--objective", default="visibility", choices=["visibility", "path_length"])
     parser.add_argument("--keep-runs", action="store_true", help="keep the run folders")
+    parser.add_argument("--seed-major", action="store_true",
+                        help="run seed by seed across the worlds (default: world by world)")
     parser.add_argument("--evaluate", nargs="+", metavar="RUN_DIR",
                         help="only evaluate finished run folders (no missions are run)")
     args = parser.parse_args()
@@ -259,22 +262,27 @@ def main():
     os.makedirs(runs_dir, exist_ok=True)
     rows = []
     worlds = args.worlds.split(",")
-    for world in worlds:
-        for seed in range(args.first_seed, args.first_seed + args.seeds):
-            run_dir, code, wall, summary = run_mission(world, seed, args, runs_dir)
-            row = {"world": world, "seed": seed, "exit": code, "wall_s": round(wall, 1)}
-            if summary:
-                evaluate(row, world, seed, run_dir, summary, runs_dir)
-            else:
-                row["state"] = "NO REPORT"
-            rows.append(row)
-            print(json.dumps(row), flush=True)
-            if not args.keep_runs:
-                for sub in ("ground_truth",):
-                    shutil.rmtree(os.path.join(run_dir, sub), ignore_errors=True)
-    write_results(rows, worlds, stamp,
-                  f"vehicle.yaml, auto_mission, objective {args.objective}, "
-                  f"real_time_factor {args.real_time_factor}")
+    seeds = range(args.first_seed, args.first_seed + args.seeds)
+    # Seed by seed across the worlds: a campaign stopped early still covers every world.
+    order = [(w, s) for s in seeds for w in worlds] if args.seed_major else \
+        [(w, s) for w in worlds for s in seeds]
+    setup = (f"vehicle.yaml, auto_mission, objective {args.objective}, "
+             f"real_time_factor {args.real_time_factor}")
+    for world, seed in order:
+        run_dir, code, wall, summary = run_mission(world, seed, args, runs_dir)
+        row = {"world": world, "seed": seed, "exit": code, "wall_s": round(wall, 1)}
+        if summary:
+            evaluate(row, world, seed, run_dir, summary, runs_dir)
+        else:
+            row["state"] = "NO REPORT"
+        rows.append(row)
+        print(json.dumps(row), flush=True)
+        if not args.keep_runs and not row.get("collisions"):  # runs with contacts: evidence
+            for sub in ("ground_truth",):
+                shutil.rmtree(os.path.join(run_dir, sub), ignore_errors=True)
+        # After every run: a campaign stopped early keeps what it measured.
+        write_results(rows, worlds, stamp, setup, quiet=True)
+    write_results(rows, worlds, stamp, setup)
 
 
 if __name__ == "__main__":
