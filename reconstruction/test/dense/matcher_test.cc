@@ -117,3 +117,35 @@ TEST_F(MatcherTest, DepthOfPlaneAndSphereWithinTolerance) {
 
 }  // namespace
 }  // namespace auv::recon::dense
+
+namespace auv::recon::dense {
+namespace {
+
+TEST_F(MatcherTest, BadInputIsRejectedNamingTheImage) {
+  const MatcherOptions options;
+  try {
+    computeDepthMap(master_, neighbours_, 5.0, 2.5, options);
+    FAIL() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find(master_.name), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("depth range"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(computeDepthMap(master_, {}, 2.5, 5.0, options), std::invalid_argument);
+  View unloaded = neighbours_[0];
+  unloaded.grey.release();
+  EXPECT_THROW(computeDepthMap(master_, {unloaded}, 2.5, 5.0, options), std::invalid_argument);
+  MatcherOptions bad;
+  bad.directions = 6;
+  EXPECT_THROW(computeDepthMap(master_, neighbours_, 2.5, 5.0, bad), OptionError);
+}
+
+// Where no neighbour sees the master (a master looking elsewhere), no depth is invented.
+TEST_F(MatcherTest, NoDepthWhereNoNeighbourSees) {
+  View elsewhere = testing::downwardView(20, {40, 0, 4}, 240, 180, 220);
+  testing::render(scene_, elsewhere);
+  const DepthMapResult result = computeDepthMap(master_, {elsewhere}, 2.5, 5.0, MatcherOptions());
+  EXPECT_LT(result.valid_pixels, result.depth.total() / 100);
+}
+
+}  // namespace
+}  // namespace auv::recon::dense
