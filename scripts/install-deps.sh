@@ -24,6 +24,8 @@ PACKAGES=(
   # reconstruction: bundle adjustment (Ceres); COLMAP is the SfM benchmark's anchor, opencv-doc
   # ships real chessboard photos for the calibration tests
   libceres-dev colmap opencv-doc
+  # reconstruction texturing: max-flow (Boost.Graph, header-only), atlas packing (stb_rect_pack)
+  libboost-dev libstb-dev
 )
 
 echo "install-deps: apt-get update"
