@@ -1,5 +1,5 @@
 // Node services other than transport: the simulation clock and timers on it, system timers,
-// QoS overrides from parameters, the `log` topic, and errors at construction. Domains 60..69.
+// QoS overrides from parameters, the `log` topic, and errors at construction. Domains 60..66.
 #include <gtest/gtest.h>
 
 #include <chrono>

@@ -11,6 +11,7 @@
 #include <fastdds/dds/topic/Topic.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
 
+#include <chrono>
 #include <cstdlib>
 #include <cstring>
 #include <map>
@@ -68,6 +69,21 @@ void applyCommon(const QosProfile& p, EndpointQos& q) {
   q.data_sharing().off();
 }
 
+std::string returnCodeName(const ReturnCode_t& rc) {
+  switch (rc()) {
+    case ReturnCode_t::RETCODE_TIMEOUT:
+      return "timeout (history full of samples a reader has not acknowledged)";
+    case ReturnCode_t::RETCODE_OUT_OF_RESOURCES:
+      return "out of resources";
+    case ReturnCode_t::RETCODE_NOT_ENABLED:
+      return "writer not enabled";
+    case ReturnCode_t::RETCODE_BAD_PARAMETER:
+      return "bad parameter";
+    default:
+      return "return code " + std::to_string(rc());
+  }
+}
+
 Guid toGuid(const eprosima::fastrtps::rtps::GUID_t& g) {
   Guid guid;
   std::memcpy(guid.data(), g.guidPrefix.value, 12);
@@ -90,13 +106,30 @@ struct DomainEntities {
 
 class FastddsWriter : public DataWriter {
  public:
-  FastddsWriter(std::shared_ptr<DomainEntities> domain, dds::DataWriter* writer)
-      : domain_(std::move(domain)), writer_(writer) {}
+  FastddsWriter(std::shared_ptr<DomainEntities> domain, dds::DataWriter* writer,
+                double max_blocking_time_s)
+      : domain_(std::move(domain)),
+        writer_(writer),
+        max_blocking_(max_blocking_time_s > 0
+                          ? std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                std::chrono::duration<double>(max_blocking_time_s))
+                          : std::chrono::hours(24 * 365)) {}  // 0: infinite (toDuration)
   ~FastddsWriter() override { domain_->publisher->delete_datawriter(writer_); }
   void write(const void* sample) override {
-    if (!writer_->write(const_cast<void*>(sample)))
-      throw std::runtime_error("fastdds: write on '" + writer_->get_topic()->get_name() +
-                               "' failed");
+    // A reliable keep-all writer whose history is full waits for acknowledgements, but Fast
+    // DDS 2.9 returns TIMEOUT as soon as the acknowledgement that frees room arrives (once per
+    // history's worth of samples, docs/performance.md), long before max_blocking_time: write
+    // again until max_blocking_time has really passed, as the QoS promises.
+    const auto deadline = std::chrono::steady_clock::now() + max_blocking_;
+    for (;;) {
+      const ReturnCode_t rc = writer_->write(const_cast<void*>(sample),
+                                             eprosima::fastrtps::rtps::c_InstanceHandle_Unknown);
+      if (rc == ReturnCode_t::RETCODE_OK) return;
+      if (rc != ReturnCode_t::RETCODE_TIMEOUT || std::chrono::steady_clock::now() >= deadline) {
+        throw std::runtime_error("fastdds: write on '" + writer_->get_topic()->get_name() +
+                                 "' failed: " + returnCodeName(rc));
+      }
+    }
   }
   int matchedReaders() const override {
     dds::PublicationMatchedStatus status;
@@ -113,6 +146,7 @@ class FastddsWriter : public DataWriter {
  private:
   std::shared_ptr<DomainEntities> domain_;
   dds::DataWriter* writer_;
+  std::chrono::steady_clock::duration max_blocking_;
 };
 
 class FastddsReader : public DataReader, public dds::DataReaderListener {
@@ -259,7 +293,7 @@ class FastddsParticipant : public Participant {
     wqos.reliable_writer_qos().times.heartbeatPeriod = eprosima::fastrtps::Duration_t(0.25);
     dds::DataWriter* w = publisher_->create_datawriter(t, wqos);
     check(w != nullptr, "create writer on '" + topic + "'");
-    return std::make_unique<FastddsWriter>(domain_, w);
+    return std::make_unique<FastddsWriter>(domain_, w, qos.max_blocking_time_s);
   }
 
   std::unique_ptr<DataReader> createReader(const std::string& topic, const msg::TypeSupport& type,
@@ -267,6 +301,11 @@ class FastddsParticipant : public Participant {
     dds::Topic* t = createTopic(topic, type);
     dds::DataReaderQos rqos = subscriber_->get_default_datareader_qos();
     applyCommon(qos, rqos);
+    // Acknowledge a heartbeat at once (Fast DDS waits 5 ms by default): a keep-all writer
+    // frees its history only on acknowledgements, and a Fast DDS writer asks for them only
+    // when its history is full, so every history's worth of samples stalled the writer for
+    // the delay (docs/performance.md, "Keep-all streams").
+    rqos.reliable_reader_qos().times.heartbeatResponseDelay = eprosima::fastrtps::Duration_t(0, 0);
     auto reader = std::make_unique<FastddsReader>(std::move(on_data));
     dds::DataReader* r =
         subscriber_->create_datareader(t, rqos, reader.get(), dds::StatusMask::data_available());
