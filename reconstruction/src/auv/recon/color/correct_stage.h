@@ -1,0 +1,49 @@
+#pragma once
+// `auv recon correct <survey>`: keyframes/<camera>/*.png -> corrected/<camera>/*.png, colour
+// corrected (section 3.2, correction.h) and undistorted with calibration/<camera>.yaml (section
+// 3.3, calibration/undistort.h), plus corrected/<camera>.yaml, the pinhole intrinsics of the
+// corrected images (same keys, zero distortion), and the `correct` section of report.json.
+// Camera folders are written aside and swapped into place only when every camera succeeded.
+
+#include <string>
+#include <vector>
+
+#include "auv/recon/calibration/undistort.h"
+#include "auv/recon/color/correction.h"
+#include "auv/recon/common/survey.h"
+
+namespace auv::recon::color {
+
+struct CorrectStageOptions {
+  ColorOptions color;
+  calibration::UndistortOptions undistort;
+  /// false (--no-undistort): the images keep their lens distortion and no calibration is
+  /// needed; corrected/<camera>.yaml is then a copy of the calibration when there is one.
+  bool undistort_images = true;
+  bool correct_colors = true;  ///< false (--no-correct-colors): undistortion only
+  int png_compression = 1;     ///< cv::IMWRITE_PNG_COMPRESSION, 0-9
+  /// Camera ids (folders of keyframes/); empty = every camera folder.
+  std::vector<std::string> cameras;
+
+  void check() const;
+};
+
+struct CameraCorrection {
+  std::string camera;
+  int images = 0;
+  bool undistorted = false;
+  double mean_alpha = 0, mean_beta = 0;  ///< average cast removed (lαβ)
+  double seconds = 0;
+};
+
+struct CorrectStageResult {
+  std::vector<CameraCorrection> cameras;
+  double seconds = 0;
+};
+
+/// Runs the stage. Throws StageError naming the camera and the file at fault (no keyframes,
+/// missing or malformed calibration, an image of another size than the calibration's, an
+/// unreadable image); earlier outputs intact.
+CorrectStageResult correctSurvey(const Survey& survey, const CorrectStageOptions& options);
+
+}  // namespace auv::recon::color

@@ -1,0 +1,45 @@
+#pragma once
+// `auv recon keyframes <survey>`: recordings/<camera>/*.mp4 -> keyframes/<camera>/ (PNG +
+// index.csv + rejected.csv) and the `keyframes` section of report.json. Every camera's folder
+// is written aside and swapped into place only when all cameras succeeded, so a failure
+// (damaged video, bad sidecar, interruption) leaves the earlier keyframes as they were.
+
+#include <string>
+#include <vector>
+
+#include "auv/recon/common/survey.h"
+#include "auv/recon/keyframes/selector.h"
+#include "auv/recon/keyframes/video.h"
+
+namespace auv::recon::keyframes {
+
+struct KeyframeStageOptions {
+  KeyframeOptions selection;
+  VideoOptions video;
+  /// Camera ids (folders of recordings/); empty = every camera folder.
+  std::vector<std::string> cameras;
+
+  void check() const;
+};
+
+struct CameraKeyframes {
+  std::string camera;
+  std::vector<VideoKeyframes> videos;
+  int frames = 0, keyframes = 0, rejected = 0;
+};
+
+struct KeyframeStageResult {
+  std::vector<CameraKeyframes> cameras;
+  std::vector<std::string> problems;  ///< damaged videos kept with keep_damaged
+  double seconds = 0;
+};
+
+/// Runs the stage over the survey. Throws StageError naming the folder or file at fault
+/// (no recordings, a camera without videos, a damaged video, ...); earlier outputs intact.
+KeyframeStageResult selectSurveyKeyframes(const Survey& survey,
+                                          const KeyframeStageOptions& options);
+
+/// Video files of a recordings/<camera>/ folder (.mp4 .avi .mov .mkv; `.part` files skipped).
+std::vector<std::filesystem::path> listVideos(const std::filesystem::path& folder);
+
+}  // namespace auv::recon::keyframes
