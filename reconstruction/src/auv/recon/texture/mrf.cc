@@ -158,19 +158,37 @@ ExpansionResult alphaExpansion(const PottsProblem& problem, std::vector<int> ini
           boost::get(&EdgeProperties::residual, graph), boost::get(&EdgeProperties::reverse, graph),
           boost::make_iterator_property_map(color.begin(), boost::get(boost::vertex_index, graph)),
           boost::get(boost::vertex_index, graph), source, sink);
-      std::vector<int> proposal = result.labels;
+      // The move's energy change, over the switched nodes and their edges only.
+      std::vector<int> switched;
       for (size_t i = 0; i < members.size(); ++i) {
         // Black: the source's tree (x = 0, keep); everything else is on the sink's side.
-        if (color[i] != boost::black_color) proposal[members[i]] = alpha;
-        graph_index[members[i]] = -1;
+        if (color[i] != boost::black_color && result.labels[members[i]] != alpha) {
+          switched.push_back(members[i]);
+        }
       }
-      const double proposed = energy(problem, proposal);
-      if (proposed < result.energy - 1e-9) {
-        result.labels = std::move(proposal);
-        result.energy = proposed;
+      double delta = 0;
+      for (int n : switched) {
+        delta += problem.dataCost(n, alpha) - problem.dataCost(n, result.labels[n]);
+        graph_index[n] = -2;  // marks switched nodes
+      }
+      for (int n : switched) {
+        for (int m : neighbours[n]) {
+          const int other = result.labels[m];
+          if (other == kNoLabel) continue;
+          const bool m_switched = graph_index[m] == -2;
+          if (m_switched && m < n) continue;  // each edge between switched nodes once
+          const int after = m_switched ? alpha : other;
+          delta += w * ((alpha != after) - (result.labels[n] != other));
+        }
+      }
+      for (int n : members) graph_index[n] = -1;
+      if (!switched.empty() && delta < -1e-9) {
+        for (int n : switched) result.labels[n] = alpha;
+        result.energy += delta;
         ++result.moves;
       }
     }
+    result.energy = energy(problem, result.labels);  // no drift from the summed deltas
     result.cycles = cycle + 1;
     if (cycle_start - result.energy <= 1e-6 * std::max(1.0, std::abs(cycle_start))) break;
   }
