@@ -77,6 +77,22 @@ def estimated_at(events, t, after):
     return (rows[0] if after else rows[-1])[1]
 
 
+def read_events(events_path):
+    """(t, navigation estimate) of every row of a mission log's events.csv."""
+    events = []
+    if not os.path.exists(events_path):
+        return events
+    with open(events_path) as lines:
+        next(lines, None)
+        for line in lines:
+            fields = line.split(",")
+            try:
+                events.append((float(fields[0]), [float(v) for v in fields[5:8]]))
+            except (ValueError, IndexError):
+                continue
+    return events
+
+
 def own_map_ratios(run_dir, summary):
     """Executed length / the shortest path on the map the vehicle had at the end (its mission
     log's map.bt, in the navigation frame, unknown = free) between the navigation estimates at
@@ -87,15 +103,7 @@ def own_map_ratios(run_dir, summary):
     events_path = os.path.join(run_dir, "mission", "events.csv")
     if not os.path.exists(map_path) or not os.path.exists(events_path):
         return [], ["no mission/map.bt or events.csv"]
-    events = []
-    with open(events_path) as lines:
-        next(lines)
-        for line in lines:
-            fields = line.split(",")
-            try:
-                events.append((float(fields[0]), [float(v) for v in fields[5:8]]))
-            except (ValueError, IndexError):
-                continue
+    events = read_events(events_path)
     ratios, errors = [], []
     for query in summary["queries"]:
         if not query["succeeded"]:

@@ -221,6 +221,33 @@ Eigen::Vector3d ShortestPathOracle::distanceGradient(const Eigen::Vector3d& posi
   return norm > 0.0 ? Eigen::Vector3d(gradient / norm) : Eigen::Vector3d::Zero();
 }
 
+double ShortestPathOracle::bottleneckClearance(const Eigen::Vector3d& start,
+                                               const Eigen::Vector3d& goal, double tolerance) {
+  if (!(tolerance > 0.0)) throw OracleError("oracle: bottleneck tolerance must be > 0 m");
+  const double upper = options_.clearance;  // the fixed-depth slab was sized for it
+  auto joined = [&](double clearance) {
+    options_.clearance = clearance;
+    try {
+      return shortestPath(start, goal).found;
+    } catch (const OracleError&) {
+      return false;  // start or goal itself closer than the clearance
+    }
+  };
+  double low = 0.0, high = upper;
+  if (joined(upper)) {
+    low = upper;
+  } else if (!joined(0.0)) {
+    high = 0.0;
+  } else {
+    while (high - low > tolerance) {
+      const double middle = 0.5 * (low + high);
+      (joined(middle) ? low : high) = middle;
+    }
+  }
+  options_.clearance = upper;
+  return low;
+}
+
 bool ShortestPathOracle::isFree(const Eigen::Vector3d& position) const {
   constexpr double kSlack = 1e-9;
   for (int axis = 0; axis < 3; ++axis) {

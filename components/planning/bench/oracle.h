@@ -64,6 +64,13 @@ class ShortestPathOracle {
   /// outside the box or closer than the clearance to the map.
   OraclePath shortestPath(const Eigen::Vector3d& start, const Eigen::Vector3d& goal) const;
 
+  /// The largest clearance (m, within `tolerance`) in [0, options().clearance] at which a path
+  /// joins start and goal: the width of the bottleneck between them. The distance field does
+  /// not depend on the clearance, so it is bisected on one raster. 0 when they are not joined
+  /// even at 0 m, or lie outside the box. Leaves options().clearance as constructed.
+  double bottleneckClearance(const Eigen::Vector3d& start, const Eigen::Vector3d& goal,
+                             double tolerance = 0.01);
+
   /// m, distance to the nearest occupied voxel centre (trilinear between grid cells; 0 outside
   /// the grid). Exact at cell centres.
   double distance(const Eigen::Vector3d& position) const;

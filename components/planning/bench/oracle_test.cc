@@ -82,6 +82,26 @@ TEST(ShortestPathOracle, PaddingGrowsTheSearchableBoxAsFreeSpace) {
   EXPECT_THROW(ShortestPathOracle(*map, options), OracleError);
 }
 
+// The gap of wallWithGap() is 4.1 m between voxel centres (x 3.95 and 8.05): joined up to a
+// clearance of half that, less the search grid's quantisation (its nodes are cell centres,
+// x 5.95 or 6.05 in the gap: 2.0 m from a wall end).
+TEST(ShortestPathOracle, BottleneckClearanceIsHalfTheGap) {
+  const auto map = wallWithGap();
+  OracleOptions options;
+  options.clearance = 3.0;  // the upper end of the search
+  options.grid = 0.1;
+  options.fixed_depth = 2.05;
+  ShortestPathOracle oracle(*map, options);
+  const Eigen::Vector3d south(6.0, -5.0, 2.05), north(6.0, 5.0, 2.05);
+  EXPECT_NEAR(oracle.bottleneckClearance(south, north), 2.0, 0.02);
+  EXPECT_EQ(oracle.options().clearance, 3.0);  // restored
+  // Both ends 5 m south of the wall, 2 m apart in open water: only the search's top limits.
+  EXPECT_NEAR(oracle.bottleneckClearance({-8.0, -5.0, 2.05}, {-6.0, -5.0, 2.05}), 3.0, 1e-9);
+  // An end inside the wall: not joined at any clearance.
+  EXPECT_EQ(oracle.bottleneckClearance({0.0, 0.05, 2.05}, north), 0.0);
+  EXPECT_THROW(oracle.bottleneckClearance(south, north, 0.0), OracleError);
+}
+
 TEST(ShortestPathOracle, GoesRoundTheWallEndAtFixedDepth) {
   const auto map = wallWithGap();
   OracleOptions options;

@@ -3,7 +3,7 @@
 //
 //   planning_oracle --map true.bt --start x,y,z --goal x,y,z --clearance planner|M
 //                   [--fixed-depth] [--grid 0.2] [--min-depth 0] [--pad 0] [--csv path.csv]
-//                   [--quiet]
+//                   [--bottleneck] [--quiet]
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -29,7 +29,7 @@ using auv::planning::bench::ShortestPathOracle;
 const char* kUsage =
     "usage: planning_oracle --map true.bt --start x,y,z --goal x,y,z --clearance planner|M\n"
     "                       [--fixed-depth] [--grid M] [--min-depth M] [--pad M] [--csv FILE]\n"
-    "                       [--quiet]\n"
+    "                       [--bottleneck] [--quiet]\n"
     "Prints the length of the shortest path start -> goal keeping --clearance metres from every\n"
     "occupied voxel of a fully known map (`auv sim octomap`); unknown space counts as free.\n"
     "  --clearance M   metres, or `planner`: the planning component's hull_radius +\n"
@@ -40,6 +40,8 @@ const char* kUsage =
     "  --pad M         grow the map's known box by M (free space): for a vehicle's own map,\n"
     "                  whose start may lie just outside what its sonar saw (default 0)\n"
     "  --csv FILE      also write the polyline (x,y,z per line, NED m)\n"
+    "  --bottleneck    print instead the largest clearance (<= --clearance, to 0.01 m) at\n"
+    "                  which start and goal are joined: the narrowest passage's half-width\n"
     "  --quiet         print the length only\n"
     "Exit status: 0 found, 1 no path or a map/query problem, 2 bad arguments.\n";
 
@@ -77,7 +79,7 @@ int main(int argc, char** argv) {
   std::string map_path, csv_path;
   Eigen::Vector3d start, goal;
   bool have_start = false, have_goal = false, have_clearance = false, fixed_depth = false;
-  bool quiet = false;
+  bool quiet = false, bottleneck = false;
   OracleOptions options;
   try {
     for (int i = 1; i < argc; ++i) {
@@ -118,6 +120,8 @@ int main(int argc, char** argv) {
         fixed_depth = true;
       } else if (arg == "--csv") {
         csv_path = value();
+      } else if (arg == "--bottleneck") {
+        bottleneck = true;
       } else if (arg == "--quiet") {
         quiet = true;
       } else {
@@ -141,7 +145,18 @@ int main(int argc, char** argv) {
     if (!map.readBinary(map_path)) throw OracleError(map_path + ": not an OctoMap .bt file");
     if (fixed_depth) options.fixed_depth = start.z();
     const auto started = std::chrono::steady_clock::now();
-    const ShortestPathOracle oracle(map, options);
+    ShortestPathOracle oracle(map, options);
+    if (bottleneck) {
+      const double widest = oracle.bottleneckClearance(start, goal);
+      if (quiet) {
+        std::cout << std::fixed << std::setprecision(3) << widest << "\n";
+      } else {
+        std::cout << std::fixed << std::setprecision(3) << "bottleneck clearance " << widest
+                  << " m (searched up to " << options.clearance << " m, grid " << options.grid
+                  << " m, " << (fixed_depth ? "fixed depth" : "3-D") << ")\n";
+      }
+      return 0;
+    }
     const auto path = oracle.shortestPath(start, goal);
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
