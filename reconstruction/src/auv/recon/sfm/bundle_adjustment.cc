@@ -9,7 +9,6 @@
 
 #include <ceres/ceres.h>
 #include <ceres/rotation.h>
-#include <Eigen/Dense>
 
 #include "auv/recon/common/stage_error.h"
 
@@ -287,69 +286,6 @@ bool refineAbsolutePose(const scene::Camera& camera, const std::vector<Eigen::Ve
   ceres::Solve(solver, &problem, &summary);
   if (!summary.IsSolutionUsable()) return false;
   fromBlock(pose, q_cw, t_cw);
-  return true;
-}
-
-namespace {
-/// Sampson distance of one correspondence (normalised coordinates) to the epipolar geometry
-/// E = [t]x R, scaled to pixels by `focal`.
-struct SampsonError {
-  SampsonError(const Eigen::Vector2d& a, const Eigen::Vector2d& b, double focal)
-      : xa(a), xb(b), f(focal) {}
-
-  template <class T>
-  bool operator()(const T* q, const T* t, T* residual) const {
-    T r[9];
-    ceres::QuaternionToRotation(q, r);  // row major
-    const Eigen::Map<const Eigen::Matrix<T, 3, 3, Eigen::RowMajor>> rotation(r);
-    Eigen::Matrix<T, 3, 3> tx;
-    tx << T(0), -t[2], t[1], t[2], T(0), -t[0], -t[1], t[0], T(0);
-    const Eigen::Matrix<T, 3, 3> e = tx * rotation;
-    const Eigen::Matrix<T, 3, 1> a(T(xa.x()), T(xa.y()), T(1)), b(T(xb.x()), T(xb.y()), T(1));
-    const Eigen::Matrix<T, 3, 1> ea = e * a, eb = e.transpose() * b;
-    const T num = b.dot(ea);
-    const T den = ea(0) * ea(0) + ea(1) * ea(1) + eb(0) * eb(0) + eb(1) * eb(1);
-    residual[0] = T(f) * num / ceres::sqrt(den + T(1e-30));
-    return true;
-  }
-
-  Eigen::Vector2d xa, xb;
-  double f;
-};
-}  // namespace
-
-bool refineRelativePose(const scene::Camera& camera_a, const scene::Camera& camera_b,
-                        const std::vector<Eigen::Vector2d>& pixels_a,
-                        const std::vector<Eigen::Vector2d>& pixels_b,
-                        const std::vector<uint32_t>& inliers,
-                        const BundleAdjustmentOptions& options, Eigen::Matrix3d& rotation,
-                        Eigen::Vector3d& translation) {
-  options.check();
-  if (inliers.size() < 6) return false;
-  const Eigen::Quaterniond q0(rotation);
-  std::array<double, 4> q = {q0.w(), q0.x(), q0.y(), q0.z()};
-  Eigen::Vector3d t = translation.normalized();
-  const double focal = 0.25 * (camera_a.fx + camera_a.fy + camera_b.fx + camera_b.fy);
-  ceres::Problem problem;
-  for (uint32_t i : inliers) {
-    problem.AddResidualBlock(
-        new ceres::AutoDiffCostFunction<SampsonError, 1, 4, 3>(
-            new SampsonError(camera_a.pixelToNormalized(pixels_a.at(i)),
-                             camera_b.pixelToNormalized(pixels_b.at(i)), focal)),
-        makeLoss(options), q.data(), t.data());
-  }
-  problem.SetManifold(q.data(), new ceres::QuaternionManifold);
-  problem.SetManifold(t.data(), new ceres::SphereManifold<3>);
-  ceres::Solver::Options solver;
-  solver.max_num_iterations = options.max_iterations;
-  solver.function_tolerance = options.function_tolerance;
-  solver.linear_solver_type = ceres::DENSE_QR;
-  solver.logging_type = ceres::SILENT;
-  ceres::Solver::Summary summary;
-  ceres::Solve(solver, &problem, &summary);
-  if (!summary.IsSolutionUsable() || !t.allFinite()) return false;
-  rotation = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
-  translation = t.normalized();
   return true;
 }
 

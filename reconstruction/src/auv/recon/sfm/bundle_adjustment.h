@@ -70,15 +70,4 @@ bool refineAbsolutePose(const scene::Camera& camera, const std::vector<Eigen::Ve
                         const BundleAdjustmentOptions& options, Eigen::Quaterniond& q_cw,
                         Eigen::Vector3d& t_cw);
 
-/// Relative pose refinement of two calibrated views: minimises the robustified Sampson
-/// distance (px, through the mean focal length) of the correspondences `inliers` over the
-/// rotation and the unit translation (a -> b). Returns false when Ceres found no usable
-/// solution (pose unchanged then).
-bool refineRelativePose(const scene::Camera& camera_a, const scene::Camera& camera_b,
-                        const std::vector<Eigen::Vector2d>& pixels_a,
-                        const std::vector<Eigen::Vector2d>& pixels_b,
-                        const std::vector<uint32_t>& inliers,
-                        const BundleAdjustmentOptions& options, Eigen::Matrix3d& rotation,
-                        Eigen::Vector3d& translation);
-
 }  // namespace auv::recon::sfm

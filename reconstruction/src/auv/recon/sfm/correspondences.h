@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -27,6 +28,12 @@ struct View {
 struct ViewPair {
   uint32_t image_a = 0, image_b = 0;
   std::vector<std::pair<uint32_t, uint32_t>> matches;
+  /// Matches a homography explains, when the verification measured it (-1: unknown, SfM
+  /// fits one itself when it considers the pair as initial pair).
+  int64_t homography_inliers = -1;
+  /// The verification's essential matrix (x_b^T E x_a = 0, normalised coordinates), when it
+  /// had one: SfM decomposes it instead of fitting one again for a candidate initial pair.
+  std::optional<Eigen::Matrix3d> essential;
 };
 
 struct SfmInput {

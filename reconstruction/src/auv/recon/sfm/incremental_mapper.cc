@@ -32,6 +32,7 @@ void MapperOptions::check() const {
                          "must be > 0 px");
   AUV_RECON_CHECK_OPTION(local_ba_images >= 1, local_ba_images, "must be >= 1");
   AUV_RECON_CHECK_OPTION(global_ba_growth > 0, global_ba_growth, "must be > 0");
+  AUV_RECON_CHECK_OPTION(local_ba_max_iterations > 0, local_ba_max_iterations, "must be > 0");
   AUV_RECON_CHECK_OPTION(global_ba_max_iterations > 0, global_ba_max_iterations, "must be > 0");
   ba.check();
   robust.check();
@@ -245,12 +246,18 @@ void IncrementalMapper::evaluatePair(PairCandidate& pair) {
   if (pa.size() < options_.init_min_inliers) return;
   const scene::Camera& ca = input_.cameras.at(a.camera_id);
   const scene::Camera& cb = input_.cameras.at(b.camera_id);
-  pair.pose = estimateRelativePose(ca, cb, pa, pb, options_.robust);
+  pair.pose = pair.essential
+                  ? relativePoseFromEssential(*pair.essential, ca, cb, pa, pb, options_.robust)
+                  : estimateRelativePose(ca, cb, pa, pb, options_.robust);
   if (!pair.pose.found || pair.pose.inliers.size() < options_.init_min_inliers) return;
-  // A homography between different cameras needs the same intrinsics to mean "planar".
-  pair.homography_ratio =
-      static_cast<double>(countHomographyInliers(pa, pb, options_.robust)) /
-      pair.pose.inliers.size();
+  // Planar scene or no baseline when a homography explains about as much (the verification's
+  // count over all its matches when it has one).
+  const int64_t h = pair.homography_inliers >= 0
+                        ? pair.homography_inliers
+                        : static_cast<int64_t>(countHomographyInliers(ca, cb, pa, pb,
+                                                                      options_.robust));
+  const double e = pair.homography_inliers >= 0 ? pair.matches : pair.pose.inliers.size();
+  pair.homography_ratio = h / std::max(e, 1.0);
   // Median triangulation angle of the inliers in front of both cameras.
   Matrix34d pose_a = Matrix34d::Zero(), pose_b;
   pose_a.leftCols<3>().setIdentity();
@@ -292,6 +299,8 @@ bool IncrementalMapper::findInitialPair(MapperResult& result) {
     candidate.a = pair.image_a;
     candidate.b = pair.image_b;
     candidate.matches = pair.matches.size();
+    candidate.homography_inliers = pair.homography_inliers;
+    candidate.essential = pair.essential;
     pair_candidates_.push_back(candidate);
   }
   std::stable_sort(pair_candidates_.begin(), pair_candidates_.end(),
@@ -424,7 +433,9 @@ void IncrementalMapper::localBundleAdjustment(uint32_t id, MapperResult& result)
   }
   {
     ScopedTimer timer(timings_->local_ba);
-    bundleAdjust(rec_, config, options_.ba);
+    BundleAdjustmentOptions ba = options_.ba;
+    ba.max_iterations = options_.local_ba_max_iterations;
+    bundleAdjust(rec_, config, ba);
     ++result.local_bas;
   }
   ScopedTimer timer(timings_->filtering);

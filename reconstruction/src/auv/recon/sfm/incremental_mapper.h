@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -46,8 +47,9 @@ struct MapperOptions {
   // Bundle adjustment.
   size_t local_ba_images = 6;       ///< the new view and its best-connected neighbours
   double global_ba_growth = 0.1;    ///< global BA when registered views grew by this fraction
-  int global_ba_max_iterations = 50;
-  BundleAdjustmentOptions ba;       ///< loss, scale, threads (local BA uses these as they are)
+  int local_ba_max_iterations = 25;   ///< Levenberg-Marquardt iterations of a local BA
+  int global_ba_max_iterations = 50;  ///< and of a global one
+  BundleAdjustmentOptions ba;         ///< loss, scale, tolerance, threads
 
   RobustOptions robust;  ///< P3P / essential / homography fits
 
@@ -91,6 +93,8 @@ class IncrementalMapper {
   struct PairCandidate {
     uint32_t a = 0, b = 0;
     size_t matches = 0;
+    int64_t homography_inliers = -1;  ///< from the verification, -1: unknown
+    std::optional<Eigen::Matrix3d> essential;  ///< from the verification
     bool evaluated = false;
     RelativePose pose;
     size_t correspondences = 0;

@@ -1,39 +1,56 @@
-// TEMPORARY back end: OpenCV's RANSAC (five-point essential matrix, homography, AP3P) with the
-// fixed threshold `max_error_px`, until the project's AC-RANSAC estimators (estimators/) land;
-// then this file calls their essential, homography and absolute-pose kernels instead.
 #include "auv/recon/sfm/robust_geometry.h"
 
-#include <algorithm>
-
-#include <opencv2/calib3d.hpp>
-#include <opencv2/core/eigen.hpp>
-
 #include "auv/recon/common/stage_error.h"
-#include "auv/recon/sfm/bundle_adjustment.h"
+#include "auv/recon/estimators/absolute_pose.h"
+#include "auv/recon/estimators/essential.h"
+#include "auv/recon/estimators/homography.h"
+#include "auv/recon/sfm/triangulation.h"
 
 namespace auv::recon::sfm {
 
 void RobustOptions::check() const {
   AUV_RECON_CHECK_OPTION(max_error_px > 0, max_error_px, "must be > 0 px");
-  AUV_RECON_CHECK_OPTION(confidence > 0 && confidence < 1, confidence, "must be in (0, 1)");
+  AUV_RECON_CHECK_OPTION(confidence > 0 && confidence <= 1, confidence, "must be in (0, 1]");
   AUV_RECON_CHECK_OPTION(max_iterations > 0, max_iterations, "must be > 0");
 }
 
 namespace {
-std::vector<cv::Point2d> normalized(const scene::Camera& camera,
-                                    const std::vector<Eigen::Vector2d>& pixels) {
-  std::vector<cv::Point2d> out;
-  out.reserve(pixels.size());
-  for (const auto& p : pixels) {
-    out.emplace_back((p.x() - camera.cx) / camera.fx, (p.y() - camera.cy) / camera.fy);
-  }
-  return out;
+estimators::AcRansacOptions acRansacOptions(const RobustOptions& options) {
+  estimators::AcRansacOptions ac;
+  ac.max_threshold = options.max_error_px;
+  ac.confidence = options.confidence;
+  ac.max_iterations = options.max_iterations;
+  ac.seed = options.seed;
+  return ac;
 }
-std::vector<cv::Point2d> toCv(const std::vector<Eigen::Vector2d>& pixels) {
-  std::vector<cv::Point2d> out;
-  out.reserve(pixels.size());
-  for (const auto& p : pixels) out.emplace_back(p.x(), p.y());
-  return out;
+
+/// Decomposes E, keeps the pose with most inliers in front, and those inliers.
+RelativePose poseFromInliers(const Eigen::Matrix3d& essential, const scene::Camera& camera_a,
+                             const scene::Camera& camera_b,
+                             const std::vector<Eigen::Vector2d>& pixels_a,
+                             const std::vector<Eigen::Vector2d>& pixels_b,
+                             const std::vector<int>& inliers, double threshold) {
+  RelativePose result;
+  const estimators::RelativePose pose = estimators::relativePoseFromEssential(
+      essential, pixels_a, pixels_b, camera_a, camera_b, inliers);
+  if (pose.points_in_front < 5) return result;
+  result.rotation = pose.rotation;
+  result.translation = pose.translation.normalized();
+  result.threshold_px = threshold;
+  // Cheirality per inlier under the chosen pose.
+  Matrix34d pose_a = Matrix34d::Zero(), pose_b;
+  pose_a.leftCols<3>().setIdentity();
+  pose_b.leftCols<3>() = result.rotation;
+  pose_b.col(3) = result.translation;
+  for (int i : inliers) {
+    const auto x = triangulateDlt({{pose_a, camera_a.pixelToNormalized(pixels_a[i])},
+                                   {pose_b, camera_b.pixelToNormalized(pixels_b[i])}});
+    if (x && depthIn(pose_a, *x) > 0 && depthIn(pose_b, *x) > 0) {
+      result.inliers.push_back(static_cast<uint32_t>(i));
+    }
+  }
+  result.found = result.inliers.size() >= 5;
+  return result;
 }
 }  // namespace
 
@@ -43,46 +60,44 @@ RelativePose estimateRelativePose(const scene::Camera& camera_a, const scene::Ca
                                   const RobustOptions& options) {
   options.check();
   RelativePose result;
-  result.threshold_px = options.max_error_px;
-  if (pixels_a.size() < 5 || pixels_a.size() != pixels_b.size()) return result;
-  const std::vector<cv::Point2d> a = normalized(camera_a, pixels_a),
-                                 b = normalized(camera_b, pixels_b);
-  const double focal = 0.25 * (camera_a.fx + camera_a.fy + camera_b.fx + camera_b.fy);
-  cv::Mat mask;
-  cv::Mat e = cv::findEssentialMat(a, b, cv::Mat::eye(3, 3, CV_64F), cv::RANSAC,
-                                   options.confidence, options.max_error_px / focal, mask);
-  if (e.rows != 3 || e.cols != 3) return result;  // several solutions stacked: take none
-  cv::Mat r, t;
-  const int good = cv::recoverPose(e, a, b, cv::Mat::eye(3, 3, CV_64F), r, t, mask);
-  if (good < 5) return result;
-  cv::cv2eigen(r, result.rotation);
-  Eigen::Vector3d translation;
-  cv::cv2eigen(t, translation);
-  result.translation = translation.normalized();
-  for (int i = 0; i < mask.rows; ++i) {
-    if (mask.at<uint8_t>(i)) result.inliers.push_back(static_cast<uint32_t>(i));
-  }
-  // The robust loop keeps its best minimal-sample model: refine it on the inliers, then keep
-  // the inliers in front of both cameras under the refined pose.
-  BundleAdjustmentOptions refine;
-  refine.loss_scale_px = std::max(0.5, options.max_error_px / 4);
-  refineRelativePose(camera_a, camera_b, pixels_a, pixels_b, result.inliers, refine,
-                     result.rotation, result.translation);
-  result.found = true;
-  return result;
+  if (pixels_a.size() < 6 || pixels_a.size() != pixels_b.size()) return result;
+  const auto essential =
+      estimators::estimateEssential(pixels_a, pixels_b, camera_a, camera_b,
+                                    acRansacOptions(options));
+  if (!essential.success()) return result;
+  return poseFromInliers(essential.model, camera_a, camera_b, pixels_a, pixels_b,
+                         essential.inliers, essential.threshold);
 }
 
-size_t countHomographyInliers(const std::vector<Eigen::Vector2d>& pixels_a,
+RelativePose relativePoseFromEssential(const Eigen::Matrix3d& essential,
+                                       const scene::Camera& camera_a,
+                                       const scene::Camera& camera_b,
+                                       const std::vector<Eigen::Vector2d>& pixels_a,
+                                       const std::vector<Eigen::Vector2d>& pixels_b,
+                                       const RobustOptions& options) {
+  options.check();
+  if (pixels_a.size() < 6 || pixels_a.size() != pixels_b.size()) return {};
+  const estimators::EssentialKernel kernel(pixels_a, pixels_b, camera_a, camera_b);
+  std::vector<double> residuals;
+  kernel.residuals(essential, &residuals);
+  std::vector<int> inliers;
+  for (size_t i = 0; i < residuals.size(); ++i) {
+    if (residuals[i] <= options.max_error_px) inliers.push_back(static_cast<int>(i));
+  }
+  return poseFromInliers(essential, camera_a, camera_b, pixels_a, pixels_b, inliers,
+                         options.max_error_px);
+}
+
+size_t countHomographyInliers(const scene::Camera& camera_a, const scene::Camera& camera_b,
+                              const std::vector<Eigen::Vector2d>& pixels_a,
                               const std::vector<Eigen::Vector2d>& pixels_b,
                               const RobustOptions& options) {
   options.check();
-  if (pixels_a.size() < 4 || pixels_a.size() != pixels_b.size()) return 0;
-  cv::Mat mask;
-  cv::Mat h = cv::findHomography(toCv(pixels_a), toCv(pixels_b), cv::RANSAC,
-                                 options.max_error_px, mask, options.max_iterations,
-                                 options.confidence);
-  if (h.empty()) return 0;
-  return static_cast<size_t>(cv::countNonZero(mask));
+  if (pixels_a.size() < 5 || pixels_a.size() != pixels_b.size()) return 0;
+  const auto homography = estimators::estimateHomography(
+      pixels_a, pixels_b, {camera_a.width, camera_a.height}, {camera_b.width, camera_b.height},
+      acRansacOptions(options));
+  return homography.success() ? homography.numInliers() : 0;
 }
 
 AbsolutePose estimateAbsolutePose(const scene::Camera& camera,
@@ -91,27 +106,14 @@ AbsolutePose estimateAbsolutePose(const scene::Camera& camera,
                                   const RobustOptions& options) {
   options.check();
   AbsolutePose result;
-  result.threshold_px = options.max_error_px;
   if (points.size() < 4 || points.size() != pixels.size()) return result;
-  std::vector<cv::Point3d> object;
-  object.reserve(points.size());
-  for (const auto& p : points) object.emplace_back(p.x(), p.y(), p.z());
-  cv::Mat k;
-  cv::eigen2cv(camera.K(), k);
-  cv::Mat rvec, tvec;
-  std::vector<int> inliers;
-  const bool ok = cv::solvePnPRansac(object, toCv(pixels), k, cv::noArray(), rvec, tvec, false,
-                                     options.max_iterations,
-                                     static_cast<float>(options.max_error_px),
-                                     options.confidence, inliers, cv::SOLVEPNP_AP3P);
-  if (!ok || inliers.size() < 4) return result;
-  cv::Mat r;
-  cv::Rodrigues(rvec, r);
-  Eigen::Matrix3d rotation;
-  cv::cv2eigen(r, rotation);
-  cv::cv2eigen(tvec, result.t_cw);
-  result.q_cw = Eigen::Quaterniond(rotation).normalized();
-  for (int i : inliers) result.inliers.push_back(static_cast<uint32_t>(i));
+  const auto pose =
+      estimators::estimateAbsolutePose(pixels, points, camera, acRansacOptions(options));
+  if (!pose.success()) return result;
+  result.q_cw = Eigen::Quaterniond(pose.model.rotation).normalized();
+  result.t_cw = pose.model.translation;
+  result.threshold_px = pose.threshold;
+  for (int i : pose.inliers) result.inliers.push_back(static_cast<uint32_t>(i));
   result.found = true;
   return result;
 }

@@ -1,8 +1,9 @@
 #pragma once
 // The robust model fits SfM needs (paper section 3.4.2): the relative pose of the initial
 // pair (essential matrix), the homography that tells a planar or rotation-only pair, and the
-// absolute pose of a new view from 2D-3D correspondences (P3P). One place that calls the
-// robust estimators, so the mapper does not depend on how they work.
+// absolute pose of a new view from 2D-3D correspondences (P3P). All through AC-RANSAC
+// (estimators/, Moisan-Moulon-Monasse): the inlier threshold is chosen per model, bounded by
+// `max_error_px`. One place that calls the estimators, so the mapper does not depend on them.
 
 #include <cstdint>
 #include <vector>
@@ -15,9 +16,11 @@
 namespace auv::recon::sfm {
 
 struct RobustOptions {
-  double max_error_px = 4.0;   ///< px: inlier threshold (upper bound for a-contrario fits)
-  double confidence = 0.9999;  ///< probability of drawing one all-inlier sample
-  int max_iterations = 10000;  ///< samples at most
+  double max_error_px = 4.0;   ///< px: upper bound of AC-RANSAC's adaptive threshold
+  double confidence = 0.9999;  ///< early stop: probability of one all-inlier sample drawn
+  int max_iterations = 1000;   ///< minimal samples at most (10 % of them focused on the best
+                               ///< model's inliers, the rest stopped early by `confidence`)
+  uint64_t seed = 42;          ///< random samples (runs are repeatable)
 
   /// Throws OptionError naming the field and value.
   void check() const;
@@ -28,18 +31,30 @@ struct RelativePose {
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  ///< camera a -> camera b
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();   ///< unit length, b's frame
   std::vector<uint32_t> inliers;  ///< indices of the correspondences, in front of both cameras
-  double threshold_px = 0;        ///< inlier threshold used
+  double threshold_px = 0;        ///< AC-RANSAC's adaptive threshold
 };
 
-/// Essential matrix of two calibrated views (five-point solver inside a robust loop),
-/// decomposed into the pose whose triangulated inliers lie in front of both cameras.
+/// Essential matrix of two calibrated views (five-point solver in AC-RANSAC, refined on the
+/// inliers), decomposed into the pose that puts most inliers in front of both cameras; the
+/// inliers behind either camera are left out.
 RelativePose estimateRelativePose(const scene::Camera& camera_a, const scene::Camera& camera_b,
                                   const std::vector<Eigen::Vector2d>& pixels_a,
                                   const std::vector<Eigen::Vector2d>& pixels_b,
                                   const RobustOptions& options);
 
-/// Number of correspondences a robustly fitted homography explains within the threshold.
-size_t countHomographyInliers(const std::vector<Eigen::Vector2d>& pixels_a,
+/// The relative pose of an essential matrix already estimated (the pair's verification):
+/// inliers = correspondences within `max_error_px` of their epipolar lines and in front of
+/// both cameras under the decomposed pose.
+RelativePose relativePoseFromEssential(const Eigen::Matrix3d& essential,
+                                       const scene::Camera& camera_a,
+                                       const scene::Camera& camera_b,
+                                       const std::vector<Eigen::Vector2d>& pixels_a,
+                                       const std::vector<Eigen::Vector2d>& pixels_b,
+                                       const RobustOptions& options);
+
+/// Number of correspondences an AC-RANSAC homography explains (0 when none is meaningful).
+size_t countHomographyInliers(const scene::Camera& camera_a, const scene::Camera& camera_b,
+                              const std::vector<Eigen::Vector2d>& pixels_a,
                               const std::vector<Eigen::Vector2d>& pixels_b,
                               const RobustOptions& options);
 
@@ -51,8 +66,8 @@ struct AbsolutePose {
   double threshold_px = 0;
 };
 
-/// Pose of a calibrated camera from 2D-3D correspondences: minimal P3P samples inside a robust
-/// loop, the best model re-estimated on its inliers.
+/// Pose of a calibrated camera from 2D-3D correspondences: minimal P3P samples in AC-RANSAC,
+/// the best model refined on its inliers.
 AbsolutePose estimateAbsolutePose(const scene::Camera& camera,
                                   const std::vector<Eigen::Vector3d>& points,
                                   const std::vector<Eigen::Vector2d>& pixels,

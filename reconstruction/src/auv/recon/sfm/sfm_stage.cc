@@ -1,0 +1,346 @@
+#include "auv/recon/sfm/sfm_stage.h"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <iostream>
+#include <map>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+
+#include "auv/recon/common/option_set.h"
+#include "auv/recon/common/progress.h"
+#include "auv/recon/common/report.h"
+#include "auv/recon/common/stage_error.h"
+#include "auv/recon/common/staged_output.h"
+#include "auv/recon/features/feature_store.h"
+#include "auv/recon/features/match_store.h"
+#include "auv/recon/scene/colmap_text.h"
+#include "auv/recon/scene/ply.h"
+
+namespace auv::recon::sfm {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+constexpr const char* kStage = "sfm";
+
+double since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+/// corrected/<camera>.yaml: the pinhole intrinsics of the undistorted images.
+scene::Camera readCorrectedCamera(const fs::path& file, uint32_t id) {
+  if (!fs::exists(file)) {
+    throw StageError(kStage, "calibration of the corrected images not found: " + file.string() +
+                                 " (run `auv recon correct` first)");
+  }
+  cv::FileStorage storage;
+  try {
+    storage.open(file.string(), cv::FileStorage::READ);
+  } catch (const cv::Exception& e) {
+    throw StageError(kStage, file.string() + ": not an OpenCV YAML file: " + e.what());
+  }
+  if (!storage.isOpened()) throw StageError(kStage, file.string() + ": cannot be read");
+  int width = 0, height = 0;
+  cv::Mat k, distortion;
+  storage["image_width"] >> width;
+  storage["image_height"] >> height;
+  storage["camera_matrix"] >> k;
+  storage["distortion_coefficients"] >> distortion;
+  if (width <= 0 || height <= 0) {
+    throw StageError(kStage, file.string() + ": image_width / image_height missing or <= 0");
+  }
+  if (k.rows != 3 || k.cols != 3) {
+    throw StageError(kStage, file.string() + ": camera_matrix missing or not 3x3");
+  }
+  k.convertTo(k, CV_64F);
+  if (!distortion.empty()) {
+    distortion.convertTo(distortion, CV_64F);
+    if (cv::countNonZero(distortion != 0) > 0) {
+      throw StageError(kStage, file.string() +
+                                   ": distortion_coefficients are not zero (SfM reads the "
+                                   "undistorted images' intrinsics)");
+    }
+  }
+  const scene::Camera camera =
+      scene::Camera::pinhole(id, width, height, k.at<double>(0, 0), k.at<double>(1, 1),
+                             k.at<double>(0, 2), k.at<double>(1, 2));
+  if (!(camera.fx > 0) || !(camera.fy > 0)) {
+    throw StageError(kStage, file.string() + ": camera_matrix has a focal length <= 0");
+  }
+  return camera;
+}
+}  // namespace
+
+void SfmStageOptions::check() const {
+  mapper.check();
+  lossFunctionFromName(loss);  // throws naming the value
+  AUV_RECON_CHECK_OPTION(min_registered_ratio >= 0 && min_registered_ratio <= 1,
+                         min_registered_ratio, "must be in [0, 1]");
+  AUV_RECON_CHECK_OPTION(threads > 0, threads, "must be > 0");
+}
+
+MapperOptions SfmStageOptions::mapperOptions() const {
+  MapperOptions m = mapper;
+  m.ba.loss = lossFunctionFromName(loss);
+  m.ba.num_threads = threads;
+  return m;
+}
+
+void SfmStageOptions::bind(OptionSet& set) {
+  MapperOptions& m = mapper;
+  set.add("init_min_inliers", &m.init_min_inliers, "essential inliers of the initial pair");
+  set.add("init_min_tri_angle", &m.init_min_tri_angle_deg,
+          "deg: median triangulation angle of the initial pair (halved when none passes)");
+  set.add("init_max_homography_ratio", &m.init_max_homography_ratio,
+          "homography / essential inliers above this: planar pair, tried last");
+  set.add("init_max_pairs", &m.init_max_pairs, "candidate initial pairs tried");
+  set.add("abs_pose_min_inliers", &m.abs_pose_min_inliers, "2D-3D inliers to register a view");
+  set.add("abs_pose_min_inlier_ratio", &m.abs_pose_min_inlier_ratio,
+          "inliers / 2D-3D correspondences to register a view");
+  set.add("min_tri_angle", &m.min_tri_angle_deg, "deg: smallest triangulation angle of a point");
+  set.add("max_reprojection_error", &m.max_reprojection_error_px,
+          "px: observations beyond are outliers (also the bound of AC-RANSAC's threshold)");
+  set.add("local_ba_images", &m.local_ba_images, "images refined by a local bundle adjustment");
+  set.add("global_ba_growth", &m.global_ba_growth,
+          "global bundle adjustment when the model grew by this fraction");
+  set.add("loss", &loss, "bundle adjustment loss: trivial, huber, cauchy, soft_l1");
+  set.add("loss_scale", &m.ba.loss_scale_px, "px: scale of the robust loss");
+  set.add("min_registered_ratio", &min_registered_ratio,
+          "fail when fewer images than this fraction register");
+  set.add("navigation", &navigation,
+          "TUM trajectory (e.g. <run>/ground_truth/navigation.tum): metric scale and gravity");
+  set.add("threads", &threads, "Ceres threads");
+}
+
+SfmInput readSfmInput(const Survey& survey) {
+  SfmInput input;
+  Survey::requireExists(survey.corrected(), kStage, "correct");
+  const std::vector<std::string> cameras = Survey::cameraFolders(survey.corrected(), kStage);
+  std::map<std::string, uint32_t> camera_ids;
+  for (const std::string& name : cameras) {
+    const uint32_t id = static_cast<uint32_t>(camera_ids.size() + 1);
+    camera_ids[name] = id;
+    input.cameras[id] = readCorrectedCamera(survey.corrected() / (name + ".yaml"), id);
+  }
+  const fs::path features_folder = survey.root() / "features";
+  const features::FeatureStore store(features_folder);
+  std::map<std::string, uint32_t> image_ids;
+  for (const features::FeatureIndexEntry& entry : store.images()) {
+    auto camera = camera_ids.find(entry.camera);
+    if (camera == camera_ids.end()) {
+      throw StageError(kStage, "features/index.csv: image " + entry.image + " of camera '" +
+                                   entry.camera + "', which has no folder in " +
+                                   survey.corrected().string());
+    }
+    const scene::Camera& intrinsics = input.cameras.at(camera->second);
+    if (entry.width != intrinsics.width || entry.height != intrinsics.height) {
+      throw StageError(kStage, "features of " + entry.image + " are of a " +
+                                   std::to_string(entry.width) + "x" +
+                                   std::to_string(entry.height) + " image, but " +
+                                   entry.camera + ".yaml says " +
+                                   std::to_string(intrinsics.width) + "x" +
+                                   std::to_string(intrinsics.height));
+    }
+    View view;
+    view.id = static_cast<uint32_t>(input.views.size() + 1);
+    view.camera_id = camera->second;
+    view.name = entry.image;
+    view.keypoints = store.read(entry.image).positions();
+    image_ids[entry.image] = view.id;
+    input.views.push_back(std::move(view));
+  }
+  const fs::path pairs_file = features::verifiedPairsFile(features_folder);
+  if (!fs::exists(pairs_file)) {
+    throw StageError(kStage, "verified matches not found: " + pairs_file.string() +
+                                 " (run `auv recon match` first)");
+  }
+  for (const features::VerifiedPair& verified : features::readVerifiedPairs(pairs_file)) {
+    auto a = image_ids.find(verified.image1), b = image_ids.find(verified.image2);
+    if (a == image_ids.end() || b == image_ids.end()) {
+      throw StageError(kStage, pairs_file.string() + ": pair (" + verified.image1 + ", " +
+                                   verified.image2 + ") names an image not in features/");
+    }
+    ViewPair pair;
+    pair.image_a = a->second;
+    pair.image_b = b->second;
+    pair.matches.assign(verified.inliers.begin(), verified.inliers.end());
+    pair.homography_inliers = verified.homography_inliers;
+    if (verified.kind == features::GeometryKind::ESSENTIAL) pair.essential = verified.model;
+    input.pairs.push_back(std::move(pair));
+  }
+  try {
+    input.check();
+  } catch (const std::invalid_argument& e) {
+    throw StageError(kStage, pairs_file.string() + ": " + e.what());
+  }
+  return input;
+}
+
+void writeSparseModel(const scene::Reconstruction& rec, const fs::path& folder) {
+  scene::writeColmapText(rec, folder);
+  scene::PlyData points;
+  for (const auto& [id, point] : rec.points) {
+    points.positions.push_back(point.xyz);
+    points.colors.push_back(point.rgb);
+  }
+  scene::writePly(folder / "points.ply", points);
+  // Camera glyphs: frusta a tenth of the model's median camera spacing deep, one colour per
+  // physical camera.
+  std::vector<double> spacing;
+  const scene::Image* previous = nullptr;
+  for (const auto& [id, image] : rec.images) {
+    if (previous) spacing.push_back((image.center() - previous->center()).norm());
+    previous = &image;
+  }
+  double depth = 0.1;
+  if (!spacing.empty()) {
+    std::nth_element(spacing.begin(), spacing.begin() + spacing.size() / 2, spacing.end());
+    depth = std::max(spacing[spacing.size() / 2], 1e-6);
+  }
+  const Eigen::Matrix<uint8_t, 3, 1> palette[] = {{230, 60, 60}, {60, 200, 60}, {60, 90, 230},
+                                                   {230, 200, 40}, {200, 60, 200}};
+  scene::PlyData glyphs;
+  for (const auto& [id, image] : rec.images) {
+    const scene::Camera& camera = rec.cameraOf(image);
+    scene::CameraGlyph glyph;
+    glyph.center = image.center();
+    glyph.rotation_cw = image.rotation();
+    glyph.depth = depth;
+    glyph.half_width = depth * camera.width / (2 * camera.fx);
+    glyph.half_height = depth * camera.height / (2 * camera.fy);
+    glyph.color = palette[(camera.id - 1) % 5];
+    scene::appendCameraGlyph(glyph, glyphs);
+  }
+  scene::writePly(folder / "cameras.ply", glyphs);
+}
+
+SfmSummary reconstructSurvey(const Survey& survey, const SfmStageOptions& options) {
+  options.check();
+  const auto start = Clock::now();
+  SfmSummary summary;
+  // Keypoint colours for the points, read with the keypoints.
+  SfmInput input = readSfmInput(survey);
+  std::map<uint32_t, std::vector<std::array<uint8_t, 3>>> colors;
+  {
+    const features::FeatureStore store(survey.root() / "features");
+    for (const View& view : input.views) {
+      std::vector<std::array<uint8_t, 3>>& c = colors[view.id];
+      for (const auto& k : store.read(view.name).keypoints) c.push_back(k.rgb);
+    }
+  }
+  std::vector<TimedPosition> trajectory;
+  std::map<std::string, double> times;
+  if (!options.navigation.empty()) {
+    try {
+      trajectory = readTumTrajectory(options.navigation);
+      times = readKeyframeTimes(survey.keyframes(),
+                                Survey::cameraFolders(survey.corrected(), kStage));
+    } catch (const std::runtime_error& e) {
+      throw StageError(kStage, std::string("navigation: ") + e.what());
+    }
+  }
+  summary.seconds_reading = since(start);
+  summary.images_total = input.views.size();
+  summary.cameras = input.cameras.size();
+
+  std::map<uint32_t, std::string> names;
+  for (const View& view : input.views) names[view.id] = view.name;
+  MapperResult result;
+  {
+    Progress progress("sfm", "images", input.views.size());
+    IncrementalMapper mapper(std::move(input), options.mapperOptions());
+    result = mapper.run(&progress, [&](const std::string& line) { progress.message(line); });
+  }
+  if (result.status != MapperStatus::SUCCESS) throw StageError(kStage, result.message);
+  scene::Reconstruction& rec = result.reconstruction;
+  const size_t registered = rec.images.size();
+  if (registered < options.min_registered_ratio * summary.images_total) {
+    throw StageError(kStage, "only " + std::to_string(registered) + " of " +
+                                 std::to_string(summary.images_total) +
+                                 " images registered (min_registered_ratio " +
+                                 std::to_string(options.min_registered_ratio) +
+                                 "); sparse/ not written");
+  }
+  for (auto& [id, point] : rec.points) {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (const auto& e : point.track) {
+      const auto& rgb = colors.at(e.image_id).at(e.point2d_idx);
+      sum += Eigen::Vector3d(rgb[0], rgb[1], rgb[2]);
+    }
+    sum /= std::max<size_t>(point.track.size(), 1);
+    point.rgb = sum.array().round().cast<uint8_t>();
+  }
+  if (!options.navigation.empty()) {
+    summary.navigation = alignToNavigation(rec, times, trajectory);
+    if (!summary.navigation.applied) {
+      std::cerr << "sfm: navigation alignment not applied: " << summary.navigation.reason
+                << "\n";
+    }
+  }
+
+  const auto writing = Clock::now();
+  StagedOutput staged(survey.sparse());
+  writeSparseModel(rec, staged.path());
+  staged.commit();
+  summary.seconds_writing = since(writing);
+
+  summary.images_registered = registered;
+  summary.points = rec.points.size();
+  summary.observations = rec.numObservations();
+  summary.mean_track_length = rec.meanTrackLength();
+  summary.mean_reprojection_error_px = rec.meanReprojectionError();
+  summary.seconds = since(start);
+
+  const MapperTimings& t = result.timings;
+  nlohmann::json section = {
+      {"images_total", summary.images_total},
+      {"images_registered", summary.images_registered},
+      {"cameras", summary.cameras},
+      {"points", summary.points},
+      {"observations", summary.observations},
+      {"mean_track_length", summary.mean_track_length},
+      {"mean_reprojection_error_px", summary.mean_reprojection_error_px},
+      {"tracks", result.tracks.tracks},
+      {"conflicting_matches", result.tracks.conflicting_matches},
+      {"local_bundle_adjustments", result.local_bas},
+      {"global_bundle_adjustments", result.global_bas},
+      {"seconds", summary.seconds},
+      {"seconds_per_substage",
+       {{"reading", summary.seconds_reading},
+        {"tracks", t.tracks},
+        {"initial_pair", t.initial_pair},
+        {"registration", t.registration},
+        {"triangulation", t.triangulation},
+        {"local_ba", t.local_ba},
+        {"global_ba", t.global_ba},
+        {"filtering", t.filtering},
+        {"writing", summary.seconds_writing}}},
+      {"options",
+       {{"init_min_inliers", options.mapper.init_min_inliers},
+        {"init_min_tri_angle_deg", options.mapper.init_min_tri_angle_deg},
+        {"abs_pose_min_inliers", options.mapper.abs_pose_min_inliers},
+        {"min_tri_angle_deg", options.mapper.min_tri_angle_deg},
+        {"max_reprojection_error_px", options.mapper.max_reprojection_error_px},
+        {"loss", options.loss},
+        {"loss_scale_px", options.mapper.ba.loss_scale_px},
+        {"navigation", options.navigation}}}};
+  std::vector<std::string> unregistered;
+  for (uint32_t id : result.unregistered) unregistered.push_back(names.at(id));
+  section["unregistered_images"] = unregistered;
+  if (!options.navigation.empty()) {
+    section["navigation"] = {{"applied", summary.navigation.applied},
+                             {"images", summary.navigation.images},
+                             {"scale", summary.navigation.similarity.scale},
+                             {"rms_m", summary.navigation.rms_m},
+                             {"reason", summary.navigation.reason}};
+  }
+  updateReport(survey.report(), kStage, section);
+  summary.mapper = std::move(result);
+  return summary;
+}
+
+}  // namespace auv::recon::sfm

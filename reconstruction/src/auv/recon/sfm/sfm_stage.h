@@ -1,0 +1,66 @@
+#pragma once
+// `auv recon sfm <survey>`: incremental SfM over the survey's features and verified matches
+// (paper section 3.4.2), written as sparse/ (COLMAP text model, points.ply, cameras.ply) and
+// the `sfm` section of report.json.
+
+#include <string>
+#include <vector>
+
+#include "auv/recon/common/survey.h"
+#include "auv/recon/sfm/correspondences.h"
+#include "auv/recon/sfm/incremental_mapper.h"
+#include "auv/recon/sfm/navigation.h"
+
+namespace auv::recon {
+class OptionSet;
+}
+
+namespace auv::recon::sfm {
+
+struct SfmStageOptions {
+  MapperOptions mapper;
+  std::string loss = "cauchy";  ///< bundle adjustment loss: trivial, huber, cauchy, soft_l1
+  /// The stage fails (earlier sparse/ kept) when fewer images than this fraction register.
+  double min_registered_ratio = 0.5;
+  /// TUM trajectory of the vehicle's navigation (e.g. <run>/ground_truth/navigation.tum):
+  /// when set, the model is scaled to metres and turned into its frame (navigation.h). Empty:
+  /// the model keeps SfM's arbitrary frame and scale.
+  std::string navigation;
+  int threads = 2;  ///< Ceres threads
+
+  /// Throws OptionError naming the field and value.
+  void check() const;
+  /// The mapper's options with `loss` and `threads` applied.
+  MapperOptions mapperOptions() const;
+  /// Binds the fields to flags / the `sfm:` section of a config file.
+  void bind(OptionSet& set);
+};
+
+struct SfmSummary {
+  size_t images_total = 0, images_registered = 0, points = 0, observations = 0;
+  size_t cameras = 0;
+  double mean_track_length = 0, mean_reprojection_error_px = 0;
+  NavigationAlignment navigation;
+  MapperResult mapper;  ///< (reconstruction included)
+  double seconds_reading = 0, seconds_writing = 0, seconds = 0;
+};
+
+/// The SfM input of a survey: cameras from corrected/<camera>.yaml (PINHOLE, ids 1.. in camera
+/// order), images and keypoints from features/ (ids 1.. in the index order), verified pairs
+/// from features/matches/pairs.bin. Throws StageError("sfm", ...) naming what is missing or
+/// inconsistent (a camera without calibration, a feature file of another size than its
+/// camera, a pair naming an unknown image).
+SfmInput readSfmInput(const Survey& survey);
+
+/// Runs the stage: reads, reconstructs (progress bar), optionally aligns to the navigation,
+/// writes sparse/ through a staging folder and the report section. Expected failures (no
+/// initial pair, too few registered images) throw StageError with the numbers; earlier
+/// outputs stay intact.
+SfmSummary reconstructSurvey(const Survey& survey, const SfmStageOptions& options);
+
+/// Writes a model as the stage does into `folder` (cameras.txt, images.txt, points3D.txt,
+/// points.ply, cameras.ply).
+void writeSparseModel(const scene::Reconstruction& reconstruction,
+                      const std::filesystem::path& folder);
+
+}  // namespace auv::recon::sfm
