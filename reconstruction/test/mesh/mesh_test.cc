@@ -114,6 +114,15 @@ TEST(Surface, TrimmingRemovesThePoissonClosureOfAnOpenTerrain) {
   EXPECT_LE(after.true_area, 1.08 * true_area);
   EXPECT_EQ(result.stats.triangles, result.trimmed->triangles_.size());
   EXPECT_LT(result.stats.triangles, result.stats.poisson_triangles);
+  // The winding follows the cloud's normals (up, towards the cameras): the texturing takes
+  // its face normals from it.
+  size_t up = 0, down = 0;
+  for (const auto& t : result.trimmed->triangles_) {
+    const auto& mv = result.trimmed->vertices_;
+    const Eigen::Vector3d n = (mv[t(1)] - mv[t(0)]).cross(mv[t(2)] - mv[t(0)]);
+    (n.z() > 0 ? up : down)++;
+  }
+  EXPECT_LT(down * 1000, up) << down << " of " << up + down << " triangles wound downwards";
   // Vertex colours come from the cloud (x-dependent red).
   ASSERT_TRUE(result.trimmed->HasVertexColors());
   const auto& v = result.trimmed->vertices_;

@@ -28,7 +28,7 @@ struct SurfaceOptions {
   int spacing_neighbors = 8;
   /// Density trimming: vertices whose Poisson density is below this quantile of all densities
   /// are removed (with their triangles). 0 disables it.
-  double density_quantile = 0.1;
+  double density_quantile = 0.02;
   /// Density trimming, absolute: vertices whose density is more than this many octree levels
   /// below the median density are removed too (densities are log2 sample depths). 0 disables.
   double density_drop_levels = 1.5;
