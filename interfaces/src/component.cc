@@ -5,6 +5,7 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <set>
 #include <sstream>
@@ -35,39 +36,42 @@ std::vector<ComponentInfo> ComponentRegistry::list() const {
   return out;
 }
 
-namespace {
-
-std::vector<fs::path> pluginDirectories() {
+std::vector<fs::path> componentSearchPath(const fs::path& executable) {
   std::vector<fs::path> dirs;
   auto split = [&dirs](const char* value, const char* suffix) {
     if (value == nullptr) return;
     std::stringstream in(value);
     std::string item;
     while (std::getline(in, item, ':')) {
-      if (!item.empty()) dirs.push_back(fs::path(item) / suffix);
+      if (!item.empty()) dirs.push_back(*suffix ? fs::path(item) / suffix : fs::path(item));
     }
   };
   split(std::getenv("AUV_COMPONENT_PATH"), "");
-  std::error_code ec;
-  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec) {
+  if (!executable.empty()) {
     // Merged colcon install: <prefix>/bin/auv next to <prefix>/lib/auv_components.
-    const fs::path prefix = exe.parent_path().parent_path();
+    const fs::path prefix = executable.parent_path().parent_path();
     dirs.push_back(prefix / "lib" / "auv_components");
-    // Isolated colcon install: install/auv_bringup/bin/auv, install/<package>/lib/...
-    for (const auto& sibling : fs::directory_iterator(prefix.parent_path(), ec))
-      dirs.push_back(sibling.path() / "lib" / "auv_components");
+    // Isolated colcon install: install/auv_bringup/bin/auv, install/<package>/lib/...: the
+    // other packages' prefixes. Only there: the folder beside a merged install may hold other
+    // installs (an older build, another branch) whose libraries would replace ours.
+    std::ifstream layout(prefix.parent_path() / ".colcon_install_layout");
+    std::string kind;
+    std::error_code ec;
+    if (layout >> kind && kind == "isolated") {
+      for (const auto& sibling : fs::directory_iterator(prefix.parent_path(), ec))
+        dirs.push_back(sibling.path() / "lib" / "auv_components");
+    }
   }
   split(std::getenv("CMAKE_PREFIX_PATH"), "lib/auv_components");
   return dirs;
 }
 
-}  // namespace
-
 std::vector<std::string> ComponentRegistry::loadPlugins() {
   std::vector<std::string> loaded;
   std::set<fs::path> seen;
-  for (const fs::path& dir : pluginDirectories()) {
+  std::error_code exe_error;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", exe_error);
+  for (const fs::path& dir : componentSearchPath(exe_error ? fs::path() : exe)) {
     std::error_code ec;
     if (!fs::is_directory(dir, ec)) continue;
     for (const auto& entry : fs::directory_iterator(dir, ec)) {

@@ -9,6 +9,7 @@
 //   };
 //   AUV_REGISTER_COMPONENT(Talker, "demo_talker", "publishes a counter on /chatter")
 
+#include <filesystem>
 #include <functional>
 #include <map>
 #include <memory>
@@ -40,6 +41,13 @@ struct ComponentInfo {
   std::function<std::unique_ptr<Component>()> create;
 };
 
+/// Where component libraries are looked for, in order: AUV_COMPONENT_PATH; the
+/// `lib/auv_components` folder of `executable`'s prefix (<prefix>/bin/<executable>) and, in an
+/// isolated colcon install (.colcon_install_layout says so), of the other packages' prefixes
+/// beside it; `lib/auv_components` under each CMAKE_PREFIX_PATH entry. No executable: the
+/// environment's folders only.
+std::vector<std::filesystem::path> componentSearchPath(const std::filesystem::path& executable);
+
 /// Process-wide registry filled by AUV_REGISTER_COMPONENT at library load time.
 class ComponentRegistry {
  public:
@@ -47,10 +55,9 @@ class ComponentRegistry {
   void add(ComponentInfo info);
   const ComponentInfo* find(const std::string& name) const;
   std::vector<ComponentInfo> list() const;
-  /// Loads every component library (lib*_components.so) found in AUV_COMPONENT_PATH, in
-  /// `lib/auv_components` of the running executable's prefix and of its sibling prefixes
-  /// (an isolated colcon install), and under each CMAKE_PREFIX_PATH entry; returns the
-  /// files loaded. Errors name the library.
+  /// Loads every component library (lib*_components.so) in the folders of
+  /// componentSearchPath() for the running executable; returns the files loaded. Errors name
+  /// the library.
   std::vector<std::string> loadPlugins();
 
  private:
