@@ -32,6 +32,72 @@ TEST(Sha256, KnownVectors) {
   EXPECT_FALSE(isSha256Hex("ABC"));
 }
 
+TEST(Sha256, FileAndChunkDigestsInOneRead) {
+  TempDir dir("chunks");
+  const std::string bytes = randomBytes(10000, 11);
+  writeFile(dir.path() / "f.bin", bytes);
+  const FileDigests digests = sha256OfFileAndChunks(dir.path() / "f.bin", 4096);
+  EXPECT_EQ(digests.sha256, Sha256::of(bytes.data(), bytes.size()));
+  ASSERT_EQ(digests.chunks.size(), 3u);  // 4096 + 4096 + 1808
+  for (size_t i = 0; i < 3; ++i) {
+    const size_t begin = 4096 * i, length = std::min<size_t>(4096, bytes.size() - begin);
+    EXPECT_EQ(Sha256::toHex(digests.chunks[i]), Sha256::of(bytes.data() + begin, length)) << i;
+  }
+  // A whole number of pieces, a grid larger than the read buffer, an empty file.
+  EXPECT_EQ(sha256OfFileAndChunks(dir.path() / "f.bin", 2500).chunks.size(), 4u);
+  const FileDigests one = sha256OfFileAndChunks(dir.path() / "f.bin", 4u << 20);
+  ASSERT_EQ(one.chunks.size(), 1u);
+  EXPECT_EQ(Sha256::toHex(one.chunks[0]), digests.sha256);
+  writeFile(dir.path() / "empty.bin", "");
+  const FileDigests empty = sha256OfFileAndChunks(dir.path() / "empty.bin", 4096);
+  EXPECT_EQ(empty.sha256, Sha256::of("", 0));
+  EXPECT_TRUE(empty.chunks.empty());
+  EXPECT_THROW(sha256OfFileAndChunks(dir.path() / "f.bin", 0), std::invalid_argument);
+  try {
+    sha256OfFileAndChunks(dir.path() / "missing.bin", 4096);
+    ADD_FAILURE() << "no error for a missing file";
+  } catch (const std::runtime_error& e) {
+    EXPECT_CONTAINS(e.what(), "missing.bin");
+  }
+}
+
+TEST(Catalogue, KeepsChunkDigestsOnItsGridForTheCataloguedState) {
+  TempDir dir("grid");
+  const std::string path = writeRecording(dir.path(), "left", 1, 10000, 5, 12);
+  const std::string bytes = testing::readFile(dir.path() / path);
+  Catalogue catalogue({dir.path(), {".mp4"}, 4096});
+  catalogue.scan();
+  const auto served = catalogue.servedFile(path);
+  ASSERT_TRUE(served);
+  const FileStamp stamp = served->stamp;
+  const auto digest = catalogue.chunkDigest(path, stamp, 4096, 4096);
+  ASSERT_TRUE(digest);
+  EXPECT_EQ(*digest, Sha256::of(bytes.data() + 4096, 4096));
+  const auto last = catalogue.chunkDigest(path, stamp, 8192, 1808);  // the short last piece
+  ASSERT_TRUE(last);
+  EXPECT_EQ(*last, Sha256::of(bytes.data() + 8192, 1808));
+  // Anything else is hashed by the caller: off the grid, another length, past the end,
+  // another state of the file, the sidecar, an unknown file.
+  EXPECT_FALSE(catalogue.chunkDigest(path, stamp, 100, 4096));
+  EXPECT_FALSE(catalogue.chunkDigest(path, stamp, 0, 2048));
+  EXPECT_FALSE(catalogue.chunkDigest(path, stamp, 8192, 4096));
+  EXPECT_FALSE(catalogue.chunkDigest(path, stamp, 12288, 0));
+  FileStamp other = stamp;
+  other.mtime_ns += 1;
+  EXPECT_FALSE(catalogue.chunkDigest(path, other, 0, 4096));
+  EXPECT_FALSE(catalogue.chunkDigest(path + ".frames.csv", stamp, 0, 4096));
+  EXPECT_FALSE(catalogue.chunkDigest("left/none.mp4", stamp, 0, 4096));
+  // Not served once the chunk server reported a change; kept again after a clean rescan.
+  catalogue.reportChanged(path, "changed since it was catalogued");
+  EXPECT_FALSE(catalogue.chunkDigest(path, stamp, 0, 4096));
+  catalogue.scan();
+  EXPECT_TRUE(catalogue.chunkDigest(path, catalogue.servedFile(path)->stamp, 0, 4096));
+  // No grid: no digests kept.
+  Catalogue plain({dir.path(), {".mp4"}});
+  plain.scan();
+  EXPECT_FALSE(plain.chunkDigest(path, plain.servedFile(path)->stamp, 0, 4096));
+}
+
 TEST(Catalogue, MissingRootIsAnEmptyCatalogue) {
   TempDir dir("missing");
   Catalogue catalogue({dir.path() / "not_yet", {".mp4"}});

@@ -257,8 +257,17 @@ Recording Catalogue::refresh(const Found& found, const std::optional<Recording>&
   }
   if (!closed) return r;  // being written (a closed video waits for its sidecar too)
   std::string sha, sidecar_sha;
+  std::shared_ptr<const std::vector<Sha256::Digest>> chunk_digests;
   try {
-    sha = sha256OfFile(options_.root / found.disk_path);
+    if (options_.chunk_digest_bytes > 0) {
+      FileDigests digests =
+          sha256OfFileAndChunks(options_.root / found.disk_path, options_.chunk_digest_bytes);
+      sha = std::move(digests.sha256);
+      chunk_digests =
+          std::make_shared<const std::vector<Sha256::Digest>>(std::move(digests.chunks));
+    } else {
+      sha = sha256OfFile(options_.root / found.disk_path);
+    }
     if (has_sidecar) sidecar_sha = sha256OfFile(options_.root / found.sidecar_disk_path);
     report.hashed += has_sidecar ? 2 : 1;
   } catch (const std::exception& e) {
@@ -299,6 +308,7 @@ Recording Catalogue::refresh(const Found& found, const std::optional<Recording>&
   }
   r.sha256 = sha;
   r.sidecar_sha256 = sidecar_sha;
+  r.chunk_digests = std::move(chunk_digests);
   r.complete = true;
   if (r.catalogued_sha256.empty()) {
     r.catalogued_sha256 = sha;
@@ -419,6 +429,22 @@ std::optional<ServedFile> Catalogue::servedFile(const std::string& file_path) co
   return std::nullopt;
 }
 
+std::optional<std::string> Catalogue::chunkDigest(const std::string& file_path,
+                                                  const FileStamp& stamp, uint64_t offset,
+                                                  uint64_t length) const {
+  const uint64_t grid = options_.chunk_digest_bytes;
+  if (grid == 0 || offset % grid != 0) return std::nullopt;
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto it = recordings_.find(file_path);
+  if (it == recordings_.end()) return std::nullopt;
+  const Recording& r = it->second;
+  if (!r.complete || r.stamp != stamp || !r.chunk_digests) return std::nullopt;
+  const uint64_t index = offset / grid;
+  if (index >= r.chunk_digests->size() || offset >= r.stamp.size) return std::nullopt;
+  if (length != std::min(grid, r.stamp.size - offset)) return std::nullopt;
+  return Sha256::toHex((*r.chunk_digests)[index]);
+}
+
 void Catalogue::reportChanged(const std::string& file_path, const std::string& why) {
   std::lock_guard<std::mutex> lock(mutex_);
   auto it = recordings_.find(file_path);
@@ -431,6 +457,7 @@ void Catalogue::reportChanged(const std::string& file_path, const std::string& w
   r.changed = true;
   r.sha256.clear();
   r.sidecar_sha256.clear();
+  r.chunk_digests.reset();
   r.problem = why;
   r.stamp = FileStamp{};  // the next scan hashes it again and decides
   ++generation_;

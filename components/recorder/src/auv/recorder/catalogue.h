@@ -15,10 +15,13 @@
 #include <cstdint>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
+
+#include "auv/recorder/sha256.h"
 
 namespace auv::recorder {
 
@@ -38,6 +41,9 @@ std::optional<FileStamp> stampOf(const std::filesystem::path& path);
 struct CatalogueOptions {
   std::filesystem::path root;                      ///< recordings root
   std::vector<std::string> extensions = {".mp4"};  ///< recording file endings, with the dot
+  /// B, grid of the chunk digests kept for each complete recording (computed in the same read
+  /// as its SHA-256, so serving a chunk on that grid needs no hashing); 0 = none.
+  uint32_t chunk_digest_bytes = 0;
   /// Throws std::invalid_argument naming the field (empty root, extension without dot, ...).
   void check() const;
 };
@@ -68,6 +74,9 @@ struct Recording {
   std::string catalogued_sidecar_sha256;  ///< sidecar digest then (changes compare to both)
   uint64_t catalogued_size = 0;           ///< size then
   bool changed = false;                   ///< changed after being catalogued complete
+  /// SHA-256 of each CatalogueOptions::chunk_digest_bytes piece of the file in `stamp`'s
+  /// state (shared: entries are copied by list() and scan()); null when not kept.
+  std::shared_ptr<const std::vector<Sha256::Digest>> chunk_digests;
 };
 
 /// A closed file the chunk server may read, and the state it was catalogued in.
@@ -104,6 +113,12 @@ class Catalogue {
 
   /// The complete recording or sidecar called `file_path` (final name); nullopt otherwise.
   std::optional<ServedFile> servedFile(const std::string& file_path) const;
+  /// The SHA-256 (hex) of the bytes [offset, offset + length) of the complete recording
+  /// `file_path` in the state `stamp`, if that range is one piece of the chunk-digest grid
+  /// (CatalogueOptions::chunk_digest_bytes; the last piece of a file may be shorter); nullopt
+  /// otherwise (other ranges, sidecars, another state of the file, digests not kept).
+  std::optional<std::string> chunkDigest(const std::string& file_path, const FileStamp& stamp,
+                                         uint64_t offset, uint64_t length) const;
   /// The chunk server found `file_path` changed on disk: it stops being complete until a scan
   /// shows it unchanged again.
   void reportChanged(const std::string& file_path, const std::string& why);

@@ -86,7 +86,10 @@ void RecorderComponent::configure(interfaces::Node& node) {
       {"file endings of recordings (with the dot)", "", {}, {}, {}, true});
   o.check();
   keepChunkBuffersInHeap();  // every chunk served allocates multi-MiB buffers
-  catalogue_ = std::make_unique<Catalogue>(CatalogueOptions{o.root, o.extensions});
+  // Chunk digests on the max_chunk_bytes grid, the grid a pull asks for by default: serving
+  // a chunk then costs no hashing (reconstruction/bench/README.md).
+  catalogue_ =
+      std::make_unique<Catalogue>(CatalogueOptions{o.root, o.extensions, o.max_chunk_bytes});
   reader_ = std::make_unique<ChunkReader>(o.root, o.max_chunk_bytes);
   std::error_code error;
   if (!std::filesystem::is_directory(o.root, error)) {
@@ -202,7 +205,11 @@ void RecorderComponent::onFetch(const msg::FileChunkRequest& request, msg::FileC
     }
     Chunk chunk =
         reader_->read(request.file_path(), request.offset(), request.length(), served->stamp);
-    reply.data_sha256(Sha256::of(chunk.data.data(), chunk.data.size()));
+    // Kept since cataloguing for chunks on the catalogue's grid (the bytes were read in the
+    // state `served->stamp`, checked by read()); hashed here for any other range.
+    const std::optional<std::string> kept = catalogue_->chunkDigest(
+        request.file_path(), served->stamp, request.offset(), chunk.data.size());
+    reply.data_sha256(kept ? *kept : Sha256::of(chunk.data.data(), chunk.data.size()));
     reply.total_size(chunk.total_size);
     reply.eof(request.offset() + chunk.data.size() == chunk.total_size);
     if (chunk_observer_) chunk_observer_(request.file_path(), request.offset(), chunk.data.size());
