@@ -112,7 +112,8 @@ TEST_F(DenseStage, FusedCloudLiesOnTheTrueSurface) {
   // Contributing images: >= 1 + min_consistent per point, ids of the model.
   const auto images = readFusedViews(survey.dense() / "fused_views.bin");
   ASSERT_EQ(images.size(), cloud.points_.size());
-  for (const auto& ids : images) {
+  for (size_t i = 0; i < images.size(); ++i) {
+    const std::vector<uint32_t> ids = images.of(i);
     ASSERT_GE(ids.size(), 1u + options_.fusion.min_consistent);
     for (const uint32_t id : ids) ASSERT_TRUE(id >= 1 && id <= 9) << id;
   }

@@ -122,7 +122,8 @@ nlohmann::json DenseOptions::toJson() const {
           {"fusion",
            {{"min_consistent", fusion.min_consistent},
             {"depth_tolerance", fusion.depth_tolerance},
-            {"reprojection_px", fusion.reprojection_px}}}};
+            {"reprojection_px", fusion.reprojection_px},
+            {"pixel_step", fusion.pixel_step}}}};
 }
 
 nlohmann::json DenseSummary::toJson() const {
@@ -278,12 +279,17 @@ DenseSummary densify(const scene::Reconstruction& model, const fs::path& image_f
   }
   {
     SubStage figures(summary.writing);
+    writeFusedViews(output.path() / "fused_views.bin", cloud.images);
+    cloud.images = PointViews();
     scene::PlyData ply;
-    ply.positions = std::move(cloud.positions);
-    ply.normals = std::move(cloud.normals);
+    ply.positions.reserve(cloud.size());
+    for (const Eigen::Vector3f& p : cloud.positions) ply.positions.push_back(p.cast<double>());
+    cloud.positions = {};
+    ply.normals.reserve(ply.positions.size());
+    for (const Eigen::Vector3f& n : cloud.normals) ply.normals.push_back(n.cast<double>());
+    cloud.normals = {};
     ply.colors = std::move(cloud.colors);
     scene::writePly(output.path() / "fused.ply", ply);
-    writeFusedViews(output.path() / "fused_views.bin", cloud.images);
     if (!options.keep_depth_maps) fs::remove_all(output.path() / "depth_maps");
     output.commit();
   }

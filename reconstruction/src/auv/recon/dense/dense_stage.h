@@ -22,7 +22,7 @@
 namespace auv::recon::dense {
 
 struct DenseOptions {
-  int max_image_size = 1600;      ///< px: longer image side depth maps are computed at (0: full)
+  int max_image_size = 1024;      ///< px: longer image side depth maps are computed at (0: full)
   int min_registered_images = 2;  ///< fewer registered images in the model: StageError
   int min_points = 1000;          ///< a fused cloud with fewer points: StageError
   int image_cache = 12;           ///< images (and depth maps) kept in memory between masters

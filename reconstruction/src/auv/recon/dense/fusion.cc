@@ -17,6 +17,7 @@ void FusionOptions::check() const {
                          "must be in (0, 1)");
   AUV_RECON_CHECK_OPTION(reprojection_px > 0, reprojection_px, "must be > 0 px");
   AUV_RECON_CHECK_OPTION(normal_step >= 1, normal_step, "must be >= 1 px");
+  AUV_RECON_CHECK_OPTION(pixel_step >= 1, pixel_step, "must be >= 1 px");
 }
 
 namespace {
@@ -91,8 +92,9 @@ FusionStats Fuser::add(const FusionView& master, const std::vector<const FusionV
   for (const FusionView* neighbour : neighbours) neighbour_used.push_back(&used(*neighbour));
   const int cols = master.depth.cols;
   std::vector<std::pair<int, int>> hits;
-  for (int y = 0; y < master.depth.rows; ++y) {
-    for (int x = 0; x < cols; ++x) {
+  const int step = options_.pixel_step;
+  for (int y = 0; y < master.depth.rows; y += step) {
+    for (int x = 0; x < cols; x += step) {
       const double depth = master.depth.at<float>(y, x);
       if (depth <= 0 || master_used[static_cast<size_t>(y) * cols + x]) continue;
       ++stats.depths;
@@ -136,31 +138,39 @@ FusionStats Fuser::add(const FusionView& master, const std::vector<const FusionV
       color /= n_views;
       std::sort(images.begin(), images.end());
       images.erase(std::unique(images.begin(), images.end()), images.end());
-      cloud_.positions.push_back(position);
-      cloud_.normals.push_back(normal);
+      cloud_.positions.push_back(position.cast<float>());
+      cloud_.normals.push_back(normal.cast<float>());
       cloud_.colors.push_back(color.array().round().cast<uint8_t>().matrix());
-      cloud_.images.push_back(std::move(images));
+      cloud_.images.add(images);
       ++stats.points;
     }
   }
   return stats;
 }
 
-void writeFusedViews(const std::filesystem::path& file,
-                     const std::vector<std::vector<uint32_t>>& images) {
-  std::ostringstream out;
-  const auto put = [&](auto value) {
-    out.write(reinterpret_cast<const char*>(&value), sizeof(value));
-  };
-  put(static_cast<uint64_t>(images.size()));
-  for (const auto& ids : images) {
-    put(static_cast<uint32_t>(ids.size()));
-    for (const uint32_t id : ids) put(id);
+void writeFusedViews(const std::filesystem::path& file, const PointViews& images) {
+  const std::filesystem::path temporary = temporaryPathFor(file);
+  {
+    std::ofstream out(temporary, std::ios::binary);
+    const auto put = [&](auto value) {
+      out.write(reinterpret_cast<const char*>(&value), sizeof(value));
+    };
+    put(static_cast<uint64_t>(images.size()));
+    for (size_t i = 0; i < images.size(); ++i) {
+      put(static_cast<uint32_t>(images.offsets[i + 1] - images.offsets[i]));
+      out.write(reinterpret_cast<const char*>(images.ids.data() + images.offsets[i]),
+                static_cast<std::streamsize>((images.offsets[i + 1] - images.offsets[i]) *
+                                             sizeof(uint32_t)));
+    }
+    if (!out.flush()) {
+      std::filesystem::remove(temporary);
+      throw std::runtime_error("dense: cannot write " + file.string());
+    }
   }
-  writeFileAtomically(file, out.str());
+  std::filesystem::rename(temporary, file);
 }
 
-std::vector<std::vector<uint32_t>> readFusedViews(const std::filesystem::path& file) {
+PointViews readFusedViews(const std::filesystem::path& file) {
   std::ifstream in(file, std::ios::binary);
   if (!in) throw std::runtime_error("dense: cannot open " + file.string());
   const auto get = [&](auto& value) {
@@ -175,13 +185,18 @@ std::vector<std::vector<uint32_t>> readFusedViews(const std::filesystem::path& f
     throw std::runtime_error("dense: " + file.string() + ": malformed (claims " +
                              std::to_string(count) + " points)");
   }
-  std::vector<std::vector<uint32_t>> images(count);
-  for (auto& ids : images) {
+  PointViews images;
+  images.offsets.reserve(count + 1);
+  for (uint64_t i = 0; i < count; ++i) {
     uint32_t n = 0;
     get(n);
     if (n > 100000) throw std::runtime_error("dense: " + file.string() + ": malformed entry");
-    ids.resize(n);
-    for (uint32_t& id : ids) get(id);
+    for (uint32_t j = 0; j < n; ++j) {
+      uint32_t id = 0;
+      get(id);
+      images.ids.push_back(id);
+    }
+    images.offsets.push_back(images.ids.size());
   }
   return images;
 }

@@ -9,7 +9,8 @@
 // projects back within a pixel tolerance of the master pixel (forward-backward check, as in
 // COLMAP's fusion). Depths with fewer than min_consistent agreeing neighbours are dropped;
 // the others become one point: the mean of the master's and the agreeing neighbours' points,
-// normals and colours. Neighbour pixels used by a point are not used again (no duplicates).
+// normals and colours. Neighbour pixels used by a point are not used again (no duplicates);
+// new points start on a grid of pixel_step px of the master (the cloud's density).
 
 #include <cstdint>
 #include <filesystem>
@@ -28,6 +29,7 @@ struct FusionOptions {
   double depth_tolerance = 0.01;  ///< relative depth difference allowed
   double reprojection_px = 2.0;   ///< forward-backward reprojection error allowed, px
   int normal_step = 2;            ///< px between the depths normals are computed from
+  int pixel_step = 2;  ///< new points start only at master pixels on this grid (density 1/step^2)
 
   void check() const;
 };
@@ -51,12 +53,27 @@ cv::Mat consistentNeighbours(const FusionView& master,
 cv::Mat filterDepthMap(const FusionView& master, const std::vector<const FusionView*>& neighbours,
                        const FusionOptions& options);
 
-/// The fused cloud: one entry per point in every vector.
+/// Image ids per point, packed: point i has ids[offsets[i] .. offsets[i + 1]).
+struct PointViews {
+  std::vector<uint64_t> offsets{0};
+  std::vector<uint32_t> ids;
+
+  size_t size() const { return offsets.size() - 1; }
+  std::vector<uint32_t> of(size_t point) const {
+    return {ids.begin() + offsets[point], ids.begin() + offsets[point + 1]};
+  }
+  void add(const std::vector<uint32_t>& point_ids) {
+    ids.insert(ids.end(), point_ids.begin(), point_ids.end());
+    offsets.push_back(ids.size());
+  }
+};
+
+/// The fused cloud (single precision: hundreds of images give millions of points).
 struct FusedCloud {
-  std::vector<Eigen::Vector3d> positions;
-  std::vector<Eigen::Vector3d> normals;              ///< unit, towards the cameras
+  std::vector<Eigen::Vector3f> positions;
+  std::vector<Eigen::Vector3f> normals;              ///< unit, towards the cameras
   std::vector<Eigen::Matrix<uint8_t, 3, 1>> colors;  ///< RGB
-  std::vector<std::vector<uint32_t>> images;         ///< contributing image ids, sorted
+  PointViews images;                                 ///< contributing image ids, sorted
 
   size_t size() const { return positions.size(); }
 };
@@ -87,9 +104,8 @@ class Fuser {
 /// The contributing images of each point: `fused_views.bin` beside fused.ply, little-endian:
 /// uint64 number of points, then per point (in PLY vertex order) uint32 n and n uint32 image
 /// ids of the sparse model (images.txt; their camera ids give the camera combination).
-void writeFusedViews(const std::filesystem::path& file,
-                     const std::vector<std::vector<uint32_t>>& images);
+void writeFusedViews(const std::filesystem::path& file, const PointViews& images);
 /// Throws std::runtime_error naming the file when it is missing, truncated or malformed.
-std::vector<std::vector<uint32_t>> readFusedViews(const std::filesystem::path& file);
+PointViews readFusedViews(const std::filesystem::path& file);
 
 }  // namespace auv::recon::dense

@@ -35,7 +35,7 @@ void MatcherOptions::check() const {
   AUV_RECON_CHECK_OPTION(min_texture_grey >= 0, min_texture_grey, "must be >= 0");
   AUV_RECON_CHECK_OPTION(speckle_size >= 0, speckle_size, "must be >= 0 px");
   AUV_RECON_CHECK_OPTION(speckle_labels >= 1, speckle_labels, "must be >= 1");
-  AUV_RECON_CHECK_OPTION(tile_size >= 8 && tile_size <= 1024, tile_size, "must be in [8, 1024] px");
+  AUV_RECON_CHECK_OPTION(strip_rows >= 1 && strip_rows <= 4096, strip_rows, "must be in [1, 4096]");
 }
 
 namespace {
@@ -121,94 +121,99 @@ struct LevelInput {
   LabelGrid grid;
 };
 
-/// Fills the costs of every pixel's interval: NCC of the master window with each neighbour
-/// warped by the plane homography (a tile at a time, box filters for the window sums), then
-/// 1 - mean of the best k neighbours.
+/// Fills the costs of every pixel's interval. Hypothesis i of pixel q is the plane of label
+/// low(q) + i: for each i and neighbour, the neighbour is resampled (cv::remap) at every
+/// master pixel's hypothesis i, and the NCC of each master window with it comes from box
+/// filters. Where low() is constant this is the fronto-parallel plane sweep; on a surface the
+/// coarser level found, the window follows that surface (a staircase of one label at most)
+/// instead of a fronto-parallel plane. Rows are processed in strips (parallel, bounded memory).
 void computeCosts(const LevelInput& in, const MatcherOptions& options, LabelVolume& volume) {
   const int r = options.window_radius;
   const int w = volume.width, h = volume.height;
-  const int tile = options.tile_size;
-  const int tiles_x = (w + tile - 1) / tile, tiles_y = (h + tile - 1) / tile;
+  const int strip = options.strip_rows;
+  const int strips = (h + strip - 1) / strip;
   const size_t n_neighbours = in.neighbours.size();
   const float min_std = static_cast<float>(options.min_texture_grey);
   const cv::Size window(2 * r + 1, 2 * r + 1);
   const int best_k = options.best_k;
+  const int last_label = in.grid.labels - 1;
+  int offsets = 0;
+  for (const uint16_t count : volume.count) offsets = std::max<int>(offsets, count);
 
 #pragma omp parallel for schedule(dynamic)
-  for (int t = 0; t < tiles_x * tiles_y; ++t) {
-    const int x0 = (t % tiles_x) * tile, y0 = (t / tiles_x) * tile;
-    const int tw = std::min(tile, w - x0), th = std::min(tile, h - y0);
-    int first = std::numeric_limits<int>::max(), last = -1;
-    for (int y = y0; y < y0 + th; ++y) {
-      for (int x = x0; x < x0 + tw; ++x) {
-        const size_t p = static_cast<size_t>(y) * w + x;
-        if (volume.count[p] == 0) continue;
-        first = std::min(first, volume.low[p]);
-        last = std::max(last, volume.low[p] + volume.count[p] - 1);
-      }
-    }
-    if (last < 0) continue;
-    const cv::Size extended(tw + 2 * r, th + 2 * r);
-    const cv::Mat master_tile = in.stats.padded(cv::Rect(x0, y0, extended.width, extended.height));
+  for (int s = 0; s < strips; ++s) {
+    const int y0 = s * strip, sh = std::min(strip, h - y0);
+    // The strip with r px of border on every side (replicated at the image's edges).
+    const cv::Size extended(w + 2 * r, sh + 2 * r);
+    const cv::Mat master_strip = in.stats.padded(cv::Rect(0, y0, extended.width, extended.height));
+    cv::Mat map_x(extended, CV_32F), map_y(extended, CV_32F);
     cv::Mat warped, product, box_w, box_ww, box_mw;
-    std::vector<float> ncc(n_neighbours * tw * th);
+    std::vector<float> ncc(n_neighbours * static_cast<size_t>(w) * sh);
     std::vector<float> scores(n_neighbours);
-    Eigen::Matrix3d shift = Eigen::Matrix3d::Identity();
-    shift(0, 2) = x0 - r;
-    shift(1, 2) = y0 - r;
-    for (int label = first; label <= last; ++label) {
-      const double inv = in.grid.inverseDepth(label);
+    for (int i = 0; i < offsets; ++i) {
       for (size_t k = 0; k < n_neighbours; ++k) {
         const View& neighbour = in.neighbours[k];
-        const Eigen::Matrix3d homography = in.sweeps[k].homography(inv);
-        const Eigen::Matrix3d tile_homography = homography * shift;
-        cv::Mat m(3, 3, CV_64F);
-        for (int i = 0; i < 3; ++i) {
-          for (int j = 0; j < 3; ++j) m.at<double>(i, j) = tile_homography(i, j);
+        const PlaneSweep& sweep = in.sweeps[k];
+        const float max_x = static_cast<float>(neighbour.width - 1);
+        const float max_y = static_cast<float>(neighbour.height - 1);
+        for (int ye = 0; ye < extended.height; ++ye) {
+          const int y = std::clamp(y0 + ye - r, 0, h - 1);
+          float* mx = map_x.ptr<float>(ye);
+          float* my = map_y.ptr<float>(ye);
+          for (int xe = 0; xe < extended.width; ++xe) {
+            const int x = std::clamp(xe - r, 0, w - 1);
+            const size_t q = static_cast<size_t>(y) * w + x;
+            const int label = std::min(volume.low[q] + i, last_label);
+            const Eigen::Vector3d p =
+                sweep.A * Eigen::Vector3d(x, y, 1.0) + sweep.b * in.grid.inverseDepth(label);
+            if (p.z() <= 0) {
+              mx[xe] = my[xe] = -1e6f;  // behind the neighbour: border value, marked below
+              continue;
+            }
+            mx[xe] = static_cast<float>(p.x() / p.z());
+            my[xe] = static_cast<float>(p.y() / p.z());
+          }
         }
-        cv::warpPerspective(neighbour.grey, warped, m, extended,
-                            cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_REPLICATE);
+        cv::remap(neighbour.grey, warped, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
         cv::boxFilter(warped, box_w, CV_32F, window);
         cv::multiply(warped, warped, product);
         cv::boxFilter(product, box_ww, CV_32F, window);
-        cv::multiply(master_tile, warped, product);
+        cv::multiply(master_strip, warped, product);
         cv::boxFilter(product, box_mw, CV_32F, window);
-        float* out = ncc.data() + k * tw * th;
-        const double max_x = neighbour.width - 1, max_y = neighbour.height - 1;
-        for (int v = 0; v < th; ++v) {
-          const float* mean_m = in.stats.mean.ptr<float>(y0 + v) + x0;
-          const float* std_m = in.stats.stddev.ptr<float>(y0 + v) + x0;
+        float* out = ncc.data() + k * static_cast<size_t>(w) * sh;
+        for (int v = 0; v < sh; ++v) {
+          const float* mean_m = in.stats.mean.ptr<float>(y0 + v);
+          const float* std_m = in.stats.stddev.ptr<float>(y0 + v);
+          const float* mx = map_x.ptr<float>(v + r) + r;
+          const float* my = map_y.ptr<float>(v + r) + r;
           const float* bw = box_w.ptr<float>(v + r) + r;
           const float* bww = box_ww.ptr<float>(v + r) + r;
           const float* bmw = box_mw.ptr<float>(v + r) + r;
-          for (int u = 0; u < tw; ++u) {
-            const Eigen::Vector3d q = homography * Eigen::Vector3d(x0 + u, y0 + v, 1.0);
+          for (int u = 0; u < w; ++u) {
             float value = std::numeric_limits<float>::quiet_NaN();
-            if (q.z() > 0) {
-              const double qx = q.x() / q.z(), qy = q.y() / q.z();
-              const float var_w = bww[u] - bw[u] * bw[u];
-              if (qx >= 0 && qy >= 0 && qx <= max_x && qy <= max_y && var_w > min_std * min_std &&
-                  std_m[u] > 0) {
-                value = (bmw[u] - mean_m[u] * bw[u]) / (std_m[u] * std::sqrt(var_w));
-              }
+            const float var_w = bww[u] - bw[u] * bw[u];
+            if (mx[u] >= 0 && my[u] >= 0 && mx[u] <= max_x && my[u] <= max_y &&
+                var_w > min_std * min_std && std_m[u] > 0) {
+              value = (bmw[u] - mean_m[u] * bw[u]) / (std_m[u] * std::sqrt(var_w));
             }
-            out[v * tw + u] = value;
+            out[static_cast<size_t>(v) * w + u] = value;
           }
         }
       }
-      for (int v = 0; v < th; ++v) {
-        for (int u = 0; u < tw; ++u) {
-          const size_t p = static_cast<size_t>(y0 + v) * w + x0 + u;
-          const int index = label - volume.low[p];
-          if (index < 0 || index >= volume.count[p]) continue;
-          uint16_t& cost = volume.costs(p)[index];
-          if (in.stats.stddev.at<float>(y0 + v, x0 + u) < min_std) {
+      for (int v = 0; v < sh; ++v) {
+        const float* std_m = in.stats.stddev.ptr<float>(y0 + v);
+        for (int u = 0; u < w; ++u) {
+          const size_t p = static_cast<size_t>(y0 + v) * w + u;
+          if (i >= volume.count[p]) continue;
+          uint16_t& cost = volume.costs(p)[i];
+          if (std_m[u] < min_std) {
             cost = kCostScale;  // no texture: no evidence either way, SGM fills it in
             continue;
           }
           size_t valid = 0;
           for (size_t k = 0; k < n_neighbours; ++k) {
-            const float value = ncc[k * tw * th + v * tw + u];
+            const float value =
+                ncc[k * static_cast<size_t>(w) * sh + static_cast<size_t>(v) * w + u];
             if (!std::isnan(value)) scores[valid++] = value;
           }
           if (valid == 0) {
@@ -219,7 +224,7 @@ void computeCosts(const LevelInput& in, const MatcherOptions& options, LabelVolu
           std::partial_sort(scores.begin(), scores.begin() + used, scores.begin() + valid,
                             std::greater<float>());
           float mean = 0;
-          for (size_t i = 0; i < used; ++i) mean += scores[i];
+          for (size_t j = 0; j < used; ++j) mean += scores[j];
           mean /= used;
           cost = static_cast<uint16_t>(
               std::clamp(static_cast<int>(std::lround((1.0f - mean) * kCostScale)), 0, kMaxCost));
@@ -281,9 +286,12 @@ LevelResult winnerTakesAll(const LevelInput& in, const LabelVolume& volume,
   return result;
 }
 
-/// The intervals of a finer level from the coarser level's inverse depths: labels between the
-/// minimum and the maximum of the 3x3 coarse neighbourhood, widened by the margin, at most
-/// `stride` labels (centred on the pixel's own estimate when the neighbourhood spans more).
+/// The intervals of a finer level from the coarser level's inverse depths: `stride` labels
+/// centred on the coarse estimate (bilinearly upsampled, so that neighbouring intervals
+/// follow the surface smoothly) and shifted, when it fits, to cover every label between the
+/// minimum and the maximum of the 3x3 coarse neighbourhood widened by the margin; where the
+/// neighbourhood spans more (a depth discontinuity) the interval stays on the pixel's own
+/// estimate.
 void rangesFromCoarse(const LevelResult& coarse, const LabelGrid& grid,
                       const MatcherOptions& options, LabelVolume& volume) {
   constexpr float kNone = 1e30f;
@@ -292,35 +300,62 @@ void rangesFromCoarse(const LevelResult& coarse, const LabelGrid& grid,
   cv::Mat high_source(coarse.inverse_depth.size(), CV_32F, cv::Scalar(-kNone));
   coarse.inverse_depth.copyTo(low_source, valid);
   coarse.inverse_depth.copyTo(high_source, valid);
-  cv::Mat low, high, own;
+  cv::Mat low, high;
   const cv::Mat kernel = cv::getStructuringElement(cv::MORPH_RECT, {3, 3});
   cv::erode(low_source, low, kernel, {-1, -1}, 1, cv::BORDER_REPLICATE);
   cv::dilate(high_source, high, kernel, {-1, -1}, 1, cv::BORDER_REPLICATE);
+  // Own estimate, holes filled with the middle of their neighbourhood.
+  cv::Mat filled = coarse.inverse_depth.clone();
+  for (int y = 0; y < filled.rows; ++y) {
+    for (int x = 0; x < filled.cols; ++x) {
+      float& f = filled.at<float>(y, x);
+      if (f <= 0 && low.at<float>(y, x) < kNone / 2) {
+        f = 0.5f * (low.at<float>(y, x) + high.at<float>(y, x));
+      }
+    }
+  }
+  cv::Mat filled_mask;
+  cv::Mat(filled > 0).convertTo(filled_mask, CV_32F, 1.0 / 255);
   const cv::Size size(volume.width, volume.height);
+  cv::Mat centre_linear, centre_nearest, weight;
+  cv::resize(filled, centre_linear, size, 0, 0, cv::INTER_LINEAR);
+  cv::resize(filled_mask, weight, size, 0, 0, cv::INTER_LINEAR);
+  cv::resize(filled, centre_nearest, size, 0, 0, cv::INTER_NEAREST);
   cv::resize(low, low, size, 0, 0, cv::INTER_NEAREST);
   cv::resize(high, high, size, 0, 0, cv::INTER_NEAREST);
-  cv::resize(coarse.inverse_depth, own, size, 0, 0, cv::INTER_NEAREST);
-  const int stride = volume.stride, last_label = grid.labels - 1;
+  const int stride = volume.stride, labels = grid.labels;
   for (int y = 0; y < volume.height; ++y) {
     for (int x = 0; x < volume.width; ++x) {
       const size_t p = static_cast<size_t>(y) * volume.width + x;
       const float lo_inv = low.at<float>(y, x), hi_inv = high.at<float>(y, x);
       if (lo_inv >= kNone / 2) continue;  // nothing found around: not matched
-      int first = static_cast<int>(std::floor(grid.label(lo_inv))) - options.range_margin;
-      int last = static_cast<int>(std::ceil(grid.label(hi_inv))) + options.range_margin;
-      first = std::max(first, 0);
-      last = std::min(last, last_label);
-      if (last - first + 1 > stride) {
-        const float own_inv = own.at<float>(y, x);
-        const double centre =
-            own_inv > 0 ? grid.label(own_inv) : 0.5 * (grid.label(lo_inv) + grid.label(hi_inv));
-        first = static_cast<int>(std::lround(centre)) - stride / 2;
-        first = std::clamp(first, 0, std::max(0, last_label + 1 - stride));
-        last = std::min(first + stride - 1, last_label);
+      const float centre_inv = weight.at<float>(y, x) > 0.999f ? centre_linear.at<float>(y, x)
+                                                               : centre_nearest.at<float>(y, x);
+      if (centre_inv <= 0) continue;
+      int first = static_cast<int>(std::lround(grid.label(centre_inv))) - stride / 2;
+      const int need_first =
+          static_cast<int>(std::floor(grid.label(lo_inv))) - options.range_margin;
+      const int need_last = static_cast<int>(std::ceil(grid.label(hi_inv))) + options.range_margin;
+      if (need_last - need_first + 1 <= stride) {
+        first = std::clamp(first, need_last - stride + 1, need_first);
       }
-      if (last < first) continue;
+      first = std::clamp(first, 0, std::max(0, labels - stride));
       volume.low[p] = first;
-      volume.count[p] = static_cast<uint16_t>(last - first + 1);
+      volume.count[p] = static_cast<uint16_t>(std::min(stride, labels - first));
+    }
+  }
+  // Unmatched pixels still lend their window samples to their neighbours' NCC: give them the
+  // range start of the nearest matched pixel on their row (or the row above).
+  for (int y = 0; y < volume.height; ++y) {
+    int32_t last_low = -1;
+    for (int x = 0; x < volume.width; ++x) {
+      const size_t p = static_cast<size_t>(y) * volume.width + x;
+      if (volume.count[p] > 0)
+        last_low = volume.low[p];
+      else if (last_low >= 0)
+        volume.low[p] = last_low;
+      else if (y > 0)
+        volume.low[p] = volume.low[p - volume.width];
     }
   }
 }

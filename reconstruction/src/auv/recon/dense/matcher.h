@@ -2,11 +2,12 @@
 // Step 2 of dense matching (PAPER.md 3.5): the depth map of a master image by semi-global
 // multi-image matching in the manner of MicMac (Pierrot-Deseilligny & Paparoditis 2006, the
 // paper's refs. [70,71]), coarse to fine over an image pyramid:
-//  * hypotheses: fronto-parallel planes of the master, sampled uniformly in inverse depth
-//    (one label ~ label_px of epipolar displacement in the widest-baseline neighbour) between
-//    the depth range the sparse points give;
+//  * hypotheses: depths sampled uniformly in inverse depth (one label ~ label_px of epipolar
+//    displacement in the widest-baseline neighbour) over the depth range the sparse points
+//    give;
 //  * cost: normalised cross-correlation of a (2r+1)^2 window of the master with each
-//    neighbour warped by the plane's homography, aggregated over the neighbours as
+//    neighbour resampled at the hypothesis (fronto-parallel at the coarsest level, following
+//    the coarser level's surface at the finer ones), aggregated over the neighbours as
 //    1 - mean of the best k (occlusion-robust);
 //  * regularisation: SGM path aggregation (sgm.h, Hirschmueller's P1/P2);
 //  * coarse to fine: each level searches, per pixel, only the labels around what the coarser
@@ -42,7 +43,7 @@ struct MatcherOptions {
   double min_texture_grey = 1.0;  ///< std of the master window, grey levels: less is not matched
   int speckle_size = 50;          ///< px at the finest level: smaller isolated blobs are removed
   int speckle_labels = 2;         ///< labels: depth step that separates speckle blobs
-  int tile_size = 64;             ///< px: cost tiles (parallel, each with its own label range)
+  int strip_rows = 32;            ///< rows per cost strip (strips run in parallel)
 
   void check() const;
 };

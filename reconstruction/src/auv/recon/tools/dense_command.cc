@@ -49,12 +49,13 @@ int denseMain(const std::vector<std::string>& args) {
     set.add("min_texture_grey", &m.min_texture_grey, "grey levels: window std below: no match");
     set.add("speckle_size", &m.speckle_size, "px: smaller isolated depth blobs are removed");
     set.add("speckle_labels", &m.speckle_labels, "labels: step separating speckle blobs");
-    set.add("tile_size", &m.tile_size, "px: cost tiles");
+    set.add("strip_rows", &m.strip_rows, "rows per cost strip (strips run in parallel)");
     dense::FusionOptions& f = options.fusion;
     set.add("min_consistent", &f.min_consistent, "neighbours whose depth maps must agree");
     set.add("depth_tolerance", &f.depth_tolerance, "relative depth difference to agree");
     set.add("reprojection_px", &f.reprojection_px, "px: forward-backward reprojection error");
     set.add("normal_step", &f.normal_step, "px between the depths normals come from");
+    set.add("pixel_step", &f.pixel_step, "px: new points start on this grid of a master");
     if (!set.parse(args)) return tools::kExitOk;
     options.check();
     const dense::DenseSummary summary = dense::runDense(Survey(survey_path), options);
