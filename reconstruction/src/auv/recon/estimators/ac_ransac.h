@@ -64,7 +64,7 @@ struct AcRansacOptions {
   double reserve_fraction = 0.1;
   /// Early stop: probability that an all-inlier sample was drawn (RANSAC bound on the best
   /// model's inlier ratio). 1 disables the early stop.
-  double confidence = 0.9999;
+  double confidence = 0.99;
   /// Refine the best model on its inliers with the kernel's non-minimal fit.
   bool refine = true;
   /// Random generator seed (runs are deterministic for one seed).
@@ -103,7 +103,8 @@ std::vector<double> log10CombinationsOfN(size_t n);
 /// log10 C(k, s) for k = 0..n.
 std::vector<double> log10CombinationsOfK(size_t s, size_t n);
 
-/// Best (log10 NFA, k) over the sorted residuals (ascending), k > s, e_k <= max_threshold.
+/// Best (log10 NFA, k) over the sorted residuals (ascending; the smallest of the n data, it may
+/// be a prefix), k > s, e_k <= max_threshold; log_c_n, log_c_k are the tables for all n data.
 /// k = 0 when no k qualifies.
 struct NfaPoint {
   double log10_nfa = std::numeric_limits<double>::infinity();
@@ -145,16 +146,21 @@ AcRansacResult<typename Kernel::Model> acRansac(const Kernel& kernel,
   std::vector<double> residuals, sorted;
   std::vector<std::pair<double, int>> ranked;
 
+  // Residuals beyond the bound, or where alpha(e) >= 1 (a model can never be meaningful with
+  // them), cannot be inliers: only the others are sorted.
+  const double cutoff = std::min(options.max_threshold, std::pow(10.0, -log_alpha0 / dimension));
+
   // NFA of one model: fills ranked (residual, index) ascending and returns the best point.
   auto evaluate = [&](const Model& model) {
     kernel.residuals(model, &residuals);
-    ranked.resize(n);
-    for (size_t i = 0; i < n; ++i) ranked[i] = {residuals[i], static_cast<int>(i)};
+    ranked.clear();
+    for (size_t i = 0; i < n; ++i) {
+      if (residuals[i] <= cutoff) ranked.emplace_back(residuals[i], static_cast<int>(i));
+    }
     std::sort(ranked.begin(), ranked.end());
-    sorted.resize(n);
-    for (size_t i = 0; i < n; ++i) sorted[i] = ranked[i].first;
-    return detail::bestNfa(sorted, s, log_alpha0, dimension, log10_e0, options.max_threshold,
-                           log_c_n, log_c_k);
+    sorted.resize(ranked.size());
+    for (size_t i = 0; i < ranked.size(); ++i) sorted[i] = ranked[i].first;
+    return detail::bestNfa(sorted, s, log_alpha0, dimension, log10_e0, cutoff, log_c_n, log_c_k);
   };
   auto keep = [&](const Model& model, const detail::NfaPoint& best) {
     result.model = model;

@@ -20,7 +20,7 @@ struct MatchingOptions {
   /// brute-force matcher (exact).
   int flann_above = 4000;
   /// FLANN leaf checks (more: closer to exact, slower).
-  int flann_checks = 128;
+  int flann_checks = 64;
 
   void check() const;
 };

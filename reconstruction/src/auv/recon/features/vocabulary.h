@@ -3,6 +3,7 @@
 // A. Zisserman, "Video Google", ICCV 2003) trained on the survey's own descriptors with
 // k-means (cv::kmeans), tf-idf weighted, L2-normalised; similarity = cosine.
 
+#include <cstdint>
 #include <vector>
 
 #include <opencv2/core.hpp>

@@ -1,0 +1,440 @@
+#include "auv/recon/features/match_stage.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <list>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <numeric>
+#include <random>
+#include <sstream>
+#include <thread>
+#include <unordered_map>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+
+#include "auv/recon/common/option_set.h"
+#include "auv/recon/common/progress.h"
+#include "auv/recon/common/report.h"
+#include "auv/recon/common/stage_error.h"
+#include "auv/recon/common/staged_output.h"
+#include "auv/recon/estimators/essential.h"
+#include "auv/recon/estimators/fundamental.h"
+#include "auv/recon/estimators/homography.h"
+#include "auv/recon/features/vocabulary.h"
+
+namespace fs = std::filesystem;
+
+namespace auv::recon::features {
+namespace {
+
+constexpr const char* kStage = "match";
+
+int threadCount(int requested) {
+  if (requested > 0) return requested;
+  return std::max(1u, std::thread::hardware_concurrency());
+}
+
+std::vector<std::string> splitCsv(const std::string& line) {
+  std::vector<std::string> fields;
+  std::string field;
+  std::istringstream in(line);
+  while (std::getline(in, field, ',')) fields.push_back(field);
+  if (!line.empty() && line.back() == ',') fields.emplace_back();
+  return fields;
+}
+
+// sim_time_s of each keyframe file of keyframes/<camera>/index.csv (the simulator's common
+// clock; camera_time_s is per camera and not synchronised, so it is not used across cameras).
+// Missing index or column: no times.
+std::map<std::string, double> keyframeTimes(const fs::path& index_csv) {
+  std::map<std::string, double> times;
+  std::ifstream in(index_csv);
+  std::string line;
+  if (!in || !std::getline(in, line)) return times;
+  const std::vector<std::string> header = splitCsv(line);
+  const auto column = [&](const std::string& name) {
+    const auto it = std::find(header.begin(), header.end(), name);
+    return it == header.end() ? -1 : static_cast<int>(it - header.begin());
+  };
+  const int file = column("file"), sim = column("sim_time_s");
+  if (file < 0 || sim < 0) return times;
+  while (std::getline(in, line)) {
+    const std::vector<std::string> f = splitCsv(line);
+    if (static_cast<int>(f.size()) <= std::max(file, sim) || f[sim].empty()) continue;
+    try {
+      times[f[file]] = std::stod(f[sim]);
+    } catch (const std::exception&) {
+      // An unreadable time is an unknown time.
+    }
+  }
+  return times;
+}
+
+// corrected/<camera>.yaml (OpenCV FileStorage: image_width, image_height, camera_matrix,
+// distortion_coefficients) as a pinhole camera; nullopt when absent. Throws StageError naming
+// the file when it exists but is unusable.
+std::unique_ptr<scene::Camera> readPinhole(const fs::path& yaml, uint32_t id) {
+  std::error_code error;
+  if (!fs::exists(yaml, error)) return nullptr;
+  cv::FileStorage storage;
+  try {
+    storage.open(yaml.string(), cv::FileStorage::READ);
+  } catch (const cv::Exception& e) {
+    throw StageError(kStage, yaml.string() + ": cannot parse: " + e.what());
+  }
+  if (!storage.isOpened()) throw StageError(kStage, yaml.string() + ": cannot open");
+  int width = 0, height = 0;
+  cv::Mat k, distortion;
+  storage["image_width"] >> width;
+  storage["image_height"] >> height;
+  storage["camera_matrix"] >> k;
+  storage["distortion_coefficients"] >> distortion;
+  if (width <= 0 || height <= 0 || k.rows != 3 || k.cols != 3) {
+    throw StageError(kStage,
+                     yaml.string() + ": needs image_width, image_height and a 3x3 camera_matrix");
+  }
+  k.convertTo(k, CV_64F);
+  if (!distortion.empty() && cv::norm(distortion) > 1e-9) {
+    throw StageError(kStage, yaml.string() +
+                                 ": non-zero distortion_coefficients (corrected images are "
+                                 "undistorted: expected zeros)");
+  }
+  auto camera = std::make_unique<scene::Camera>(
+      scene::Camera::pinhole(id, width, height, k.at<double>(0, 0), k.at<double>(1, 1),
+                             k.at<double>(0, 2), k.at<double>(1, 2)));
+  if (!(camera->fx > 0) || !(camera->fy > 0)) {
+    throw StageError(kStage, yaml.string() + ": camera_matrix has a non-positive focal length");
+  }
+  return camera;
+}
+
+// A bounded cache of images' features shared by the matching threads.
+class FeatureCache {
+ public:
+  FeatureCache(const FeatureStore& store, size_t capacity) : store_(store), capacity_(capacity) {}
+
+  std::shared_ptr<const ImageFeatures> get(const std::string& image) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      const auto it = entries_.find(image);
+      if (it != entries_.end()) {
+        order_.splice(order_.begin(), order_, it->second.second);
+        return it->second.first;
+      }
+    }
+    auto features = std::make_shared<const ImageFeatures>(store_.read(image));
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (entries_.count(image) == 0) {
+      order_.push_front(image);
+      entries_[image] = {features, order_.begin()};
+      while (entries_.size() > capacity_) {
+        entries_.erase(order_.back());
+        order_.pop_back();
+      }
+    }
+    return features;
+  }
+
+ private:
+  const FeatureStore& store_;
+  size_t capacity_;
+  std::mutex mutex_;
+  std::list<std::string> order_;  // most recent first
+  std::unordered_map<std::string, std::pair<std::shared_ptr<const ImageFeatures>,
+                                            std::list<std::string>::iterator>>
+      entries_;
+};
+
+struct PairOutcome {
+  VerifiedPair pair;
+  std::string status;
+};
+
+}  // namespace
+
+void VerificationOptions::check() const {
+  AUV_RECON_CHECK_OPTION(min_inliers >= 8, min_inliers, "must be >= 8");
+  AUV_RECON_CHECK_OPTION(max_threshold_px > 0, max_threshold_px, "must be > 0 px");
+  AUV_RECON_CHECK_OPTION(max_iterations > 0, max_iterations, "must be > 0");
+}
+
+void MatchStageOptions::check() const {
+  matching.check();
+  pairs.check();
+  verification.check();
+  AUV_RECON_CHECK_OPTION(threads >= 0, threads, "must be >= 0 (0: all cores)");
+}
+
+void MatchStageOptions::bind(OptionSet& set) {
+  set.add("ratio", &matching.ratio, "Lowe's ratio test: best < ratio x second best");
+  set.add("mutual", &matching.mutual, "keep only mutual best matches");
+  set.add("flann_above", &matching.flann_above,
+          "approximate (FLANN) matching when both images have more descriptors");
+  set.add("flann_checks", &matching.flann_checks, "FLANN leaf checks");
+  set.add("exhaustive_max_images", &pairs.exhaustive_max_images,
+          "at most this many images: match every pair");
+  set.add("sequential_window", &pairs.sequential_window,
+          "next keyframes of the same camera matched with each keyframe");
+  set.add("cross_camera_max_dt_s", &pairs.cross_camera_max_dt_s,
+          "s: cross-camera pairs at most this far apart in sim_time_s (0: none)");
+  set.add("loop_top_k", &pairs.loop_top_k, "most similar images matched per image (0: none)");
+  set.add("loop_min_separation", &pairs.loop_min_separation,
+          "same-camera keyframes closer than this are not loop candidates");
+  set.add("loop_min_score", &pairs.loop_min_score,
+          "appearance candidates need this fraction of the image's best similarity");
+  set.add("vocabulary_words", &pairs.vocabulary_words, "visual words of the vocabulary");
+  set.add("min_inliers", &verification.min_inliers, "pairs with fewer inliers are dropped");
+  set.add("max_threshold_px", &verification.max_threshold_px,
+          "px: upper bound of AC-RANSAC's adaptive threshold");
+  set.add("max_iterations", &verification.max_iterations, "AC-RANSAC samples per pair");
+  set.add("estimate_homography", &verification.estimate_homography,
+          "also count homography inliers (planarity of the pair)");
+  set.add("force_fundamental", &verification.force_fundamental,
+          "fundamental matrix even for calibrated cameras");
+  set.add("threads", &threads, "pairs matched at once (0: all cores)");
+}
+
+VerifiedPair verifyPair(const PairGeometryInput& input, const VerificationOptions& options) {
+  options.check();
+  if (input.features1 == nullptr || input.features2 == nullptr) {
+    throw std::invalid_argument("verifyPair: features of both images are required");
+  }
+  const ImageFeatures& f1 = *input.features1;
+  const ImageFeatures& f2 = *input.features2;
+  VerifiedPair pair;
+  pair.image1 = f1.image;
+  pair.image2 = f2.image;
+  pair.putative = static_cast<uint32_t>(input.putative.size());
+  std::vector<Eigen::Vector2d> x1, x2;
+  x1.reserve(input.putative.size());
+  x2.reserve(input.putative.size());
+  for (const MatchIndices& m : input.putative) {
+    if (m.first >= f1.size() || m.second >= f2.size()) {
+      throw std::out_of_range("verifyPair: match (" + std::to_string(m.first) + ", " +
+                              std::to_string(m.second) + ") outside " + f1.image + " / " +
+                              f2.image);
+    }
+    x1.emplace_back(f1.keypoints[m.first].x, f1.keypoints[m.first].y);
+    x2.emplace_back(f2.keypoints[m.second].x, f2.keypoints[m.second].y);
+  }
+  if (static_cast<int>(input.putative.size()) < options.min_inliers) return pair;
+
+  estimators::AcRansacOptions ransac;
+  ransac.max_iterations = options.max_iterations;
+  ransac.max_threshold = options.max_threshold_px;
+  const bool calibrated =
+      input.camera1 != nullptr && input.camera2 != nullptr && !options.force_fundamental;
+  const estimators::ImageSize size1{f1.width, f1.height}, size2{f2.width, f2.height};
+  estimators::AcRansacResult<Eigen::Matrix3d> result;
+  if (calibrated) {
+    pair.kind = GeometryKind::ESSENTIAL;
+    result = estimators::estimateEssential(x1, x2, *input.camera1, *input.camera2, ransac);
+  } else {
+    pair.kind = GeometryKind::FUNDAMENTAL;
+    result = estimators::estimateFundamental(x1, x2, size1, size2, ransac);
+  }
+  pair.log10_nfa = result.log10_nfa;
+  pair.threshold_px = result.threshold;
+  if (!result.success() || static_cast<int>(result.numInliers()) < options.min_inliers) {
+    return pair;
+  }
+  pair.model = result.model;
+  if (options.estimate_homography) {
+    const auto h = estimators::estimateHomography(x1, x2, size1, size2, ransac);
+    pair.homography_inliers = h.success() ? static_cast<uint32_t>(h.numInliers()) : 0;
+  }
+  pair.inliers.reserve(result.numInliers());
+  for (int i : result.inliers) pair.inliers.push_back(input.putative[i]);
+  return pair;
+}
+
+MatchSummary matchSurvey(const Survey& survey, const MatchStageOptions& options) {
+  options.check();
+  const auto start = std::chrono::steady_clock::now();
+  const fs::path features_folder = survey.root() / "features";
+  const FeatureStore store(features_folder);
+  const std::vector<FeatureIndexEntry>& entries = store.images();
+  if (entries.size() < 2) {
+    throw StageError(kStage, features_folder.string() + "/index.csv lists " +
+                                 std::to_string(entries.size()) +
+                                 " image(s): at least 2 are needed");
+  }
+
+  // Images with their camera order and times; cameras with their calibration.
+  std::map<std::string, std::unique_ptr<scene::Camera>> cameras;
+  std::map<std::string, std::map<std::string, double>> times;
+  std::vector<PairImage> images(entries.size());
+  std::map<std::string, int> next_sequence;
+  for (size_t i = 0; i < entries.size(); ++i) {
+    const FeatureIndexEntry& e = entries[i];
+    if (!cameras.count(e.camera)) {
+      cameras[e.camera] = readPinhole(survey.corrected() / (e.camera + ".yaml"),
+                                      static_cast<uint32_t>(cameras.size() + 1));
+      times[e.camera] = keyframeTimes(survey.keyframes() / e.camera / "index.csv");
+    }
+    PairImage& image = images[i];
+    image.name = e.image;
+    image.camera = e.camera;
+    image.sequence = next_sequence[e.camera]++;
+    const std::string file = fs::path(e.image).filename().string();
+    const auto t = times[e.camera].find(file);
+    if (t != times[e.camera].end()) image.time_s = t->second;
+  }
+
+  // Appearance similarity for loop candidates (only where pairs are not exhaustive).
+  cv::Mat similarity;
+  const bool exhaustive = static_cast<int>(entries.size()) <= options.pairs.exhaustive_max_images;
+  if (!exhaustive && options.pairs.loop_top_k > 0) {
+    constexpr int kTrainingRows = 30000;
+    const int per_image = std::max(1, kTrainingRows / static_cast<int>(entries.size()));
+    std::mt19937_64 random(7);
+    cv::Mat training;
+    {
+      Progress progress("match: vocabulary sample", "images", entries.size());
+      for (const FeatureIndexEntry& e : entries) {
+        const ImageFeatures f = store.read(e.image);
+        std::vector<int> rows(f.size());
+        std::iota(rows.begin(), rows.end(), 0);
+        std::shuffle(rows.begin(), rows.end(), random);
+        for (int r = 0; r < std::min<int>(per_image, static_cast<int>(rows.size())); ++r) {
+          training.push_back(f.descriptors.row(rows[r]));
+        }
+        progress.advance();
+      }
+    }
+    if (training.rows >= options.pairs.vocabulary_words) {
+      const Vocabulary vocabulary = Vocabulary::train(training, options.pairs.vocabulary_words);
+      std::vector<cv::Mat> histograms(entries.size());
+      Progress progress("match: global descriptors", "images", entries.size());
+      std::atomic<size_t> next{0};
+      auto worker = [&] {
+        for (size_t i = next++; i < entries.size(); i = next++) {
+          histograms[i] = vocabulary.histogram(store.read(entries[i].image).descriptors);
+          progress.advance();
+        }
+      };
+      std::vector<std::thread> pool;
+      for (int t = 1; t < threadCount(options.threads); ++t) pool.emplace_back(worker);
+      worker();
+      for (std::thread& t : pool) t.join();
+      similarity = Vocabulary::similarity(Vocabulary::tfIdf(histograms));
+    }
+  }
+  const std::vector<CandidatePair> candidates = selectPairs(images, similarity, options.pairs);
+
+  // Match and verify every candidate pair.
+  const int threads = threadCount(options.threads);
+  FeatureCache cache(
+      store, static_cast<size_t>(std::max(16, 2 * options.pairs.sequential_window + 4 * threads)));
+  std::vector<PairOutcome> outcomes(candidates.size());
+  Progress progress("match", "pairs", candidates.size());
+  std::mutex error_mutex;
+  std::string first_error;
+  std::atomic<size_t> next{0};
+  auto worker = [&] {
+    for (size_t i = next++; i < candidates.size(); i = next++) {
+      try {
+        const CandidatePair& c = candidates[i];
+        const auto f1 = cache.get(images[c.index1].name);
+        const auto f2 = cache.get(images[c.index2].name);
+        PairGeometryInput input;
+        input.features1 = f1.get();
+        input.features2 = f2.get();
+        input.camera1 = cameras[images[c.index1].camera].get();
+        input.camera2 = cameras[images[c.index2].camera].get();
+        input.putative = matchDescriptors(f1->descriptors, f2->descriptors, options.matching);
+        PairOutcome& out = outcomes[i];
+        out.pair = verifyPair(input, options.verification);
+        out.pair.source = c.source;
+        if (out.pair.putative < static_cast<uint32_t>(options.verification.min_inliers)) {
+          out.status = "too_few_putative";
+        } else if (!(out.pair.log10_nfa < 0)) {
+          out.status = "no_meaningful_model";
+        } else if (out.pair.inliers.empty()) {
+          out.status = "too_few_inliers";
+        } else {
+          out.status = "verified";
+        }
+      } catch (const std::exception& error) {
+        std::lock_guard<std::mutex> lock(error_mutex);
+        if (first_error.empty()) first_error = error.what();
+        return;
+      }
+      progress.advance();
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < std::min<int>(threads, static_cast<int>(candidates.size())); ++t) {
+    pool.emplace_back(worker);
+  }
+  worker();
+  for (std::thread& t : pool) t.join();
+  progress.finish();
+  if (!first_error.empty()) throw StageError(kStage, first_error);
+
+  MatchSummary summary;
+  summary.images = entries.size();
+  summary.candidate_pairs = candidates.size();
+  std::vector<VerifiedPair> verified;
+  std::map<std::string, size_t> by_source;
+  std::ostringstream csv;
+  csv << "image1,image2,source,kind,putative,inliers,homography_inliers,log10_nfa,threshold_px,"
+         "status\n";
+  for (PairOutcome& o : outcomes) {
+    const VerifiedPair& p = o.pair;
+    csv << p.image1 << "," << p.image2 << "," << pairSourceName(p.source) << ","
+        << geometryKindName(p.kind) << "," << p.putative << "," << p.inliers.size() << ","
+        << p.homography_inliers << "," << p.log10_nfa << "," << p.threshold_px << "," << o.status
+        << "\n";
+    if (o.pair.inliers.empty()) continue;
+    ++by_source[pairSourceName(p.source)];
+    summary.verified_matches += p.inliers.size();
+    (p.kind == GeometryKind::ESSENTIAL ? summary.essential_pairs : summary.fundamental_pairs)++;
+    verified.push_back(std::move(o.pair));
+  }
+  summary.verified_pairs = verified.size();
+  if (verified.empty()) {
+    throw StageError(kStage, "no pair of the " + std::to_string(candidates.size()) +
+                                 " candidates verified (at least " +
+                                 std::to_string(options.verification.min_inliers) +
+                                 " geometric inliers needed); earlier matches kept");
+  }
+
+  StagedOutput output(features_folder / "matches");
+  writeVerifiedPairs(output.path() / "pairs.bin", verified);
+  writeFileAtomically(output.path() / "pairs.csv", csv.str());
+  output.commit();
+  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  nlohmann::json sources = nlohmann::json::object();
+  for (const auto& [source, count] : by_source) sources[source] = count;
+  updateReport(survey.report(), kStage,
+               {{"images", summary.images},
+                {"candidate_pairs", summary.candidate_pairs},
+                {"verified_pairs", summary.verified_pairs},
+                {"verified_pairs_by_source", sources},
+                {"verified_matches", summary.verified_matches},
+                {"essential_pairs", summary.essential_pairs},
+                {"fundamental_pairs", summary.fundamental_pairs},
+                {"exhaustive", exhaustive},
+                {"seconds", summary.seconds},
+                {"threads", threads},
+                {"options",
+                 {{"ratio", options.matching.ratio},
+                  {"mutual", options.matching.mutual},
+                  {"sequential_window", options.pairs.sequential_window},
+                  {"exhaustive_max_images", options.pairs.exhaustive_max_images},
+                  {"cross_camera_max_dt_s", options.pairs.cross_camera_max_dt_s},
+                  {"loop_top_k", options.pairs.loop_top_k},
+                  {"min_inliers", options.verification.min_inliers},
+                  {"max_threshold_px", options.verification.max_threshold_px}}}});
+  return summary;
+}
+
+}  // namespace auv::recon::features
