@@ -301,11 +301,16 @@ class FastddsParticipant : public Participant {
     dds::Topic* t = createTopic(topic, type);
     dds::DataReaderQos rqos = subscriber_->get_default_datareader_qos();
     applyCommon(qos, rqos);
-    // Acknowledge a heartbeat at once (Fast DDS waits 5 ms by default): a keep-all writer
-    // frees its history only on acknowledgements, and a Fast DDS writer asks for them only
-    // when its history is full, so every history's worth of samples stalled the writer for
-    // the delay (docs/performance.md, "Keep-all streams").
-    rqos.reliable_reader_qos().times.heartbeatResponseDelay = eprosima::fastrtps::Duration_t(0, 0);
+    // Keep-all readers acknowledge a heartbeat at once (Fast DDS waits 5 ms by default): a
+    // keep-all writer frees its history only on acknowledgements, and a Fast DDS writer asks
+    // for them only when its history is full, so every history's worth of samples stalled the
+    // writer for the delay (docs/performance.md, "Keep-all streams"). Not keep-last readers:
+    // a keep-last writer's history is always full, so it asks with every sample, and answering
+    // each at once halved Fast DDS's reliable keep-last throughput; the delay batches those.
+    if (qos.history == History::KEEP_ALL) {
+      rqos.reliable_reader_qos().times.heartbeatResponseDelay =
+          eprosima::fastrtps::Duration_t(0, 0);
+    }
     auto reader = std::make_unique<FastddsReader>(std::move(on_data));
     dds::DataReader* r =
         subscriber_->create_datareader(t, rqos, reader.get(), dds::StatusMask::data_available());
