@@ -2,7 +2,8 @@
 // succeeds and every sample arrives in order, however often the writer's history fills (Fast
 // DDS 2.9 returned TIMEOUT from write() each time its history filled, long before
 // max_blocking_time: docs/performance.md, "Keep-all streams"). And a write that really cannot
-// go through fails after max_blocking_time naming the topic. Domains 67..69 (test/README.md).
+// go through fails after max_blocking_time naming the topic. Domains 67..69 and 9
+// (test/README.md).
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
@@ -130,10 +131,9 @@ INSTANTIATE_TEST_SUITE_P(Vendors, KeepAllStreamTest,
 
 TEST(KeepAllStreamTest, AWriteThatCannotGoThroughFailsNamingTheTopic) {
   // A reader that never takes: its keep-all history fills, it stops acknowledging, and the
-  // writer's history fills for good. Fast DDS writer, reader in the same process (domain 67
-  // is free again once the parameterised tests are done; ctest runs each test on its own).
-  Node writer_node("stuck_writer", nodeOptions(Vendor::FASTDDS, 67));
-  Node reader_node("stuck_reader", nodeOptions(Vendor::FASTDDS, 67));
+  // writer's history fills for good. Fast DDS writer, reader in the same process; domain 9.
+  Node writer_node("stuck_writer", nodeOptions(Vendor::FASTDDS, 9));
+  Node reader_node("stuck_reader", nodeOptions(Vendor::FASTDDS, 9));
   auto subscription = reader_node.createSubscription<msg::FileChunkReply>(
       "stuck", bulkTransferQos(),
       std::function<void(const msg::FileChunkReply&)>([](const msg::FileChunkReply&) {}));
