@@ -1,6 +1,7 @@
 #include "auv/recon/texture/view_selection.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 
@@ -198,31 +199,63 @@ size_t rejectInconsistentViews(std::vector<std::vector<FaceObservation>>& observ
                                const ViewSelectionOptions& options) {
   size_t rejected = 0;
   const double log_threshold = std::log(options.photo_consistency_threshold);
+  const size_t min_views = static_cast<size_t>(options.photo_consistency_min_views);
+  // Exposure and white balance differ between views (the seam levelling evens them out later):
+  // each view's gain per channel is the median ratio of its colours of the faces to their
+  // per-face medians; colours are compared after dividing by it.
+  int num_views = 0;
+  for (const auto& face : observations) {
+    for (const auto& o : face) num_views = std::max(num_views, o.view + 1);
+  }
+  std::vector<std::array<std::vector<float>, 3>> ratios(num_views);
+  std::vector<float> channel;
+  for (const auto& face : observations) {
+    if (face.size() < min_views) continue;
+    for (int c = 0; c < 3; ++c) {
+      channel.clear();
+      for (const auto& o : face) channel.push_back(o.mean_color(c));
+      std::nth_element(channel.begin(), channel.begin() + channel.size() / 2, channel.end());
+      const float median = channel[channel.size() / 2];
+      if (median < 8.0f) continue;  // too dark for a ratio
+      for (const auto& o : face) ratios[o.view][c].push_back(o.mean_color(c) / median);
+    }
+  }
+  std::vector<Eigen::Vector3f> gain(num_views, Eigen::Vector3f::Ones());
+  for (int v = 0; v < num_views; ++v) {
+    for (int c = 0; c < 3; ++c) {
+      auto& r = ratios[v][c];
+      if (r.size() < 10) continue;
+      std::nth_element(r.begin(), r.begin() + r.size() / 2, r.end());
+      gain[v](c) = std::clamp(r[r.size() / 2], 0.25f, 4.0f);
+    }
+  }
   for (auto& face : observations) {
     const size_t n = face.size();
-    if (n < static_cast<size_t>(options.photo_consistency_min_views)) continue;
+    if (n < min_views) continue;
+    std::vector<Eigen::Vector3f> colors(n);
+    for (size_t i = 0; i < n; ++i) colors[i] = face[i].mean_color.cwiseQuotient(gain[face[i].view]);
     // Start at the per-channel median; bandwidth from the median absolute deviation.
     Eigen::Vector3d mode, sigma;
     std::vector<double> values(n);
     for (int c = 0; c < 3; ++c) {
-      for (size_t i = 0; i < n; ++i) values[i] = face[i].mean_color(c);
+      for (size_t i = 0; i < n; ++i) values[i] = colors[i](c);
       std::nth_element(values.begin(), values.begin() + n / 2, values.end());
       mode(c) = values[n / 2];
-      for (size_t i = 0; i < n; ++i) values[i] = std::abs(face[i].mean_color(c) - mode(c));
+      for (size_t i = 0; i < n; ++i) values[i] = std::abs(colors[i](c) - mode(c));
       std::nth_element(values.begin(), values.begin() + n / 2, values.end());
       sigma(c) = std::max(options.photo_consistency_sigma, 1.4826 * values[n / 2]);
     }
-    auto logWeight = [&](const FaceObservation& o) {
-      const Eigen::Vector3d d = (o.mean_color.cast<double>() - mode).cwiseQuotient(sigma);
+    auto logWeight = [&](const Eigen::Vector3f& color) {
+      const Eigen::Vector3d d = (color.cast<double>() - mode).cwiseQuotient(sigma);
       return -0.5 * d.squaredNorm();
     };
     // Mean-shift with a Gaussian kernel: the mode of the views' colours.
     for (int iteration = 0; iteration < 20; ++iteration) {
       Eigen::Vector3d sum = Eigen::Vector3d::Zero();
       double weights = 0;
-      for (const auto& o : face) {
-        const double w = std::exp(logWeight(o));
-        sum += w * o.mean_color.cast<double>();
+      for (const auto& color : colors) {
+        const double w = std::exp(logWeight(color));
+        sum += w * color.cast<double>();
         weights += w;
       }
       if (weights <= 1e-300) break;
@@ -232,8 +265,8 @@ size_t rejectInconsistentViews(std::vector<std::vector<FaceObservation>>& observ
       if (shift < 1e-3) break;
     }
     std::vector<FaceObservation> kept;
-    for (const auto& o : face) {
-      if (logWeight(o) >= log_threshold) kept.push_back(o);
+    for (size_t i = 0; i < n; ++i) {
+      if (logWeight(colors[i]) >= log_threshold) kept.push_back(face[i]);
     }
     if (kept.empty()) continue;  // no consensus: keep them all
     rejected += face.size() - kept.size();

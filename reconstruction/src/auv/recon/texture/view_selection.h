@@ -89,8 +89,9 @@ std::vector<std::vector<FaceObservation>> observeFaces(const FaceMesh& mesh,
                                                        const ViewSelectionOptions& options);
 
 /// Removes the observations whose colour is inconsistent with the face's other views
-/// (mean-shift mode, Waechter section 3.2). Returns the number removed. Faces with fewer than
-/// `photo_consistency_min_views` views are left alone.
+/// (mean-shift mode, Waechter section 3.2), after dividing each view's colours by its exposure
+/// gain (median ratio to the per-face medians over all faces). Returns the number removed.
+/// Faces with fewer than `photo_consistency_min_views` views are left alone.
 size_t rejectInconsistentViews(std::vector<std::vector<FaceObservation>>& observations,
                                const ViewSelectionOptions& options);
 
