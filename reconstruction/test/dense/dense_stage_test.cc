@@ -110,7 +110,7 @@ TEST_F(DenseStage, FusedCloudLiesOnTheTrueSurface) {
   EXPECT_GT(cells.size(), 0.6 * 40 * 28) << "cells covered";
 
   // Contributing images: >= 1 + min_consistent per point, ids of the model.
-  const auto images = readFusedViews(survey.dense() / "fused_views.bin");
+  const PointViews images = readPointViews(survey.dense() / "fused_views.bin");
   ASSERT_EQ(images.size(), cloud.points_.size());
   for (size_t i = 0; i < images.size(); ++i) {
     const std::vector<uint32_t> ids = images.of(i);

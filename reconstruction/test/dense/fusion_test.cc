@@ -182,7 +182,9 @@ TEST_F(Files, FusedViewsRoundTripAndTruncation) {
   images.add({3});
   images.add({2, 5, 9});
   writeFusedViews(folder_ / "fused_views.bin", images);
-  const PointViews back = readFusedViews(folder_ / "fused_views.bin");
+  EXPECT_EQ(readFusedViews(folder_ / "fused_views.bin"),
+            (std::vector<std::vector<uint32_t>>{{1, 2}, {3}, {2, 5, 9}}));
+  const PointViews back = readPointViews(folder_ / "fused_views.bin");
   ASSERT_EQ(back.size(), 3u);
   EXPECT_EQ(back.of(0), (std::vector<uint32_t>{1, 2}));
   EXPECT_EQ(back.of(1), (std::vector<uint32_t>{3}));

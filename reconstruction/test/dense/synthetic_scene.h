@@ -26,6 +26,7 @@ struct Scene {
   Eigen::Vector3d sphere_center{0.3, 0.2, 0.2};
   double sphere_radius = 0.6;
   bool textured = true;  ///< false: a flat grey world (nothing to match)
+  double texture_scale = 1.0;  ///< multiplies the texture's feature sizes (4 to 16 cm at 1)
 
   /// Nearest hit along the ray, or a negative distance.
   double intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction) const {
@@ -76,9 +77,10 @@ struct Scene {
   /// BGR colour of a surface point.
   Eigen::Vector3d color(const Eigen::Vector3d& p) const {
     if (!textured) return {128, 128, 128};
-    const double a = 0.5 * noise(p / 0.16) + 0.3 * noise(p / 0.08 + Eigen::Vector3d(7, 3, 1)) +
-                     0.2 * noise(p / 0.04 + Eigen::Vector3d(1, 9, 4));
-    const double b = noise(p / 0.3 + Eigen::Vector3d(5, 5, 5));
+    const Eigen::Vector3d q = p / texture_scale;
+    const double a = 0.5 * noise(q / 0.16) + 0.3 * noise(q / 0.08 + Eigen::Vector3d(7, 3, 1)) +
+                     0.2 * noise(q / 0.04 + Eigen::Vector3d(1, 9, 4));
+    const double b = noise(q / 0.3 + Eigen::Vector3d(5, 5, 5));
     const double grey = 30 + 200 * a;
     return {grey * (0.8 + 0.2 * b), grey, grey * (1.0 - 0.2 * b)};
   }
@@ -111,6 +113,7 @@ inline cv::Mat render(const Scene& scene, View& view) {
   const Eigen::Matrix3d k_inv = view.K.inverse();
   const Eigen::Vector3d origin = view.center();
   const Eigen::Matrix3d to_world = view.R.transpose();
+#pragma omp parallel for schedule(dynamic, 8)
   for (int y = 0; y < view.height; ++y) {
     for (int x = 0; x < view.width; ++x) {
       Eigen::Vector3d sum = Eigen::Vector3d::Zero();

@@ -170,7 +170,7 @@ void writeFusedViews(const std::filesystem::path& file, const PointViews& images
   std::filesystem::rename(temporary, file);
 }
 
-PointViews readFusedViews(const std::filesystem::path& file) {
+PointViews readPointViews(const std::filesystem::path& file) {
   std::ifstream in(file, std::ios::binary);
   if (!in) throw std::runtime_error("dense: cannot open " + file.string());
   const auto get = [&](auto& value) {
@@ -198,6 +198,13 @@ PointViews readFusedViews(const std::filesystem::path& file) {
     }
     images.offsets.push_back(images.ids.size());
   }
+  return images;
+}
+
+std::vector<std::vector<uint32_t>> readFusedViews(const std::filesystem::path& file) {
+  const PointViews packed = readPointViews(file);
+  std::vector<std::vector<uint32_t>> images(packed.size());
+  for (size_t i = 0; i < packed.size(); ++i) images[i] = packed.of(i);
   return images;
 }
 

@@ -106,6 +106,8 @@ class Fuser {
 /// ids of the sparse model (images.txt; their camera ids give the camera combination).
 void writeFusedViews(const std::filesystem::path& file, const PointViews& images);
 /// Throws std::runtime_error naming the file when it is missing, truncated or malformed.
-PointViews readFusedViews(const std::filesystem::path& file);
+PointViews readPointViews(const std::filesystem::path& file);
+/// The same, one list per point (convenient for small clouds).
+std::vector<std::vector<uint32_t>> readFusedViews(const std::filesystem::path& file);
 
 }  // namespace auv::recon::dense
