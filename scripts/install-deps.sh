@@ -26,6 +26,8 @@ PACKAGES=(
   libceres-dev colmap opencv-doc
   # reconstruction texturing: max-flow (Boost.Graph, header-only), atlas packing (stb_rect_pack)
   libboost-dev libstb-dev
+  # reconstruction pipeline benchmark: wall time and peak memory per stage (GNU time)
+  time
 )
 
 echo "install-deps: apt-get update"

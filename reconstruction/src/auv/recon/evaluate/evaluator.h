@@ -33,8 +33,8 @@ struct EvaluateOptions {
   double sample_spacing_m = 0.02;
   /// Well-imaged region: keyframes that must see a point.
   int min_views = 2;
-  /// m: farthest a keyframe counts as seeing a point; 0 = the scenario's water visibility
-  /// (4.5 m when the scenario gives coefficients instead).
+  /// m: farthest a keyframe counts as seeing a point; 0 = half the scenario's water
+  /// visibility (contrast still 14 %; 2.25 m when the scenario gives no visibility).
   double max_range_m = 0;
   /// deg: most oblique view of a surface point that counts.
   double max_incidence_deg = 80;

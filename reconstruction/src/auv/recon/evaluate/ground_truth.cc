@@ -1,5 +1,6 @@
 #include "auv/recon/evaluate/ground_truth.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <mutex>
@@ -127,7 +128,14 @@ GroundTruth GroundTruth::load(const fs::path& run) {
     const double scale = world["scale"] ? world["scale"].as<double>() : 1.0;
     gt.mesh_to_world_ = meshToWorld(up, origin, yaw, scale);
     const YAML::Node water = root["water"];
-    if (water && water["visibility"]) gt.visibility_ = water["visibility"].as<double>();
+    if (water && water["visibility"]) {
+      gt.visibility_ = water["visibility"].as<double>();
+    } else if (water && water["attenuation"]) {
+      // The simulator's definition (Koschmieder, 2 % contrast) for the clearest channel.
+      const auto a = water["attenuation"].as<std::vector<double>>();
+      const double clearest = a.empty() ? 0.0 : *std::min_element(a.begin(), a.end());
+      if (clearest > 0) gt.visibility_ = 3.912 / clearest;
+    }
   } catch (const std::exception& e) {
     throw StageError(kStage, "ground truth: " + scenario.string() + ": " + e.what());
   }

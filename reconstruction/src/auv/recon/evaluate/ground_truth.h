@@ -68,7 +68,8 @@ class GroundTruth {
   /// one; read once. Throws StageError naming the scenario or the mesh file.
   std::shared_ptr<const open3d::geometry::TriangleMesh> worldMesh() const;
   std::filesystem::path meshFile() const { return mesh_file_; }
-  /// water.visibility of the scenario (m), 0 when it gives the coefficients instead.
+  /// water.visibility of the scenario (m; from the clearest channel's attenuation, 3.912 / a,
+  /// when it gives coefficients), 0 when it gives neither.
   double visibility() const { return visibility_; }
 
   /// trajectory.tum (true) and navigation.tum (the vehicle's estimate); empty when absent.

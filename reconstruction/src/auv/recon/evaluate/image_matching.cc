@@ -14,15 +14,29 @@ namespace {
 
 constexpr const char* kStage = "evaluate";
 
+/// One CSV line (RFC 4180 quoting: "a,b" and "" inside quotes).
 std::vector<std::string> splitCsv(const std::string& line) {
-  std::vector<std::string> fields;
-  std::string field;
-  std::istringstream in(line);
-  while (std::getline(in, field, ',')) {
-    while (!field.empty() && (field.back() == '\r' || field.back() == ' ')) field.pop_back();
-    fields.push_back(field);
+  std::vector<std::string> fields(1);
+  bool quoted = false;
+  for (size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (quoted) {
+      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
+        fields.back() += '"';
+        ++i;
+      } else if (c == '"') {
+        quoted = false;
+      } else {
+        fields.back() += c;
+      }
+    } else if (c == '"') {
+      quoted = true;
+    } else if (c == ',') {
+      fields.emplace_back();
+    } else if (c != '\r') {
+      fields.back() += c;
+    }
   }
-  if (!line.empty() && line.back() == ',') fields.emplace_back();
   return fields;
 }
 
@@ -132,6 +146,22 @@ ImageMatching matchImages(const scene::Reconstruction& reconstruction,
     matching.matched.push_back(MatchedImage{id, image.name, frame});
   }
   return matching;
+}
+
+std::vector<PosePair> posePairs(const ImageMatching& matching,
+                                const scene::Reconstruction& reconstruction) {
+  std::vector<PosePair> pairs;
+  for (const MatchedImage& m : matching.matched) {
+    const scene::Image& image = reconstruction.images.at(m.image_id);
+    PosePair pair;
+    pair.name = m.name;
+    pair.center_estimate = image.center();
+    pair.rotation_estimate_cw = image.rotation();
+    pair.center_truth = m.truth->image.center();
+    pair.rotation_truth_cw = m.truth->image.rotation();
+    pairs.push_back(pair);
+  }
+  return pairs;
 }
 
 }  // namespace auv::recon::evaluate

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "auv/recon/evaluate/alignment.h"
 #include "auv/recon/evaluate/ground_truth.h"
 #include "auv/recon/scene/reconstruction.h"
 
@@ -48,5 +49,9 @@ struct ImageMatching {
 ImageMatching matchImages(const scene::Reconstruction& reconstruction,
                           const std::map<std::string, std::vector<KeyframeSource>>& sources,
                           const GroundTruth& truth);
+
+/// The poses of the matched images in the reconstruction and in the truth, for alignToTruth().
+std::vector<PosePair> posePairs(const ImageMatching& matching,
+                                const scene::Reconstruction& reconstruction);
 
 }  // namespace auv::recon::evaluate

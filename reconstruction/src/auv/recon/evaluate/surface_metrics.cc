@@ -97,7 +97,9 @@ std::vector<int> nearestIndices(const std::vector<Eigen::Vector3d>& queries,
                                 const std::vector<Eigen::Vector3d>& points) {
   std::vector<int> nearest(queries.size(), -1);
   if (points.empty()) return nearest;
-  const open3d::geometry::KDTreeFlann tree(toMatrix(points));
+  // Open3D 0.16 keeps referring to the matrix it was built from: it must outlive the tree.
+  const Eigen::MatrixXd tree_data = toMatrix(points);
+  const open3d::geometry::KDTreeFlann tree(tree_data);
 #pragma omp parallel for schedule(dynamic, 1024)
   for (int64_t i = 0; i < static_cast<int64_t>(queries.size()); ++i) {
     std::vector<int> index(1);

@@ -71,7 +71,9 @@ std::vector<size_t> trianglesNear(const open3d::geometry::TriangleMesh& mesh,
                                   const std::vector<Eigen::Vector3d>& centers, double distance_m) {
   std::vector<size_t> near;
   if (centers.empty()) return near;
-  const open3d::geometry::KDTreeFlann tree(toMatrix(centers));
+  // Open3D 0.16 keeps referring to the matrix it was built from: it must outlive the tree.
+  const Eigen::MatrixXd tree_data = toMatrix(centers);
+  const open3d::geometry::KDTreeFlann tree(tree_data);
   std::vector<int> index(1);
   std::vector<double> distance2(1);
   for (size_t t = 0; t < mesh.triangles_.size(); ++t) {
@@ -187,7 +189,9 @@ std::vector<uint8_t> countViews(const SurfaceSamples& samples, const std::vector
     }
     max_radius2.push_back(1.1 * 1.1 * r2);
   }
-  const open3d::geometry::KDTreeFlann tree(toMatrix(centers));
+  // Open3D 0.16 keeps referring to the matrix it was built from: it must outlive the tree.
+  const Eigen::MatrixXd tree_data = toMatrix(centers);
+  const open3d::geometry::KDTreeFlann tree(tree_data);
   const double min_cos = std::cos(options.max_incidence_deg * M_PI / 180.0);
   const double range2 = options.max_range_m * options.max_range_m;
 

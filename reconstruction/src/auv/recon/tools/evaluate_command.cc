@@ -1,0 +1,118 @@
+// `auv recon evaluate <survey> --ground-truth <run>`: the reconstruction against the
+// simulator's ground truth (src/auv/recon/evaluate/README.md).
+#include <cmath>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include "auv/recon/common/option_set.h"
+#include "auv/recon/common/stage_error.h"
+#include "auv/recon/evaluate/evaluator.h"
+#include "auv/recon/texture/textured_model.h"
+#include "auv/recon/tools/command.h"
+
+namespace auv::recon {
+namespace {
+
+std::string fixed(double value, int digits) {
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(digits) << value;
+  return out.str();
+}
+
+int evaluateMain(const std::vector<std::string>& args) {
+  return tools::runReportingErrors("evaluate", [&] {
+    evaluate::EvaluateOptions o;
+    std::string survey_path, ground_truth;
+    OptionSet set("evaluate");
+    set.positional("survey", &survey_path,
+                   "survey folder (reads sparse/, keyframes/, dense/fused.ply, mesh/mesh.ply, "
+                   "textured/; writes evaluation.json)");
+    set.add("ground_truth", &ground_truth,
+            "the simulated run folder (default: ground_truth_run of <survey>/simulation.json)");
+    set.add("thresholds_m", &o.thresholds_m, "m: F-score distance thresholds, comma-separated");
+    set.add("sample_spacing_m", &o.sample_spacing_m, "m: spacing of the true-surface samples");
+    set.add("min_views", &o.min_views, "well-imaged region: keyframes that must see a point");
+    set.add("max_range_m", &o.max_range_m,
+            "m: well-imaged region: farthest view (0: half the water's visibility)");
+    set.add("max_incidence_deg", &o.max_incidence_deg,
+            "deg: well-imaged region: most oblique view of a point");
+    set.add("axis_length_m", &o.axis_length_m,
+            "m: alignment: points along each camera's axes (0: centres only)");
+    set.add("inlier_sigmas", &o.inlier_sigmas, "alignment: inlier bound in robust sigmas");
+    set.add("min_inlier_m", &o.min_inlier_m, "m: alignment: residuals always accepted");
+    set.add("psnr_views", &o.psnr_views, "held-out frames rendered for the texture PSNR");
+    set.add("write_clouds", &o.write_clouds, "also write evaluation/region.ply");
+    set.add("seed", &o.seed, "sampling seed");
+    if (!set.parse(args)) return tools::kExitOk;
+    o.check();
+    const Survey survey(survey_path);
+    std::filesystem::path run = ground_truth;
+    if (run.empty()) run = evaluate::recordedGroundTruth(survey);
+    if (run.empty()) {
+      throw std::invalid_argument("--ground-truth <run folder>: required (" +
+                                  (survey.root() / "simulation.json").string() +
+                                  " names no ground_truth_run)");
+    }
+    // Texture fidelity: the texture stage's renderer of textured/model.obj, read once.
+    std::unique_ptr<texture::TexturedModel> model;
+    std::filesystem::path model_file;
+    const evaluate::TexturedModelRenderer renderer =
+        [&](const std::filesystem::path& obj, const scene::Camera& camera,
+            const Eigen::Matrix3d& rotation_cw, const Eigen::Vector3d& translation_cw,
+            cv::Mat& image, cv::Mat& mask) {
+          if (!model || model_file != obj) {
+            model = std::make_unique<texture::TexturedModel>(texture::readObj(obj));
+            model_file = obj;
+          }
+          texture::ViewGeometry view;
+          view.camera = camera;
+          view.world_to_camera.linear() = rotation_cw;
+          view.world_to_camera.translation() = translation_cw;
+          const texture::Rendering rendering = texture::renderTexturedModel(*model, view);
+          image = rendering.image;
+          mask = rendering.mask;
+          return true;
+        };
+    const nlohmann::json result = evaluate::evaluateSurvey(survey, run, o, renderer);
+    const auto& images = result["images"];
+    const auto& error = result["camera_error"]["position_m"];
+    std::cout << "evaluate: " << images["matched_to_truth"] << " of " << images["registered"]
+              << " registered images matched to ground truth, " << images["keyframes"]
+              << " keyframes; alignment scale " << fixed(result["alignment"]["scale"], 4)
+              << ", camera position error median " << fixed(error["median"], 3) << " m (max "
+              << fixed(error["max"], 3) << " m)\n";
+    std::cout << "evaluate: well-imaged region "
+              << fixed(result["region"]["area_well_imaged_m2"], 1)
+              << " m2 (seen by >= " << o.min_views << " keyframes within "
+              << fixed(result["region"]["max_range_m"], 1) << " m)\n";
+    for (const auto& [name, s] : result["surfaces"].items()) {
+      std::cout << "evaluate: " << std::left << std::setw(6) << name << std::right;
+      for (const auto& t : s["thresholds"]) {
+        std::cout << "  F@" << fixed(t["threshold_m"].get<double>() * 100, 0) << "cm "
+                  << fixed(t["fscore"], 3) << " (P " << fixed(t["precision"], 3) << " R "
+                  << fixed(t["recall"], 3) << ")";
+      }
+      std::cout << "\n";
+    }
+    const auto& texture = result["texture"];
+    std::cout << "evaluate: texture: " << texture["status"].get<std::string>();
+    if (texture.contains("median_psnr_db") && !texture["median_psnr_db"].is_null()) {
+      std::cout << ", median PSNR " << fixed(texture["median_psnr_db"], 2) << " dB ("
+                << fixed(texture["median_psnr_gain_offset_db"], 2)
+                << " dB after per-channel gain/offset)";
+    }
+    std::cout << "\nevaluate: " << fixed(result["seconds"], 1) << " s -> "
+              << (survey.root() / "evaluation.json").string() << std::endl;
+    return tools::kExitOk;
+  });
+}
+
+}  // namespace
+
+AUV_RECON_COMMAND("evaluate", 90,
+                  "<survey> --ground-truth <run>   accuracy, completeness, F-score vs the truth",
+                  evaluateMain);
+
+}  // namespace auv::recon
