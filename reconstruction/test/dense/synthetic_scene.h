@@ -25,7 +25,7 @@ struct Scene {
   bool with_sphere = true;
   Eigen::Vector3d sphere_center{0.3, 0.2, 0.2};
   double sphere_radius = 0.6;
-  bool textured = true;  ///< false: a flat grey world (nothing to match)
+  bool textured = true;        ///< false: a flat grey world (nothing to match)
   double texture_scale = 1.0;  ///< multiplies the texture's feature sizes (4 to 16 cm at 1)
 
   /// Nearest hit along the ray, or a negative distance.
