@@ -111,9 +111,16 @@ std::vector<cv::Point2f> findBoard(const cv::Mat& gray, const CalibrationOptions
     cv::resize(gray, search, cv::Size(), scale, scale, cv::INTER_AREA);
   }
   std::vector<cv::Point2f> corners;
-  const int flags =
-      cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_FAST_CHECK;
-  if (!cv::findChessboardCorners(search, pattern, corners, flags)) return {};
+  // The quick check first (rejects most frames without a board at once); it also rejects
+  // many low-contrast underwater boards, which the full search and then the sector-based
+  // detector (cv::findChessboardCornersSB, more robust to blur and low contrast) still find.
+  const int flags = cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE;
+  const bool found =
+      cv::findChessboardCorners(search, pattern, corners, flags | cv::CALIB_CB_FAST_CHECK) ||
+      cv::findChessboardCorners(search, pattern, corners, flags) ||
+      cv::findChessboardCornersSB(search, pattern, corners,
+                                  cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_EXHAUSTIVE);
+  if (!found) return {};
   if (scale != 1.0) {
     // Corners of the reduced copy back to the full image (pixel centres at integers).
     for (auto& p : corners) {
