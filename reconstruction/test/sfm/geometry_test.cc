@@ -190,9 +190,8 @@ TEST(Resection, FindsThePoseWithHalfTheCorrespondencesWrong) {
   EXPECT_LT(estimated.q_cw.angularDistance(truth.q_cw), 0.1 * kDeg);
 
   // Too few correspondences: no pose, no crash.
-  EXPECT_FALSE(estimateAbsolutePose(camera, {points[0], points[1]}, {pixels[0], pixels[1]},
-                                    robust)
-                   .found);
+  EXPECT_FALSE(
+      estimateAbsolutePose(camera, {points[0], points[1]}, {pixels[0], pixels[1]}, robust).found);
 }
 
 TEST(RelativePose, MatchesTheTrueMotionOfTwoCameras) {
@@ -244,7 +243,8 @@ TEST(Alignment, RecoversAKnownSimilarityAndRejectsCollinearPoints) {
   EXPECT_NEAR(s->scale, 2.5, 1e-9);
   EXPECT_LT((s->rotation - truth.rotation).norm(), 1e-9);
   EXPECT_LT((s->translation - truth.translation).norm(), 1e-9);
-  EXPECT_FALSE(estimateSimilarity({{0, 0, 0}, {1, 1, 1}, {2, 2, 2}}, {{0, 0, 0}, {1, 1, 1}, {2, 2, 2}}));
+  EXPECT_FALSE(
+      estimateSimilarity({{0, 0, 0}, {1, 1, 1}, {2, 2, 2}}, {{0, 0, 0}, {1, 1, 1}, {2, 2, 2}}));
   EXPECT_FALSE(estimateSimilarity({{0, 0, 0}, {1, 0, 0}}, {{0, 0, 0}, {1, 0, 0}}));
 
   // Poses moved by a similarity come back with zero error.
@@ -304,10 +304,10 @@ TEST(BundleAdjustment, ReducesTheErrorOfAPerturbedProblem) {
   std::normal_distribution<double> n(0, 1);
   for (auto& [id, image] : rec.images) {
     if (id == 1) continue;
-    image.q_cw = (image.q_cw *
-                  Eigen::Quaterniond(Eigen::AngleAxisd(
-                      0.5 * kDeg, Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized())))
-                     .normalized();
+    image.q_cw =
+        (image.q_cw * Eigen::Quaterniond(Eigen::AngleAxisd(
+                          0.5 * kDeg, Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized())))
+            .normalized();
     image.t_cw += 0.05 * Eigen::Vector3d(n(rng), n(rng), n(rng));
   }
   for (auto& [id, point] : rec.points) point.xyz += 0.05 * Eigen::Vector3d(n(rng), n(rng), n(rng));

@@ -24,7 +24,13 @@ TEST(IncrementalMapper, ReconstructsAThreeCameraRigWithWrongMatches) {
   const MapperResult result =
       mapper.run(nullptr, [&](const std::string& line) { log.push_back(line); });
   ASSERT_EQ(result.status, MapperStatus::SUCCESS) << result.message;
-  { const auto& tm = result.timings; std::cerr << "DEBUG tracks " << tm.tracks << " init " << tm.initial_pair << " reg " << tm.registration << " tri " << tm.triangulation << " lba " << tm.local_ba << " gba " << tm.global_ba << " filt " << tm.filtering << " total " << tm.total << " lbas " << result.local_bas << " gbas " << result.global_bas << "\n"; }
+  {
+    const auto& tm = result.timings;
+    std::cerr << "DEBUG tracks " << tm.tracks << " init " << tm.initial_pair << " reg "
+              << tm.registration << " tri " << tm.triangulation << " lba " << tm.local_ba << " gba "
+              << tm.global_ba << " filt " << tm.filtering << " total " << tm.total << " lbas "
+              << result.local_bas << " gbas " << result.global_bas << "\n";
+  }
   const scene::Reconstruction& rec = result.reconstruction;
   EXPECT_EQ(rec.images.size(), 24u);
   EXPECT_TRUE(result.unregistered.empty());

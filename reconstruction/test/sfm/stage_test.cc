@@ -24,8 +24,8 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path freshFolder(const std::string& name) {
-  const fs::path folder = fs::temp_directory_path() / ("auv_sfm_test_" + name + "_" +
-                                                       std::to_string(::getpid()));
+  const fs::path folder =
+      fs::temp_directory_path() / ("auv_sfm_test_" + name + "_" + std::to_string(::getpid()));
   fs::remove_all(folder);
   fs::create_directories(folder);
   return folder;
@@ -128,8 +128,7 @@ TEST(SfmStage, EmptyOrIncompleteSurveysGiveClearErrors) {
   EXPECT_NE(error.find("left.yaml"), std::string::npos) << error;
   // Calibration with distortion: SfM wants the undistorted intrinsics.
   {
-    cv::FileStorage storage((survey.corrected() / "left.yaml").string(),
-                            cv::FileStorage::WRITE);
+    cv::FileStorage storage((survey.corrected() / "left.yaml").string(), cv::FileStorage::WRITE);
     storage << "image_width" << 640 << "image_height" << 480;
     storage << "camera_matrix" << (cv::Mat_<double>(3, 3) << 500, 0, 320, 0, 500, 240, 0, 0, 1);
     storage << "distortion_coefficients" << (cv::Mat_<double>(1, 5) << 0.1, 0, 0, 0, 0);

@@ -18,12 +18,12 @@
 namespace auv::recon::sfm::testing {
 
 struct SyntheticOptions {
-  int cameras = 3;             ///< rig cameras (different intrinsics and orientations)
-  int stations = 8;            ///< rig positions along the wall
-  int points = 1500;           ///< on the wall
-  double noise_px = 0.5;       ///< keypoint noise, standard deviation
-  double outlier_ratio = 0.03; ///< wrong matches added per pair, fraction of its true ones
-  int distractors = 50;        ///< unmatched keypoints per image
+  int cameras = 3;              ///< rig cameras (different intrinsics and orientations)
+  int stations = 8;             ///< rig positions along the wall
+  int points = 1500;            ///< on the wall
+  double noise_px = 0.5;        ///< keypoint noise, standard deviation
+  double outlier_ratio = 0.03;  ///< wrong matches added per pair, fraction of its true ones
+  int distractors = 50;         ///< unmatched keypoints per image
   size_t min_pair_matches = 30;
   unsigned seed = 1;
 };
@@ -79,8 +79,8 @@ inline SyntheticScene makeSyntheticScene(const SyntheticOptions& o) {
     Eigen::Isometry3d vehicle = Eigen::Isometry3d::Identity();
     const double f = o.stations > 1 ? static_cast<double>(k) / (o.stations - 1) : 0.0;
     vehicle.translation() = Eigen::Vector3d(-4 + 8 * f, 0.4 * std::sin(3 * f), 0.3 * f);
-    vehicle.linear() = Eigen::AngleAxisd(0.1 * std::sin(5 * f), Eigen::Vector3d::UnitY())
-                           .toRotationMatrix();
+    vehicle.linear() =
+        Eigen::AngleAxisd(0.1 * std::sin(5 * f), Eigen::Vector3d::UnitY()).toRotationMatrix();
     for (int c = 0; c < o.cameras; ++c) {
       const scene::Camera& camera = s.input.cameras.at(static_cast<uint32_t>(c + 1));
       const Eigen::Isometry3d camera_to_world = vehicle * rigMount(c);

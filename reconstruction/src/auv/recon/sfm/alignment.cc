@@ -61,7 +61,8 @@ std::optional<PoseErrors> poseErrorsAfterAlignment(
   // Rotation alignment A minimising sum |R_est A^T - R_ref|: the projection onto SO(3) of
   // the sum of R_ref^T R_est.
   Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
-  for (uint32_t id : ids) sum += reference.at(id).rotation().transpose() * estimated.at(id).rotation();
+  for (uint32_t id : ids)
+    sum += reference.at(id).rotation().transpose() * estimated.at(id).rotation();
   Eigen::JacobiSVD<Eigen::Matrix3d> rsvd(sum, Eigen::ComputeFullU | Eigen::ComputeFullV);
   Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
   d(2, 2) = (rsvd.matrixU() * rsvd.matrixV().transpose()).determinant() < 0 ? -1 : 1;
@@ -74,8 +75,7 @@ std::optional<PoseErrors> poseErrorsAfterAlignment(
     errors.max_position = std::max(errors.max_position, d);
     const Eigen::Matrix3d r_est = estimated.at(ids[i]).rotation() * align.transpose();
     const Eigen::Matrix3d delta = r_est * reference.at(ids[i]).rotation().transpose();
-    const double angle =
-        std::acos(std::clamp((delta.trace() - 1) / 2, -1.0, 1.0)) * 180.0 / M_PI;
+    const double angle = std::acos(std::clamp((delta.trace() - 1) / 2, -1.0, 1.0)) * 180.0 / M_PI;
     errors.mean_rotation_deg += angle / ids.size();
     errors.max_rotation_deg = std::max(errors.max_rotation_deg, angle);
   }

@@ -29,8 +29,8 @@ std::string lossFunctionName(LossFunction loss) {
 }
 
 LossFunction lossFunctionFromName(const std::string& name) {
-  for (LossFunction l : {LossFunction::TRIVIAL, LossFunction::HUBER, LossFunction::CAUCHY,
-                         LossFunction::SOFT_L1}) {
+  for (LossFunction l :
+       {LossFunction::TRIVIAL, LossFunction::HUBER, LossFunction::CAUCHY, LossFunction::SOFT_L1}) {
     if (lossFunctionName(l) == name) return l;
   }
   throw std::invalid_argument("loss '" + name + "' is not one of trivial, huber, cauchy, soft_l1");
@@ -50,7 +50,11 @@ namespace {
 /// pose as a unit quaternion (Ceres order w, x, y, z) and a translation, world -> camera.
 struct ReprojectionError {
   ReprojectionError(const Eigen::Vector2d& observed, const scene::Camera& camera)
-      : u(observed.x()), v(observed.y()), fx(camera.fx), fy(camera.fy), cx(camera.cx),
+      : u(observed.x()),
+        v(observed.y()),
+        fx(camera.fx),
+        fy(camera.fy),
+        cx(camera.cx),
         cy(camera.cy) {}
 
   template <class T>
@@ -65,8 +69,7 @@ struct ReprojectionError {
     return true;
   }
 
-  static ceres::CostFunction* create(const Eigen::Vector2d& observed,
-                                     const scene::Camera& camera) {
+  static ceres::CostFunction* create(const Eigen::Vector2d& observed, const scene::Camera& camera) {
     return new ceres::AutoDiffCostFunction<ReprojectionError, 2, 4, 3, 3>(
         new ReprojectionError(observed, camera));
   }
@@ -114,8 +117,7 @@ void configureSolver(ceres::Solver::Options& solver, const BundleAdjustmentOptio
   solver.minimizer_progress_to_stdout = false;
   solver.logging_type = ceres::SILENT;
   // Schur complement on the points: dense for a few cameras, sparse (SuiteSparse) beyond.
-  solver.linear_solver_type =
-      variable_images <= 40 ? ceres::DENSE_SCHUR : ceres::SPARSE_SCHUR;
+  solver.linear_solver_type = variable_images <= 40 ? ceres::DENSE_SCHUR : ceres::SPARSE_SCHUR;
 }
 
 }  // namespace
@@ -254,8 +256,7 @@ BundleAdjustmentSummary bundleAdjust(scene::Reconstruction& rec,
     scene::Image& image = rec.images.at(id);
     fromBlock(poses.at(id), image.q_cw, image.t_cw);
   }
-  summary.seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return summary;
 }
 

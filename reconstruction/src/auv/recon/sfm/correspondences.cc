@@ -27,8 +27,7 @@ void SfmInput::check() const {
   for (const View& view : views) {
     if (!cameras.count(view.camera_id)) {
       throw std::invalid_argument("image " + std::to_string(view.id) + " ('" + view.name +
-                                  "') refers to unknown camera " +
-                                  std::to_string(view.camera_id));
+                                  "') refers to unknown camera " + std::to_string(view.camera_id));
     }
     if (!keypoints.emplace(view.id, view.keypoints.size()).second) {
       throw std::invalid_argument("image id " + std::to_string(view.id) + " ('" + view.name +
@@ -47,8 +46,8 @@ void SfmInput::check() const {
       if (ka >= a->second || kb >= b->second) {
         throw std::invalid_argument(name + ": match (" + std::to_string(ka) + ", " +
                                     std::to_string(kb) + ") beyond the keypoints (" +
-                                    std::to_string(a->second) + ", " +
-                                    std::to_string(b->second) + ")");
+                                    std::to_string(a->second) + ", " + std::to_string(b->second) +
+                                    ")");
       }
     }
   }

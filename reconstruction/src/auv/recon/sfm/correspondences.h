@@ -20,7 +20,7 @@ namespace auv::recon::sfm {
 struct View {
   uint32_t id = 0;
   uint32_t camera_id = 0;
-  std::string name;                        ///< relative to corrected/, e.g. "left/left_0001_000123.png"
+  std::string name;  ///< relative to corrected/, e.g. "left/left_0001_000123.png"
   std::vector<Eigen::Vector2d> keypoints;  ///< px, OpenCV convention (pixel centres at integers)
 };
 
@@ -48,10 +48,10 @@ struct SfmInput {
 };
 
 struct TrackStats {
-  size_t tracks = 0;              ///< with >= 2 images
-  size_t observations = 0;        ///< keypoints in tracks
-  size_t conflicting_matches = 0; ///< left out: they would put two keypoints of one image
-                                  ///< in one track
+  size_t tracks = 0;               ///< with >= 2 images
+  size_t observations = 0;         ///< keypoints in tracks
+  size_t conflicting_matches = 0;  ///< left out: they would put two keypoints of one image
+                                   ///< in one track
 };
 
 /// Tracks: the connected components of the match graph over (image, keypoint) nodes, found

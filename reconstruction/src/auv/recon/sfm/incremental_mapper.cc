@@ -96,7 +96,8 @@ double IncrementalMapper::maxTriangulationAngle(const scene::Point3D& point) con
   double best = 0;
   const size_t n = std::min<size_t>(point.track.size(), 12);  // enough to decide
   std::vector<Eigen::Vector3d> centers;
-  for (size_t i = 0; i < n; ++i) centers.push_back(rec_.images.at(point.track[i].image_id).center());
+  for (size_t i = 0; i < n; ++i)
+    centers.push_back(rec_.images.at(point.track[i].image_id).center());
   for (size_t i = 0; i < n; ++i) {
     for (size_t j = i + 1; j < n; ++j) {
       best = std::max(best, triangulationAngle(centers[i], centers[j], point.xyz));
@@ -141,9 +142,9 @@ bool IncrementalMapper::triangulateTrack(uint64_t track) {
     auto it = rec_.images.find(e.image_id);
     if (it == rec_.images.end()) continue;
     elements.push_back(e);
-    observations.push_back({poseMatrix(it->second),
-                            rec_.cameraOf(it->second).pixelToNormalized(
-                                it->second.points2d[e.point2d_idx])});
+    observations.push_back(
+        {poseMatrix(it->second),
+         rec_.cameraOf(it->second).pixelToNormalized(it->second.points2d[e.point2d_idx])});
   }
   if (elements.size() < 2) return false;
   for (int attempt = 0; attempt < 2; ++attempt) {
@@ -215,7 +216,8 @@ size_t IncrementalMapper::filterPoints(const std::set<uint64_t>& points) {
       }
     }
     point.track = std::move(kept);
-    if (point.track.size() < 2 || maxTriangulationAngle(point) < options_.min_tri_angle_deg * kDeg) {
+    if (point.track.size() < 2 ||
+        maxTriangulationAngle(point) < options_.min_tri_angle_deg * kDeg) {
       removed += point.track.size();
       deletePoint(id);
     }
@@ -252,10 +254,10 @@ void IncrementalMapper::evaluatePair(PairCandidate& pair) {
   if (!pair.pose.found || pair.pose.inliers.size() < options_.init_min_inliers) return;
   // Planar scene or no baseline when a homography explains about as much (the verification's
   // count over all its matches when it has one).
-  const int64_t h = pair.homography_inliers >= 0
-                        ? pair.homography_inliers
-                        : static_cast<int64_t>(countHomographyInliers(ca, cb, pa, pb,
-                                                                      options_.robust));
+  const int64_t h =
+      pair.homography_inliers >= 0
+          ? pair.homography_inliers
+          : static_cast<int64_t>(countHomographyInliers(ca, cb, pa, pb, options_.robust));
   const double e = pair.homography_inliers >= 0 ? pair.matches : pair.pose.inliers.size();
   pair.homography_ratio = h / std::max(e, 1.0);
   // Median triangulation angle of the inliers in front of both cameras.
@@ -303,10 +305,9 @@ bool IncrementalMapper::findInitialPair(MapperResult& result) {
     candidate.essential = pair.essential;
     pair_candidates_.push_back(candidate);
   }
-  std::stable_sort(pair_candidates_.begin(), pair_candidates_.end(),
-                   [](const PairCandidate& x, const PairCandidate& y) {
-                     return x.matches > y.matches;
-                   });
+  std::stable_sort(
+      pair_candidates_.begin(), pair_candidates_.end(),
+      [](const PairCandidate& x, const PairCandidate& y) { return x.matches > y.matches; });
   if (pair_candidates_.size() > options_.init_max_pairs) {
     pair_candidates_.resize(options_.init_max_pairs);
   }
@@ -381,8 +382,8 @@ bool IncrementalMapper::registerImage(uint32_t id) {
   if (!pose.found || pose.inliers.size() < options_.abs_pose_min_inliers ||
       pose.inliers.size() < options_.abs_pose_min_inlier_ratio * points.size()) {
     std::ostringstream line;
-    line << "sfm: " << view.name << " not registered: " << pose.inliers.size()
-         << " inliers of " << points.size() << " 2D-3D correspondences";
+    line << "sfm: " << view.name << " not registered: " << pose.inliers.size() << " inliers of "
+         << points.size() << " 2D-3D correspondences";
     logLine(line.str());
     return false;
   }
@@ -515,8 +516,8 @@ MapperResult IncrementalMapper::run(Progress* progress,
       message << "no initial pair among " << input_.pairs.size() << " verified pairs ("
               << pair_candidates_.size() << " tried; most matches " << best
               << ", most essential inliers " << most_inliers
-              << ", widest median triangulation angle " << widest / kDeg << " deg; needs >= "
-              << options_.init_min_inliers << " inliers and >= "
+              << ", widest median triangulation angle " << widest / kDeg
+              << " deg; needs >= " << options_.init_min_inliers << " inliers and >= "
               << options_.init_min_tri_angle_deg / (1 << options_.init_relaxations) << " deg)";
       result.message = message.str();
       result.timings.total = std::chrono::duration<double>(Clock::now() - start).count();

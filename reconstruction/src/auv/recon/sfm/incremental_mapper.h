@@ -28,10 +28,10 @@ namespace auv::recon::sfm {
 
 struct MapperOptions {
   // Initial pair.
-  size_t init_min_inliers = 100;        ///< essential-matrix inliers the initial pair needs
-  double init_min_tri_angle_deg = 16;   ///< deg: median triangulation angle of its points
+  size_t init_min_inliers = 100;           ///< essential-matrix inliers the initial pair needs
+  double init_min_tri_angle_deg = 16;      ///< deg: median triangulation angle of its points
   double init_max_homography_ratio = 0.8;  ///< homography / essential inliers above: planar
-  size_t init_max_pairs = 40;           ///< candidate pairs tried (most matches first)
+  size_t init_max_pairs = 40;              ///< candidate pairs tried (most matches first)
   int init_relaxations = 2;  ///< times the angle is halved when no pair passes; a last round
                              ///< then also accepts planar pairs (flat sea floor)
 
@@ -45,8 +45,8 @@ struct MapperOptions {
   double max_reprojection_error_px = 4.0;  ///< px: observations beyond are outliers
 
   // Bundle adjustment.
-  size_t local_ba_images = 6;       ///< the new view and its best-connected neighbours
-  double global_ba_growth = 0.1;    ///< global BA when registered views grew by this fraction
+  size_t local_ba_images = 6;         ///< the new view and its best-connected neighbours
+  double global_ba_growth = 0.1;      ///< global BA when registered views grew by this fraction
   int local_ba_max_iterations = 25;   ///< Levenberg-Marquardt iterations of a local BA
   int global_ba_max_iterations = 50;  ///< and of a global one
   BundleAdjustmentOptions ba;         ///< loss, scale, tolerance, threads
@@ -93,7 +93,7 @@ class IncrementalMapper {
   struct PairCandidate {
     uint32_t a = 0, b = 0;
     size_t matches = 0;
-    int64_t homography_inliers = -1;  ///< from the verification, -1: unknown
+    int64_t homography_inliers = -1;           ///< from the verification, -1: unknown
     std::optional<Eigen::Matrix3d> essential;  ///< from the verification
     bool evaluated = false;
     RelativePose pose;

@@ -19,8 +19,8 @@ std::vector<TimedPosition> readTumTrajectory(const std::filesystem::path& file) 
     std::istringstream fields(line);
     TimedPosition p;
     double q[4];
-    if (!(fields >> p.time >> p.position.x() >> p.position.y() >> p.position.z() >> q[0] >>
-          q[1] >> q[2] >> q[3]) ||
+    if (!(fields >> p.time >> p.position.x() >> p.position.y() >> p.position.z() >> q[0] >> q[1] >>
+          q[2] >> q[3]) ||
         !std::isfinite(p.time) || !p.position.allFinite()) {
       throw std::runtime_error(file.string() + ":" + std::to_string(number) +
                                ": not a TUM line 't x y z qx qy qz qw'");
@@ -38,9 +38,8 @@ bool positionAt(const std::vector<TimedPosition>& trajectory, double time,
   if (trajectory.empty() || time < trajectory.front().time || time > trajectory.back().time) {
     return false;
   }
-  auto after = std::lower_bound(
-      trajectory.begin(), trajectory.end(), time,
-      [](const TimedPosition& p, double t) { return p.time < t; });
+  auto after = std::lower_bound(trajectory.begin(), trajectory.end(), time,
+                                [](const TimedPosition& p, double t) { return p.time < t; });
   if (after == trajectory.begin()) {
     position = after->position;
     return true;
@@ -96,8 +95,8 @@ std::map<std::string, double> readKeyframeTimes(const std::filesystem::path& key
         if (used != cells[tc].size() || !std::isfinite(t)) throw std::invalid_argument("");
         times[camera + "/" + cells[fc]] = t;
       } catch (const std::exception&) {
-        throw std::runtime_error(index.string() + ":" + std::to_string(number) +
-                                 ": sim_time_s '" + cells[tc] + "' is not a number");
+        throw std::runtime_error(index.string() + ":" + std::to_string(number) + ": sim_time_s '" +
+                                 cells[tc] + "' is not a number");
       }
     }
   }

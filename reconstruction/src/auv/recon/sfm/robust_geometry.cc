@@ -61,17 +61,15 @@ RelativePose estimateRelativePose(const scene::Camera& camera_a, const scene::Ca
   options.check();
   RelativePose result;
   if (pixels_a.size() < 6 || pixels_a.size() != pixels_b.size()) return result;
-  const auto essential =
-      estimators::estimateEssential(pixels_a, pixels_b, camera_a, camera_b,
-                                    acRansacOptions(options));
+  const auto essential = estimators::estimateEssential(pixels_a, pixels_b, camera_a, camera_b,
+                                                       acRansacOptions(options));
   if (!essential.success()) return result;
-  return poseFromInliers(essential.model, camera_a, camera_b, pixels_a, pixels_b,
-                         essential.inliers, essential.threshold);
+  return poseFromInliers(essential.model, camera_a, camera_b, pixels_a, pixels_b, essential.inliers,
+                         essential.threshold);
 }
 
 RelativePose relativePoseFromEssential(const Eigen::Matrix3d& essential,
-                                       const scene::Camera& camera_a,
-                                       const scene::Camera& camera_b,
+                                       const scene::Camera& camera_a, const scene::Camera& camera_b,
                                        const std::vector<Eigen::Vector2d>& pixels_a,
                                        const std::vector<Eigen::Vector2d>& pixels_b,
                                        const RobustOptions& options) {
@@ -94,9 +92,9 @@ size_t countHomographyInliers(const scene::Camera& camera_a, const scene::Camera
                               const RobustOptions& options) {
   options.check();
   if (pixels_a.size() < 5 || pixels_a.size() != pixels_b.size()) return 0;
-  const auto homography = estimators::estimateHomography(
-      pixels_a, pixels_b, {camera_a.width, camera_a.height}, {camera_b.width, camera_b.height},
-      acRansacOptions(options));
+  const auto homography =
+      estimators::estimateHomography(pixels_a, pixels_b, {camera_a.width, camera_a.height},
+                                     {camera_b.width, camera_b.height}, acRansacOptions(options));
   return homography.success() ? homography.numInliers() : 0;
 }
 

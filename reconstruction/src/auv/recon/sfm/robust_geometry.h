@@ -46,8 +46,7 @@ RelativePose estimateRelativePose(const scene::Camera& camera_a, const scene::Ca
 /// inliers = correspondences within `max_error_px` of their epipolar lines and in front of
 /// both cameras under the decomposed pose.
 RelativePose relativePoseFromEssential(const Eigen::Matrix3d& essential,
-                                       const scene::Camera& camera_a,
-                                       const scene::Camera& camera_b,
+                                       const scene::Camera& camera_a, const scene::Camera& camera_b,
                                        const std::vector<Eigen::Vector2d>& pixels_a,
                                        const std::vector<Eigen::Vector2d>& pixels_b,
                                        const RobustOptions& options);

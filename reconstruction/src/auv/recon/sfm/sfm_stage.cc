@@ -138,12 +138,10 @@ SfmInput readSfmInput(const Survey& survey) {
     }
     const scene::Camera& intrinsics = input.cameras.at(camera->second);
     if (entry.width != intrinsics.width || entry.height != intrinsics.height) {
-      throw StageError(kStage, "features of " + entry.image + " are of a " +
-                                   std::to_string(entry.width) + "x" +
-                                   std::to_string(entry.height) + " image, but " +
-                                   entry.camera + ".yaml says " +
-                                   std::to_string(intrinsics.width) + "x" +
-                                   std::to_string(intrinsics.height));
+      throw StageError(
+          kStage, "features of " + entry.image + " are of a " + std::to_string(entry.width) + "x" +
+                      std::to_string(entry.height) + " image, but " + entry.camera + ".yaml says " +
+                      std::to_string(intrinsics.width) + "x" + std::to_string(intrinsics.height));
     }
     View view;
     view.id = static_cast<uint32_t>(input.views.size() + 1);
@@ -201,8 +199,8 @@ void writeSparseModel(const scene::Reconstruction& rec, const fs::path& folder) 
     std::nth_element(spacing.begin(), spacing.begin() + spacing.size() / 2, spacing.end());
     depth = std::max(spacing[spacing.size() / 2], 1e-6);
   }
-  const Eigen::Matrix<uint8_t, 3, 1> palette[] = {{230, 60, 60}, {60, 200, 60}, {60, 90, 230},
-                                                   {230, 200, 40}, {200, 60, 200}};
+  const Eigen::Matrix<uint8_t, 3, 1> palette[] = {
+      {230, 60, 60}, {60, 200, 60}, {60, 90, 230}, {230, 200, 40}, {200, 60, 200}};
   scene::PlyData glyphs;
   for (const auto& [id, image] : rec.images) {
     const scene::Camera& camera = rec.cameraOf(image);
@@ -237,8 +235,8 @@ SfmSummary reconstructSurvey(const Survey& survey, const SfmStageOptions& option
   if (!options.navigation.empty()) {
     try {
       trajectory = readTumTrajectory(options.navigation);
-      times = readKeyframeTimes(survey.keyframes(),
-                                Survey::cameraFolders(survey.corrected(), kStage));
+      times =
+          readKeyframeTimes(survey.keyframes(), Survey::cameraFolders(survey.corrected(), kStage));
     } catch (const std::runtime_error& e) {
       throw StageError(kStage, std::string("navigation: ") + e.what());
     }
@@ -277,8 +275,7 @@ SfmSummary reconstructSurvey(const Survey& survey, const SfmStageOptions& option
   if (!options.navigation.empty()) {
     summary.navigation = alignToNavigation(rec, times, trajectory);
     if (!summary.navigation.applied) {
-      std::cerr << "sfm: navigation alignment not applied: " << summary.navigation.reason
-                << "\n";
+      std::cerr << "sfm: navigation alignment not applied: " << summary.navigation.reason << "\n";
     }
   }
 

@@ -14,21 +14,21 @@ int sfmMain(const std::vector<std::string>& args) {
     sfm::SfmStageOptions options;
     std::string survey;
     OptionSet set("sfm");
-    set.positional("survey", &survey, "survey folder (reads corrected/, features/; writes sparse/)");
+    set.positional("survey", &survey,
+                   "survey folder (reads corrected/, features/; writes sparse/)");
     options.bind(set);
     if (!set.parse(args)) return tools::kExitOk;
     options.check();
     const sfm::SfmSummary s = sfm::reconstructSurvey(Survey(survey), options);
     std::cout << "sfm: " << s.images_registered << " of " << s.images_total
               << " images registered, " << s.points << " points, mean track length "
-              << s.mean_track_length << ", mean reprojection error "
-              << s.mean_reprojection_error_px << " px";
+              << s.mean_track_length << ", mean reprojection error " << s.mean_reprojection_error_px
+              << " px";
     if (s.navigation.applied) {
       std::cout << ", aligned to the navigation (" << s.navigation.images << " images, rms "
                 << s.navigation.rms_m << " m)";
     }
-    std::cout << " in " << s.seconds << " s -> " << Survey(survey).sparse().string()
-              << std::endl;
+    std::cout << " in " << s.seconds << " s -> " << Survey(survey).sparse().string() << std::endl;
     return tools::kExitOk;
   });
 }

@@ -1,0 +1,71 @@
+#pragma once
+// `auv recon run <survey>`: the reconstruction stages in the paper's order (section 3:
+// keyframes -> correct -> features -> match -> sfm -> dense -> mesh -> texture) over one survey
+// folder (../shared/DESIGN.md section 6), each through its library's entry point. A stage whose
+// output is newer than all of its input is skipped (unless `force`), so a run continues where
+// an earlier one stopped and re-runs only what changed.
+
+#include <filesystem>
+#include <functional>
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+#include "auv/recon/common/survey.h"
+
+namespace auv::recon {
+class OptionSet;
+}
+
+namespace auv::recon::pipeline {
+
+/// The stages `run` chains, in order.
+const std::vector<std::string>& stageNames();
+
+struct PipelineOptions {
+  std::string from = "keyframes";  ///< first stage run
+  std::string to = "texture";      ///< last stage run
+  bool force = false;              ///< run stages even when their output is up to date
+  /// recon.yaml: one section per stage (`sfm:`, `features:`, ...), the same keys as the
+  /// stages' flags. Empty: defaults.
+  std::string config;
+
+  /// Throws OptionError naming the field: unknown stage, `from` after `to`, missing config.
+  void check() const;
+  void bind(OptionSet& set);
+};
+
+enum class StageOutcome { RAN, UP_TO_DATE, NOT_BUILT };
+std::string stageOutcomeName(StageOutcome outcome);
+
+struct StageReport {
+  std::string stage;
+  StageOutcome outcome = StageOutcome::RAN;
+  double seconds = 0;
+  std::string note;  ///< the stage's one-line result, or why it was skipped
+};
+
+struct PipelineSummary {
+  std::vector<StageReport> stages;
+  double seconds = 0;
+};
+
+/// Runs the stages from `options.from` to `options.to`; `log` gets one line per stage. A
+/// stage's failure (StageError naming it) stops the run and propagates; the outputs of the
+/// stages before it stay (each stage writes through a staging folder).
+PipelineSummary runPipeline(const Survey& survey, const PipelineOptions& options,
+                            std::ostream& log);
+
+/// Newest modification time of the files under `paths` (files or folders, hidden entries
+/// skipped); false when there is no file at all.
+bool newestFileTime(const std::vector<std::filesystem::path>& paths,
+                    std::filesystem::file_time_type& time);
+/// Oldest modification time of the files under `paths`; false when there is no file.
+bool oldestFileTime(const std::vector<std::filesystem::path>& paths,
+                    std::filesystem::file_time_type& time);
+/// A stage's output is up to date when it has files, all at least as new as every input
+/// file (and there is input).
+bool upToDate(const std::vector<std::filesystem::path>& inputs,
+              const std::vector<std::filesystem::path>& outputs);
+
+}  // namespace auv::recon::pipeline

@@ -1,0 +1,189 @@
+// `auv recon run`: stage order, up-to-date skipping, options and config checks, and a real
+// chain features -> match -> sfm on Sceaux castle at quarter resolution.
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "auv/recon/common/stage_error.h"
+#include "auv/recon/pipeline/pipeline.h"
+#include "auv/recon/scene/colmap_text.h"
+
+namespace auv::recon::pipeline {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path freshFolder(const std::string& name) {
+  const fs::path folder =
+      fs::temp_directory_path() / ("auv_pipeline_test_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(folder);
+  fs::create_directories(folder);
+  return folder;
+}
+
+void touch(const fs::path& file, fs::file_time_type when) {
+  fs::create_directories(file.parent_path());
+  std::ofstream(file) << "x";
+  fs::last_write_time(file, when);
+}
+
+TEST(Pipeline, StagesComeInThePapersOrder) {
+  EXPECT_EQ(stageNames(), (std::vector<std::string>{"keyframes", "correct", "features", "match",
+                                                    "sfm", "dense", "mesh", "texture"}));
+}
+
+TEST(Pipeline, OutputIsUpToDateOnlyWhenNewerThanEveryInput) {
+  const fs::path root = freshFolder("dates");
+  const auto now = fs::file_time_type::clock::now();
+  const auto hour = std::chrono::hours(1);
+  touch(root / "in" / "a.png", now - 3 * hour);
+  touch(root / "in" / "sub" / "b.png", now - 2 * hour);
+  touch(root / "out" / "x.txt", now - hour);
+  touch(root / "out" / "y.txt", now - hour / 2);
+  EXPECT_TRUE(upToDate({root / "in"}, {root / "out"}));
+  // An input file changed after the output: out of date.
+  touch(root / "in" / "sub" / "b.png", now);
+  EXPECT_FALSE(upToDate({root / "in"}, {root / "out"}));
+  // One output file older than an input: out of date (a half-updated output never counts).
+  touch(root / "in" / "sub" / "b.png", now - 2 * hour);
+  touch(root / "out" / "x.txt", now - 4 * hour);
+  EXPECT_FALSE(upToDate({root / "in"}, {root / "out"}));
+  // Hidden entries (staging folders) do not count.
+  touch(root / "out" / "x.txt", now - hour);
+  touch(root / "in" / ".staging" / "c.png", now);
+  EXPECT_TRUE(upToDate({root / "in"}, {root / "out"}));
+  // No output or no input: run.
+  EXPECT_FALSE(upToDate({root / "in"}, {root / "missing"}));
+  EXPECT_FALSE(upToDate({root / "missing"}, {root / "out"}));
+  // Several inputs, files and folders.
+  touch(root / "extra.yaml", now);
+  EXPECT_FALSE(upToDate({root / "in", root / "extra.yaml"}, {root / "out"}));
+  fs::remove_all(root);
+}
+
+TEST(Pipeline, OptionsNameTheBadField) {
+  PipelineOptions options;
+  options.from = "dense";
+  options.to = "sfm";
+  try {
+    options.check();
+    FAIL();
+  } catch (const OptionError& e) {
+    EXPECT_NE(std::string(e.what()).find("from = dense"), std::string::npos) << e.what();
+  }
+  options = {};
+  options.to = "render";
+  EXPECT_THROW(options.check(), OptionError);
+  options = {};
+  options.config = "/nonexistent/recon.yaml";
+  EXPECT_THROW(options.check(), OptionError);
+}
+
+TEST(Pipeline, AFailingStageStopsTheRunNamingIt) {
+  const fs::path root = freshFolder("fail");
+  PipelineOptions options;
+  options.from = "features";
+  options.to = "sfm";
+  std::ostringstream log;
+  try {
+    runPipeline(Survey(root), options, log);
+    FAIL() << "expected a StageError";
+  } catch (const StageError& e) {
+    EXPECT_EQ(e.stage(), "features");
+    EXPECT_NE(std::string(e.what()).find("corrected"), std::string::npos) << e.what();
+  }
+  EXPECT_NE(log.str().find("run: features ..."), std::string::npos) << log.str();
+  EXPECT_EQ(log.str().find("run: match"), std::string::npos) << log.str();
+  fs::remove_all(root);
+}
+
+/// Sceaux castle at quarter resolution as corrected/castle/ (+ castle.yaml); false if absent.
+bool quarterSceaux(const Survey& survey) {
+  const fs::path data = fs::path(AUV_RECON_SHARED_DATA) / "sceaux_castle" / "images";
+  if (!fs::exists(data / "K.txt")) return false;
+  fs::create_directories(survey.corrected() / "castle");
+  for (const auto& entry : fs::directory_iterator(data)) {
+    if (entry.path().extension() != ".JPG") continue;
+    cv::Mat full = cv::imread(entry.path().string(), cv::IMREAD_COLOR), small;
+    cv::resize(full, small, cv::Size(708, 532), 0, 0, cv::INTER_AREA);
+    cv::imwrite((survey.corrected() / "castle" / (entry.path().stem().string() + ".png")).string(),
+                small);
+  }
+  cv::FileStorage storage((survey.corrected() / "castle.yaml").string(), cv::FileStorage::WRITE);
+  const double f = 2905.88 / 4, cx = (1416 + 0.5) / 4 - 0.5, cy = (1064 + 0.5) / 4 - 0.5;
+  storage << "image_width" << 708 << "image_height" << 532;
+  storage << "camera_matrix" << (cv::Mat_<double>(3, 3) << f, 0, cx, 0, f, cy, 0, 0, 1);
+  storage << "distortion_coefficients" << cv::Mat::zeros(1, 5, CV_64F);
+  return true;
+}
+
+TEST(Pipeline, ChainsFeaturesMatchAndSfmThenSkipsWhatIsUpToDate) {
+  const fs::path root = freshFolder("chain");
+  const Survey survey(root);
+  if (!quarterSceaux(survey)) GTEST_SKIP() << "Sceaux castle data absent";
+  {
+    std::ofstream config(root / "recon.yaml");
+    config << "features:\n  threads: 2\nmatch:\n  threads: 2\nsfm:\n  threads: 2\n";
+  }
+  PipelineOptions options;
+  options.from = "features";
+  options.to = "sfm";
+  options.config = (root / "recon.yaml").string();
+  std::ostringstream log;
+  PipelineSummary first = runPipeline(survey, options, log);
+  ASSERT_EQ(first.stages.size(), 3u);
+  for (const auto& s : first.stages) EXPECT_EQ(s.outcome, StageOutcome::RAN) << s.stage;
+  const scene::Reconstruction model = scene::readColmapText(survey.sparse());
+  EXPECT_GE(model.images.size(), 8u);  // quarter resolution: not every view may register
+  const auto sparse_time = fs::last_write_time(survey.sparse() / "images.txt");
+
+  // Nothing changed: every stage is skipped and sparse/ is untouched.
+  PipelineSummary second = runPipeline(survey, options, log);
+  for (const auto& s : second.stages) EXPECT_EQ(s.outcome, StageOutcome::UP_TO_DATE) << s.stage;
+  EXPECT_EQ(fs::last_write_time(survey.sparse() / "images.txt"), sparse_time);
+
+  // New verified matches: sfm runs again, features and match do not.
+  fs::last_write_time(survey.root() / "features" / "matches" / "pairs.csv",
+                      fs::file_time_type::clock::now() + std::chrono::seconds(1));
+  PipelineSummary third = runPipeline(survey, options, log);
+  ASSERT_EQ(third.stages.size(), 3u);
+  EXPECT_EQ(third.stages[0].outcome, StageOutcome::UP_TO_DATE);
+  EXPECT_EQ(third.stages[1].outcome, StageOutcome::UP_TO_DATE);
+  EXPECT_EQ(third.stages[2].outcome, StageOutcome::RAN);
+  EXPECT_GT(fs::last_write_time(survey.sparse() / "images.txt"), sparse_time);
+
+  // A config section for a stage `run` cannot configure: a clear error before anything runs.
+  {
+    std::ofstream config(root / "bad.yaml");
+    config << "keyframes:\n  min_motion_px: 40\n";
+  }
+  PipelineOptions bad = options;
+  bad.config = (root / "bad.yaml").string();
+  try {
+    runPipeline(survey, bad, log);
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("section 'keyframes'"), std::string::npos) << e.what();
+  }
+  // A bad sfm option in the config names the key; sparse/ stays.
+  {
+    std::ofstream config(root / "bad.yaml");
+    config << "sfm:\n  max_reprojection_error: -1\n";
+  }
+  PipelineOptions force = bad;
+  force.from = "sfm";
+  force.force = true;
+  EXPECT_THROW(runPipeline(survey, force, log), std::invalid_argument);
+  EXPECT_EQ(scene::readColmapText(survey.sparse()).images.size(), model.images.size());
+  fs::remove_all(root);
+}
+
+}  // namespace
+}  // namespace auv::recon::pipeline
