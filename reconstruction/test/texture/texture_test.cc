@@ -481,3 +481,37 @@ TEST(Texture, PhotoConsistencyKeepsViewsThatDifferOnlyInExposure) {
   ASSERT_GT(faces_with_three, scene.mesh.faces.size() / 2);
   EXPECT_EQ(rejectInconsistentViews(observations, options), 0u) << "of " << total;
 }
+
+TEST(Texture, AtlasStaysWithinItsTexelBudget) {
+  Scene scene;
+  scene.mesh = synth::gridMesh(10, 0.8, synth::flat);
+  for (const Eigen::Vector3d& c : {Eigen::Vector3d(-0.3, 0, 1.0), Eigen::Vector3d(0.3, 0, 1.0)}) {
+    scene.views.push_back(synth::lookAt(c, Eigen::Vector3d(c.x(), 0, 0), 320, 240, 300));
+    scene.images.push_back(synth::renderTruth(scene.mesh, scene.views.back()));
+  }
+  TextureOptions options = quietOptions();
+  const TextureResult native = textureMesh(scene.mesh, scene.views, scene.loader(), options);
+  const double native_texels = native.stats.atlas.fill_ratio * native.stats.atlas.pages *
+                               native.stats.atlas.page_size * native.stats.atlas.page_size;
+  options.atlas.max_atlas_megapixels = native_texels / 4e6;  // a quarter of what it needs
+  const TextureResult budget = textureMesh(scene.mesh, scene.views, scene.loader(), options);
+  const double texels = budget.stats.atlas.fill_ratio * budget.stats.atlas.pages *
+                        budget.stats.atlas.page_size * budget.stats.atlas.page_size;
+  std::cout << "native " << native_texels << " texels (scale " << native.stats.atlas.texel_scale
+            << "), budget " << options.atlas.max_atlas_megapixels * 1e6 << ": " << texels
+            << " texels (scale " << budget.stats.atlas.texel_scale << ")" << std::endl;
+  EXPECT_EQ(native.stats.atlas.texel_scale, 1.0);
+  EXPECT_LT(budget.stats.atlas.texel_scale, 0.6);
+  EXPECT_LE(texels, 1.05 * options.atlas.max_atlas_megapixels * 1e6);
+  // Still the right texture, at half the resolution (a view inside what the survey saw).
+  const ViewGeometry check = synth::lookAt(Eigen::Vector3d(0, 0, 0.7), Eigen::Vector3d(0, 0, 0));
+  const Rendering rendering = renderTexturedModel(budget.model, check);
+  const Rendering full = renderTexturedModel(native.model, check);
+  const cv::Mat3b truth = synth::renderTruth(scene.mesh, check);
+  const double psnr_native = psnr(full.image, truth, full.mask);
+  const double psnr_budget = psnr(rendering.image, truth, rendering.mask);
+  std::cout << "PSNR native " << psnr_native << " dB, at half resolution " << psnr_budget << " dB"
+            << std::endl;
+  EXPECT_GT(psnr_native, 45.0);
+  EXPECT_GT(psnr_budget, 40.0);
+}

@@ -17,6 +17,7 @@ void AtlasOptions::check() const {
                          "must be in [64, 16384]");
   AUV_RECON_CHECK_OPTION(padding >= 1 && padding <= 16, padding, "must be in [1, 16]");
   AUV_RECON_CHECK_OPTION(blend_width >= 1 && blend_width <= 64, blend_width, "must be in [1, 64]");
+  AUV_RECON_CHECK_OPTION(max_atlas_megapixels > 0, max_atlas_megapixels, "must be > 0");
   AUV_RECON_CHECK_OPTION(unseen_gray >= 0 && unseen_gray <= 255, unseen_gray,
                          "must be in [0, 255]");
 }
@@ -93,6 +94,7 @@ AtlasResult buildAtlas(const FaceMesh& mesh, const std::vector<ViewGeometry>& vi
     patch.faces.push_back(static_cast<int>(f));
   }
   const int max_content = options.max_page_size - 2 * pad - 2;
+  std::vector<Eigen::Vector2d> patch_extent;  // source pixels
   for (Patch& patch : patches) {
     const ViewGeometry& view = views[patch.label];
     Eigen::Vector2d low = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
@@ -105,8 +107,21 @@ AtlasResult buildAtlas(const FaceMesh& mesh, const std::vector<ViewGeometry>& vi
       }
     }
     patch.origin = low.array().floor().matrix();
-    const Eigen::Vector2d extent = high - patch.origin;
-    patch.scale = std::min(1.0, max_content / std::max(1.0, extent.maxCoeff()));
+    patch_extent.push_back(high - patch.origin);
+  }
+  // Texel budget: patches at native resolution unless their total exceeds it (hundreds of
+  // overlapping full-resolution views); then every patch is scaled by the same factor.
+  double native_area = 0;
+  for (const Eigen::Vector2d& extent : patch_extent) {
+    native_area += (extent.x() + 1 + 2 * pad) * (extent.y() + 1 + 2 * pad);
+  }
+  const double budget = options.max_atlas_megapixels * 1e6;
+  result.stats.texel_scale = native_area > budget ? std::sqrt(budget / native_area) : 1.0;
+  for (size_t p = 0; p < patches.size(); ++p) {
+    Patch& patch = patches[p];
+    const Eigen::Vector2d& extent = patch_extent[p];
+    patch.scale =
+        std::min(result.stats.texel_scale, max_content / std::max(1.0, extent.maxCoeff()));
     patch.width = static_cast<int>(std::ceil(extent.x() * patch.scale)) + 1 + 2 * pad;
     patch.height = static_cast<int>(std::ceil(extent.y() * patch.scale)) + 1 + 2 * pad;
   }

@@ -16,6 +16,9 @@ namespace auv::recon::texture {
 struct AtlasOptions {
   /// Largest atlas page side, texels (pages are square; a patch larger than a page is scaled).
   int max_page_size = 4096;
+  /// Texel budget of the whole atlas, megatexels: patches are cut at the images' native
+  /// resolution unless they add up to more, then all are scaled down by the same factor.
+  double max_atlas_megapixels = 64.0;
   /// Texels of padding around each patch (bilinear filtering and mip-mapping read beyond the
   /// faces).
   int padding = 2;
@@ -35,6 +38,7 @@ struct AtlasStats {
   double fill_ratio = 0;  ///< patch texels / page texels
   size_t unseen_faces = 0;
   size_t blended_texels = 0;
+  double texel_scale = 1.0;  ///< texels per source pixel (< 1 when over the budget)
 };
 
 struct AtlasResult {

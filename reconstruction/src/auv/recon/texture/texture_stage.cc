@@ -130,6 +130,7 @@ TextureStageSummary runTextureStage(const Survey& survey, const TextureStageOpti
       {"atlas_page_size", s.atlas.page_size},
       {"atlas_fill_ratio", s.atlas.fill_ratio},
       {"blended_texels", s.atlas.blended_texels},
+      {"texel_scale", s.atlas.texel_scale},
       {"image_reads", cache.reads()},
       {"seconds",
        {{"visibility", s.seconds_visibility},
@@ -146,7 +147,8 @@ TextureStageSummary runTextureStage(const Survey& survey, const TextureStageOpti
         {"global_leveling", options.texture.global_leveling},
         {"local_blending", options.texture.atlas.local_blending},
         {"blend_width", options.texture.atlas.blend_width},
-        {"max_page_size", options.texture.atlas.max_page_size}}}};
+        {"max_page_size", options.texture.atlas.max_page_size},
+        {"max_atlas_megapixels", options.texture.atlas.max_atlas_megapixels}}}};
   updateReport(survey.report(), "texture", section);
   return summary;
 }

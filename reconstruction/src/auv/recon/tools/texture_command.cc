@@ -37,6 +37,8 @@ int textureMain(const std::vector<std::string>& args) {
     set.add("blend_width", &a.blend_width, "texels of feathering on each side of a seam");
     set.add("max_page_size", &a.max_page_size, "largest atlas page side (texels)");
     set.add("padding", &a.padding, "texels of padding around each patch");
+    set.add("max_atlas_megapixels", &a.max_atlas_megapixels,
+            "texel budget of the atlas (patches scaled down beyond it)");
     set.add("image_cache", &options.image_cache, "images kept in memory at once");
     if (!set.parse(args)) return tools::kExitOk;
     options.check();
