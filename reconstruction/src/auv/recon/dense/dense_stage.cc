@@ -1,6 +1,7 @@
 #include "auv/recon/dense/dense_stage.h"
 
 #include <chrono>
+#include <ctime>
 #include <fstream>
 #include <iomanip>
 #include <list>
@@ -54,17 +55,20 @@ class LruCache {
 /// Starts a sub-stage's time and peak memory.
 class SubStage {
  public:
-  explicit SubStage(SubStageFigures& figures) : figures_(figures), start_(Clock::now()) {
+  explicit SubStage(SubStageFigures& figures)
+      : figures_(figures), start_(Clock::now()), cpu_start_(std::clock()) {
     resetPeakMemory();
   }
   ~SubStage() {
     figures_.seconds = std::chrono::duration<double>(Clock::now() - start_).count();
+    figures_.cpu_seconds = static_cast<double>(std::clock() - cpu_start_) / CLOCKS_PER_SEC;
     figures_.peak_memory_bytes = peakMemoryBytes();
   }
 
  private:
   SubStageFigures& figures_;
   Clock::time_point start_;
+  std::clock_t cpu_start_;
 };
 
 fs::path depthMapPath(const fs::path& folder, const std::string& image_name) {
@@ -74,7 +78,9 @@ fs::path depthMapPath(const fs::path& folder, const std::string& image_name) {
 }
 
 nlohmann::json figures(const SubStageFigures& f) {
-  return {{"seconds", f.seconds}, {"peak_memory_mb", f.peak_memory_bytes / 1048576.0}};
+  return {{"seconds", f.seconds},
+          {"cpu_seconds", f.cpu_seconds},
+          {"peak_memory_mb", f.peak_memory_bytes / 1048576.0}};
 }
 }  // namespace
 

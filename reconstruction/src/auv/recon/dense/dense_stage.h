@@ -38,7 +38,8 @@ struct DenseOptions {
 
 /// Time and peak resident memory of a sub-stage.
 struct SubStageFigures {
-  double seconds = 0;
+  double seconds = 0;      ///< wall clock
+  double cpu_seconds = 0;  ///< process CPU time, all threads (less noisy on a shared machine)
   size_t peak_memory_bytes = 0;
 };
 
