@@ -170,8 +170,7 @@ std::string u45Section(const fs::path& folder, const ColorOptions& options) {
               << b.contrast << " -> " << a.contrast << "\n";
   }
   std::ostringstream out;
-  out << "## U45 (" << files.size() << " real underwater photos, " << folder.string()
-      << ")\n\n"
+  out << "## U45 (" << files.size() << " real underwater photos, " << folder.string() << ")\n\n"
       << "| statistic (mean over images) | before | after |\n|---|---|---|\n";
   auto row = [&](const char* name, const std::vector<double>& b, const std::vector<double>& a) {
     char text[256];
@@ -189,8 +188,7 @@ std::string u45Section(const fs::path& folder, const ColorOptions& options) {
                 "| verified SIFT matches with the second view (total) | %ld | %ld |\n\n"
                 "Matches: more after correction in %d images, fewer in %d; median ratio "
                 "after/before %.2f.\n\n",
-                kp_before, kp_after, matches_before, matches_after, improved, worse,
-                median(gain));
+                kp_before, kp_after, matches_before, matches_after, improved, worse, median(gain));
   out << text;
   return out.str();
 }
@@ -201,9 +199,8 @@ cv::Mat linearRgb(const cv::Mat& bgr) {
   for (int y = 0; y < bgr.rows; ++y) {
     for (int x = 0; x < bgr.cols; ++x) {
       const cv::Vec3b p = bgr.at<cv::Vec3b>(y, x);
-      out.at<cv::Vec3f>(y, x) =
-          cv::Vec3f(srgbToLinear(p[2] / 255.f), srgbToLinear(p[1] / 255.f),
-                    srgbToLinear(p[0] / 255.f));
+      out.at<cv::Vec3f>(y, x) = cv::Vec3f(srgbToLinear(p[2] / 255.f), srgbToLinear(p[1] / 255.f),
+                                          srgbToLinear(p[0] / 255.f));
     }
   }
   return out;
@@ -218,7 +215,8 @@ cv::Mat greyWorldRgb(const cv::Mat& bgr) {
     for (int x = 0; x < bgr.cols; ++x) {
       const cv::Vec3f p = lin.at<cv::Vec3f>(y, x);
       for (int c = 0; c < 3; ++c) {
-        const float v = std::clamp(static_cast<float>(p[c] * grey / std::max(m[c], 1e-6)), 0.f, 1.f);
+        const float v =
+            std::clamp(static_cast<float>(p[c] * grey / std::max(m[c], 1e-6)), 0.f, 1.f);
         out.at<cv::Vec3b>(y, x)[2 - c] = cv::saturate_cast<uchar>(linearToSrgb(v) * 255.f);
       }
     }
@@ -307,8 +305,8 @@ std::string simSection(const fs::path& water, const fs::path& clear, const Color
                 "| lαβ correction (after) | %.2f | %.2f |\n"
                 "| reference point: grey-world gains in RGB | %.2f | %.2f |\n\n",
                 water.string().c_str(), clear.string().c_str(), raw_angle.size(), every,
-                100 * mean(coverage), mean(raw_angle), mean(raw_de), mean(lab_angle),
-                mean(lab_de), mean(gw_angle), mean(gw_de));
+                100 * mean(coverage), mean(raw_angle), mean(raw_de), mean(lab_angle), mean(lab_de),
+                mean(gw_angle), mean(gw_de));
   out << text;
   return out.str();
 }

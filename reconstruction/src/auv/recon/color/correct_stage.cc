@@ -144,7 +144,18 @@ CorrectStageResult correctSurvey(const Survey& survey, const CorrectStageOptions
   progress.finish();
   for (auto& output : outputs) output->commit();
   calibration::CalibrationOptions board;  // board keys of the yaml: defaults, informative only
+  // The report keeps the cameras of earlier runs that this one did not redo.
   nlohmann::json cameras_json = nlohmann::json::object();
+  try {
+    const nlohmann::json report = readReport(survey.report());
+    if (report.contains("stages") && report["stages"].contains(kStage) &&
+        report["stages"][kStage].contains("cameras") &&
+        report["stages"][kStage]["cameras"].is_object()) {
+      cameras_json = report["stages"][kStage]["cameras"];
+    }
+  } catch (const std::exception&) {
+    // An unreadable report is set aside by updateReport.
+  }
   for (size_t i = 0; i < work.size(); ++i) {
     const Work& w = work[i];
     const fs::path yaml = survey.corrected() / (w.camera + ".yaml");
