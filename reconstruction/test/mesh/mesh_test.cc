@@ -11,6 +11,7 @@
 #include <open3d/io/PointCloudIO.h>
 #include <nlohmann/json.hpp>
 
+#include "auv/recon/common/option_set.h"
 #include "auv/recon/common/report.h"
 #include "auv/recon/common/stage_error.h"
 #include "auv/recon/mesh/mesh_stage.h"
@@ -277,4 +278,22 @@ TEST(MeshStage, WritesTheMeshAndReportAndKeepsEarlierOutputsOnFailure) {
     EXPECT_NE(std::string(e.what()).find("fused.ply"), std::string::npos) << e.what();
   }
   EXPECT_EQ(fs::file_size(survey.mesh() / "mesh.ply"), size_before);
+}
+
+TEST(MeshStage, OptionsBindToFlagsAndTheConfigSection) {
+  TempDir dir;
+  const fs::path config = dir.path / "recon.yaml";
+  std::ofstream(config) << "mesh:\n  density_quantile: 0.05\n  write_untrimmed: false\n";
+  MeshStageOptions options;
+  OptionSet set("mesh");
+  options.bind(set);
+  ASSERT_TRUE(set.parse({"--config", config.string(), "--poisson-depth", "7"}));
+  EXPECT_EQ(options.surface.poisson_depth, 7);
+  EXPECT_DOUBLE_EQ(options.surface.density_quantile, 0.05);
+  EXPECT_FALSE(options.write_untrimmed);
+  std::ofstream(config) << "mesh:\n  poisson_dept: 8\n";
+  MeshStageOptions other;
+  OptionSet set2("mesh");
+  other.bind(set2);
+  EXPECT_THROW(set2.parse({"--config", config.string()}), std::invalid_argument);
 }

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "auv/recon/common/option_set.h"
 #include "auv/recon/common/report.h"
 #include "auv/recon/common/stage_error.h"
 #include "auv/recon/mesh/mesh_stage.h"
@@ -208,4 +209,18 @@ TEST(TextureStage, ChainsWithTheMeshStageOnASyntheticSurvey) {
   const double value = psnr(rendering.image, synth::renderTruth(truth, check), rendering.mask);
   std::cout << "held-out view of the Poisson mesh's texture: PSNR " << value << " dB" << std::endl;
   EXPECT_GT(value, 30.0);
+}
+
+TEST(TextureStage, OptionsBindToFlagsAndTheConfigSection) {
+  TempDir dir;
+  const fs::path config = dir.path / "recon.yaml";
+  std::ofstream(config) << "texture:\n  smoothness: 0.8\n  local_blending: false\n";
+  TextureStageOptions options;
+  OptionSet set("texture");
+  options.bind(set);
+  ASSERT_TRUE(set.parse({"--config", config.string(), "--max-page-size", "2048"}));
+  EXPECT_DOUBLE_EQ(options.texture.selection.smoothness, 0.8);
+  EXPECT_FALSE(options.texture.atlas.local_blending);
+  EXPECT_EQ(options.texture.atlas.max_page_size, 2048);
+  EXPECT_THROW(set.parse({"--blend-width", "wide"}), std::invalid_argument);
 }

@@ -60,6 +60,25 @@ o3d::TriangleMesh readMesh(const fs::path& file, const std::string& stage) {
   return mesh;
 }
 
+void MeshStageOptions::bind(OptionSet& set) {
+  SurfaceOptions& s = surface;
+  set.add("poisson_depth", &s.poisson_depth, "Poisson octree depth (finest cell = extent/2^d)");
+  set.add("poisson_scale", &s.poisson_scale, "Poisson cube = cloud extent x this");
+  set.add("poisson_linear_fit", &s.poisson_linear_fit, "Poisson linear iso-value fit");
+  set.add("max_edge_factor", &s.max_edge_factor,
+          "remove triangles with an edge > this x local spacing (0: off)");
+  set.add("spacing_neighbors", &s.spacing_neighbors, "neighbours of the local point spacing");
+  set.add("density_quantile", &s.density_quantile,
+          "remove vertices below this quantile of Poisson density (0: off)");
+  set.add("density_drop_levels", &s.density_drop_levels,
+          "remove vertices this many octree levels below the median density (0: off)");
+  set.add("min_component_fraction", &s.min_component_fraction,
+          "remove components smaller than this fraction of the largest");
+  set.add("min_points", &s.min_points, "fewer cloud points: the stage fails");
+  set.add("threads", &s.threads, "Poisson threads (-1: all)");
+  set.add("write_untrimmed", &write_untrimmed, "also write mesh/mesh_untrimmed.ply");
+}
+
 MeshStageSummary runMeshStage(const Survey& survey, const MeshStageOptions& options) {
   options.check();
   const auto start = std::chrono::steady_clock::now();

@@ -8,6 +8,7 @@
 #include <open3d/geometry/PointCloud.h>
 #include <open3d/geometry/TriangleMesh.h>
 
+#include "auv/recon/common/option_set.h"
 #include "auv/recon/common/survey.h"
 #include "auv/recon/mesh/surface.h"
 
@@ -17,6 +18,8 @@ struct MeshStageOptions {
   SurfaceOptions surface;
   bool write_untrimmed = true;  ///< also mesh/mesh_untrimmed.ply
   void check() const { surface.check(); }
+  /// Binds every option to `--flag value` and to the `mesh:` section of a config file.
+  void bind(OptionSet& set);
 };
 
 struct MeshStageSummary {

@@ -5,6 +5,7 @@
 
 #include <cstddef>
 
+#include "auv/recon/common/option_set.h"
 #include "auv/recon/common/survey.h"
 #include "auv/recon/texture/texturer.h"
 
@@ -16,6 +17,8 @@ struct TextureStageOptions {
   size_t image_cache = 24;
 
   void check() const;
+  /// Binds every option to `--flag value` and to the `texture:` section of a config file.
+  void bind(OptionSet& set);
 };
 
 struct TextureStageSummary {
