@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <unordered_map>
 
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
@@ -24,13 +25,16 @@ Eigen::Vector3f ColorOffsets::at(int vertex, int label) const {
 }
 
 std::vector<SeamEdge> findSeamEdges(const FaceMesh& mesh, const std::vector<int>& labels) {
-  std::map<std::pair<int, int>, int> first_face;
+  std::unordered_map<uint64_t, int> first_face;  // edge (low, high vertex) -> first face
+  first_face.reserve(3 * mesh.faces.size() / 2 + 1);
   std::vector<SeamEdge> seams;
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
     for (int k = 0; k < 3; ++k) {
       int a = mesh.faces[f](k), b = mesh.faces[f]((k + 1) % 3);
       if (a > b) std::swap(a, b);
-      const auto [it, inserted] = first_face.emplace(std::make_pair(a, b), static_cast<int>(f));
+      const auto [it, inserted] = first_face.emplace(
+          (static_cast<uint64_t>(static_cast<uint32_t>(a)) << 32) | static_cast<uint32_t>(b),
+          static_cast<int>(f));
       if (inserted) continue;
       const int g = it->second;
       if (labels[f] == kNoLabel || labels[g] == kNoLabel || labels[f] == labels[g]) continue;

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <map>
+#include <unordered_map>
 
 #include <opencv2/imgproc.hpp>
 
@@ -46,13 +47,16 @@ void FaceMesh::computeFaceNormals(const std::vector<Eigen::Vector3d>& vertex_nor
 }
 
 std::vector<std::pair<int, int>> FaceMesh::faceAdjacency() const {
-  std::map<std::pair<int, int>, int> first_face;
+  std::unordered_map<uint64_t, int> first_face;  // edge (low, high vertex) -> first face
+  first_face.reserve(3 * faces.size() / 2 + 1);
   std::vector<std::pair<int, int>> pairs;
   for (size_t f = 0; f < faces.size(); ++f) {
     for (int k = 0; k < 3; ++k) {
       int a = faces[f]((k + 0) % 3), b = faces[f]((k + 1) % 3);
       if (a > b) std::swap(a, b);
-      const auto [it, inserted] = first_face.emplace(std::make_pair(a, b), static_cast<int>(f));
+      const auto [it, inserted] = first_face.emplace(
+          (static_cast<uint64_t>(static_cast<uint32_t>(a)) << 32) | static_cast<uint32_t>(b),
+          static_cast<int>(f));
       if (!inserted && it->second != static_cast<int>(f)) {
         pairs.emplace_back(it->second, static_cast<int>(f));
       }
