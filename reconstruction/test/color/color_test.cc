@@ -16,6 +16,7 @@
 #include "auv/recon/color/correct_stage.h"
 #include "auv/recon/color/correction.h"
 #include "auv/recon/color/lalphabeta.h"
+#include "auv/recon/common/option_set.h"
 #include "auv/recon/common/report.h"
 #include "auv/recon/common/stage_error.h"
 
@@ -281,4 +282,32 @@ TEST(CorrectStage, KeyframeOfAnotherSizeThanTheCalibrationNamesBoth) {
   EXPECT_THROW(correctSurvey(Survey(empty), CorrectStageOptions()), StageError);
   fs::remove_all(survey);
   fs::remove_all(empty);
+}
+
+TEST(CorrectStageOptions, BindTakesFlagsAndTheConfigSection) {
+  const fs::path folder = freshFolder("bind");
+  std::ofstream(folder / "recon.yaml")
+      << "correct:\n  chroma_strength: 0.5\n  camera: [left]\n  stretch_luminance: false\n";
+  CorrectStageOptions options;
+  OptionSet set("correct");
+  options.bind(set);
+  ASSERT_TRUE(set.parse({"--config", (folder / "recon.yaml").string(), "--no-undistort", "--alpha",
+                         "1", "--cutoff-high", "0.01"}));
+  EXPECT_DOUBLE_EQ(options.color.chroma_strength, 0.5);
+  EXPECT_EQ(options.cameras, (std::vector<std::string>{"left"}));
+  EXPECT_FALSE(options.color.stretch_luminance);
+  EXPECT_FALSE(options.undistort_images);
+  EXPECT_TRUE(options.correct_colors);
+  EXPECT_DOUBLE_EQ(options.undistort.alpha, 1.0);
+  EXPECT_DOUBLE_EQ(options.color.cutoff_high, 0.01);
+  EXPECT_DOUBLE_EQ(options.color.cutoff_low, ColorOptions().cutoff_low);  // default kept
+  // A value of the wrong type names the file and the key.
+  std::ofstream(folder / "recon.yaml") << "correct:\n  png_compression: fast\n";
+  try {
+    set.applyConfigFile(folder / "recon.yaml");
+    FAIL() << "a non-integer png_compression was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("correct.png_compression"), std::string::npos) << e.what();
+  }
+  fs::remove_all(folder);
 }

@@ -9,6 +9,7 @@
 
 #include <open3d/io/PointCloudIO.h>
 
+#include "auv/recon/common/option_set.h"
 #include "auv/recon/common/report.h"
 #include "auv/recon/common/stage_error.h"
 #include "auv/recon/dense/depth_map.h"
@@ -214,6 +215,33 @@ TEST_F(DenseStage, OptionsAreChecked) {
   } catch (const OptionError& e) {
     EXPECT_NE(std::string(e.what()).find("p2 = 1"), std::string::npos) << e.what();
   }
+}
+
+TEST(DenseOptionsBind, TakesFlagsAndTheConfigSection) {
+  const fs::path file =
+      fs::temp_directory_path() / ("dense_bind_" + std::to_string(::getpid()) + ".yaml");
+  std::ofstream(file) << "dense:\n  max_image_size: 512\n  directions: 4\n"
+                         "  keep_depth_maps: false\n  min_consistent: 3\n";
+  DenseOptions options;
+  OptionSet set("dense");
+  options.bind(set);
+  ASSERT_TRUE(set.parse({"--config", file.string(), "--max-neighbours", "5", "--p2", "300"}));
+  EXPECT_EQ(options.max_image_size, 512);
+  EXPECT_EQ(options.matcher.directions, 4);
+  EXPECT_FALSE(options.keep_depth_maps);
+  EXPECT_EQ(options.fusion.min_consistent, 3);
+  EXPECT_EQ(options.neighbours.max_neighbours, 5);
+  EXPECT_EQ(options.matcher.p2, 300);
+  EXPECT_EQ(options.matcher.window_radius, MatcherOptions().window_radius);  // default kept
+  EXPECT_NO_THROW(options.check());
+  std::ofstream(file) << "dense:\n  max_neighbors: 5\n";
+  try {
+    set.applyConfigFile(file);
+    FAIL() << "an unknown key was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("dense.max_neighbors"), std::string::npos) << e.what();
+  }
+  fs::remove(file);
 }
 
 }  // namespace

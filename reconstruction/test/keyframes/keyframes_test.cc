@@ -18,6 +18,7 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
+#include "auv/recon/common/option_set.h"
 #include "auv/recon/common/report.h"
 #include "auv/recon/common/stage_error.h"
 #include "auv/recon/keyframes/selector.h"
@@ -452,4 +453,33 @@ TEST(KeyframeCommand, ExitCodesAndMessages) {
   EXPECT_EQ(runTool("keyframes " + survey.string() + " --analysis-width 0", &err), 0) << err;
   EXPECT_TRUE(fs::exists(survey / "keyframes" / "left" / "index.csv"));
   fs::remove_all(survey);
+}
+
+TEST(KeyframeStageOptions, BindTakesFlagsAndTheConfigSection) {
+  const fs::path folder = freshFolder("bind");
+  std::ofstream(folder / "recon.yaml")
+      << "keyframes:\n  lk_levels: 2\n  camera: [left, right]\n  keep_damaged: true\n"
+         "dense:\n  max_image_size: 512\n";  // other sections are not this stage's business
+  KeyframeStageOptions options;
+  OptionSet set("keyframes");
+  options.bind(set);
+  // Flags win over the file wherever --config stands.
+  ASSERT_TRUE(set.parse({"--min-motion", "0.2", "--config", (folder / "recon.yaml").string(),
+                         "--lk_levels", "4", "--png-compression", "3"}));
+  EXPECT_DOUBLE_EQ(options.selection.min_motion, 0.2);
+  EXPECT_EQ(options.selection.lk_levels, 4);
+  EXPECT_EQ(options.video.png_compression, 3);
+  EXPECT_EQ(options.cameras, (std::vector<std::string>{"left", "right"}));
+  EXPECT_TRUE(options.video.keep_damaged);
+  EXPECT_EQ(options.selection.max_features, KeyframeOptions().max_features);  // default kept
+  EXPECT_NO_THROW(options.check());
+  // An unknown key of the section names the file and the key.
+  std::ofstream(folder / "recon.yaml") << "keyframes:\n  min_motion_px: 40\n";
+  try {
+    set.applyConfigFile(folder / "recon.yaml");
+    FAIL() << "an unknown key was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("keyframes.min_motion_px"), std::string::npos) << e.what();
+  }
+  fs::remove_all(folder);
 }

@@ -1,5 +1,6 @@
-// `auv recon run`: stage order, up-to-date skipping, options and config checks, and a real
-// chain features -> match -> sfm on Sceaux castle at quarter resolution.
+// `auv recon run`: stage order, up-to-date skipping, options and config checks (every stage's
+// section reaches it, bad ones refused before anything runs), and a real chain features ->
+// match -> sfm on Sceaux castle at quarter resolution.
 #include <unistd.h>
 
 #include <filesystem>
@@ -104,6 +105,115 @@ TEST(Pipeline, AFailingStageStopsTheRunNamingIt) {
   fs::remove_all(root);
 }
 
+/// A recon.yaml in `root` with `text`; returns its path.
+std::string writeConfig(const fs::path& root, const std::string& text) {
+  const fs::path file = root / "recon.yaml";
+  std::ofstream(file) << text;
+  return file.string();
+}
+
+/// The message of the StageError `run` throws (empty, and a test failure, if none).
+std::string stageFailure(const Survey& survey, const PipelineOptions& options) {
+  std::ostringstream log;
+  try {
+    runPipeline(survey, options, log);
+  } catch (const StageError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "expected a StageError; log: " << log.str();
+  return "";
+}
+
+// Each stage's section reaches the stage: a value the stage's own error message shows, on
+// surveys too small for the stage to run (so no heavy work).
+TEST(Pipeline, ConfigSectionsReachKeyframesCorrectAndDense) {
+  const fs::path root = freshFolder("sections");
+  const Survey survey(root);
+  fs::create_directories(survey.recordings() / "left");  // no videos
+  fs::create_directories(survey.keyframes() / "left");   // no keyframes
+  fs::create_directories(survey.corrected());
+  fs::create_directories(survey.sparse());
+  // A sparse model of 3 images and no point.
+  std::ofstream(survey.sparse() / "cameras.txt") << "1 PINHOLE 64 48 50 50 31.5 23.5\n";
+  std::ofstream(survey.sparse() / "points3D.txt") << "";
+  {
+    std::ofstream images(survey.sparse() / "images.txt");
+    for (int i = 1; i <= 3; ++i)
+      images << i << " 1 0 0 0 " << i << " 0 0 1 left/" << i << ".png\n\n";
+  }
+  PipelineOptions options;
+  options.force = true;
+
+  options.from = options.to = "keyframes";
+  EXPECT_NE(stageFailure(survey, options).find("no videos"), std::string::npos);
+  options.config = writeConfig(root, "keyframes:\n  camera: [forward]\n");
+  std::string what = stageFailure(survey, options);
+  EXPECT_NE(what.find("forward"), std::string::npos) << what;
+  EXPECT_NE(what.find("no such camera folder"), std::string::npos) << what;
+
+  options.config.clear();
+  options.from = options.to = "correct";
+  EXPECT_NE(stageFailure(survey, options).find("camera 'left'"), std::string::npos);
+  options.config = writeConfig(root, "correct:\n  camera: [down]\n");
+  what = stageFailure(survey, options);
+  EXPECT_NE(what.find("camera 'down'"), std::string::npos) << what;
+
+  // Defaults: 3 registered images are enough to start (then no neighbour: no point shared).
+  options.config.clear();
+  options.from = options.to = "dense";
+  what = stageFailure(survey, options);
+  EXPECT_EQ(what.find("at least"), std::string::npos) << what;
+  options.config = writeConfig(root, "dense:\n  min_registered_images: 10\n");
+  what = stageFailure(survey, options);
+  EXPECT_NE(what.find("3 registered images (at least 10 needed"), std::string::npos) << what;
+  fs::remove_all(root);
+}
+
+// The whole file is read before the first stage runs: a bad value or key in any section, or a
+// section that names nothing `run` knows, is an error naming the file, section and key.
+TEST(Pipeline, BadConfigSectionsAreRefusedBeforeAnyStageRuns) {
+  const fs::path root = freshFolder("bad_config");
+  const Survey survey(root);
+  PipelineOptions options;
+  options.from = options.to = "keyframes";  // dense is not even in the range
+  auto refusal = [&](const std::string& text) {
+    options.config = writeConfig(root, text);
+    std::ostringstream log;
+    try {
+      runPipeline(survey, options, log);
+    } catch (const StageError& e) {
+      ADD_FAILURE() << "a stage ran: " << e.what();
+    } catch (const std::invalid_argument& e) {
+      EXPECT_EQ(log.str(), "") << "a stage started before the config was checked";
+      EXPECT_NE(std::string(e.what()).find(options.config), std::string::npos) << e.what();
+      return std::string(e.what());
+    }
+    ADD_FAILURE() << "accepted: " << text;
+    return std::string();
+  };
+  std::string what = refusal("dense:\n  max_image_size: 10\n");  // out of range
+  EXPECT_NE(what.find("dense: max_image_size = 10"), std::string::npos) << what;
+  what = refusal("dense:\n  max_image_size: ten\n");  // not a number
+  EXPECT_NE(what.find("dense.max_image_size"), std::string::npos) << what;
+  what = refusal("dense:\n  max_image_sise: 512\n");  // unknown key
+  EXPECT_NE(what.find("dense.max_image_sise"), std::string::npos) << what;
+  what = refusal("keyframes:\n  lk_window: 4\n");  // the stage's own check (odd window)
+  EXPECT_NE(what.find("keyframes: "), std::string::npos) << what;
+  EXPECT_NE(what.find("lk_window"), std::string::npos) << what;
+  what = refusal("sfm:\n  threads: 2\nsfn:\n  threads: 2\n");  // a typo of a stage
+  EXPECT_NE(what.find("section 'sfn'"), std::string::npos) << what;
+  what = refusal("- keyframes\n- dense\n");
+  EXPECT_NE(what.find("map"), std::string::npos) << what;
+
+  // Sections of the pipeline itself and of the commands reading the same file are accepted:
+  // the run goes on to the keyframes stage (which fails: no recordings/).
+  options.config = writeConfig(root,
+                               "run:\n  force: true\nevaluate:\n  anything: 1\n"
+                               "dense:\n  max_image_size: 512\nmesh: {}\ntexture:\n");
+  EXPECT_NE(stageFailure(survey, options).find("recordings"), std::string::npos);
+  fs::remove_all(root);
+}
+
 /// Sceaux castle at quarter resolution as corrected/castle/ (+ castle.yaml); false if absent.
 bool quarterSceaux(const Survey& survey) {
   const fs::path data = fs::path(AUV_RECON_SHARED_DATA) / "sceaux_castle" / "images";
@@ -159,28 +269,23 @@ TEST(Pipeline, ChainsFeaturesMatchAndSfmThenSkipsWhatIsUpToDate) {
   EXPECT_EQ(third.stages[2].outcome, StageOutcome::RAN);
   EXPECT_GT(fs::last_write_time(survey.sparse() / "images.txt"), sparse_time);
 
-  // A config section for a stage `run` cannot configure: a clear error before anything runs.
-  {
-    std::ofstream config(root / "bad.yaml");
-    config << "keyframes:\n  min_motion_px: 40\n";
-  }
-  PipelineOptions bad = options;
-  bad.config = (root / "bad.yaml").string();
-  try {
-    runPipeline(survey, bad, log);
-    FAIL();
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("section 'keyframes'"), std::string::npos) << e.what();
-  }
-  // A bad sfm option in the config names the key; sparse/ stays.
+  // A bad sfm option in the config names the section and the key; sparse/ stays.
   {
     std::ofstream config(root / "bad.yaml");
     config << "sfm:\n  max_reprojection_error: -1\n";
   }
-  PipelineOptions force = bad;
+  PipelineOptions force = options;
+  force.config = (root / "bad.yaml").string();
   force.from = "sfm";
   force.force = true;
-  EXPECT_THROW(runPipeline(survey, force, log), std::invalid_argument);
+  try {
+    runPipeline(survey, force, log);
+    FAIL() << "a negative max_reprojection_error was accepted";
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("sfm"), std::string::npos) << what;
+    EXPECT_NE(what.find("max_reprojection_error"), std::string::npos) << what;
+  }
   EXPECT_EQ(scene::readColmapText(survey.sparse()).images.size(), model.images.size());
   fs::remove_all(root);
 }

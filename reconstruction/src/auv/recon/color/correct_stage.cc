@@ -8,6 +8,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "auv/recon/calibration/calibration.h"
+#include "auv/recon/common/option_set.h"
 #include "auv/recon/common/progress.h"
 #include "auv/recon/common/report.h"
 #include "auv/recon/common/stage_error.h"
@@ -40,6 +41,25 @@ void CorrectStageOptions::check() const {
         !camera.empty() && camera.find('/') == std::string::npos && camera[0] != '.', camera,
         "must be a camera folder name");
   }
+}
+
+void CorrectStageOptions::bind(OptionSet& set) {
+  set.add("camera", &cameras, "camera id (folder of keyframes/); repeatable; all");
+  set.add("undistort", &undistort_images,
+          "undistort with calibration/<camera>.yaml (--no-undistort: keep the distortion)");
+  set.add("correct_colors", &correct_colors,
+          "lαβ colour correction (--no-correct-colors: undistortion only)");
+  set.add("chroma_strength", &color.chroma_strength,
+          "fraction of the α, β shift to the white point applied (0-1)");
+  set.add("cutoff_low", &color.cutoff_low,
+          "fraction of the pixels cut off at the dark end of the luminance");
+  set.add("cutoff_high", &color.cutoff_high,
+          "fraction of the pixels cut off at the bright end of the luminance");
+  set.add("stretch_luminance", &color.stretch_luminance,
+          "luminance cut-off and stretch (--no-stretch-luminance: off)");
+  set.add("alpha", &undistort.alpha,
+          "0: undistorted images hold valid pixels only; 1: every source pixel kept");
+  set.add("png_compression", &png_compression, "PNG compression level 0-9");
 }
 
 CorrectStageResult correctSurvey(const Survey& survey, const CorrectStageOptions& options) {

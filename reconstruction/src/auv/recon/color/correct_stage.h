@@ -12,6 +12,10 @@
 #include "auv/recon/color/correction.h"
 #include "auv/recon/common/survey.h"
 
+namespace auv::recon {
+class OptionSet;
+}
+
 namespace auv::recon::color {
 
 struct CorrectStageOptions {
@@ -26,6 +30,8 @@ struct CorrectStageOptions {
   std::vector<std::string> cameras;
 
   void check() const;
+  /// Binds the fields to flags / the `correct:` section of a config file.
+  void bind(OptionSet& set);
 };
 
 struct CameraCorrection {

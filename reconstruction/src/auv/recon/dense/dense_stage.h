@@ -19,6 +19,10 @@
 #include "auv/recon/dense/neighbours.h"
 #include "auv/recon/scene/reconstruction.h"
 
+namespace auv::recon {
+class OptionSet;
+}
+
 namespace auv::recon::dense {
 
 struct DenseOptions {
@@ -34,6 +38,8 @@ struct DenseOptions {
   /// Checks every field, the sub-stages' included.
   void check() const;
   nlohmann::json toJson() const;
+  /// Binds the fields to flags / the `dense:` section of a config file.
+  void bind(OptionSet& set);
 };
 
 /// Time and peak resident memory of a sub-stage.

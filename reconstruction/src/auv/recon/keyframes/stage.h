@@ -11,6 +11,10 @@
 #include "auv/recon/keyframes/selector.h"
 #include "auv/recon/keyframes/video.h"
 
+namespace auv::recon {
+class OptionSet;
+}
+
 namespace auv::recon::keyframes {
 
 struct KeyframeStageOptions {
@@ -20,6 +24,8 @@ struct KeyframeStageOptions {
   std::vector<std::string> cameras;
 
   void check() const;
+  /// Binds the fields to flags / the `keyframes:` section of a config file.
+  void bind(OptionSet& set);
 };
 
 struct CameraKeyframes {

@@ -7,33 +7,16 @@
 #include <ostream>
 #include <sstream>
 
+#include "auv/recon/color/correct_stage.h"
 #include "auv/recon/common/option_set.h"
 #include "auv/recon/common/stage_error.h"
+#include "auv/recon/dense/dense_stage.h"
 #include "auv/recon/features/match_stage.h"
 #include "auv/recon/features/sift_extractor.h"
-#include "auv/recon/sfm/sfm_stage.h"
-
-// The stages of other folders are wired when their library is in the tree.
-#if __has_include("auv/recon/keyframes/stage.h")
 #include "auv/recon/keyframes/stage.h"
-#define AUV_RECON_HAS_KEYFRAMES 1
-#endif
-#if __has_include("auv/recon/color/correct_stage.h")
-#include "auv/recon/color/correct_stage.h"
-#define AUV_RECON_HAS_CORRECT 1
-#endif
-#if __has_include("auv/recon/dense/dense_stage.h")
-#include "auv/recon/dense/dense_stage.h"
-#define AUV_RECON_HAS_DENSE 1
-#endif
-#if __has_include("auv/recon/mesh/mesh_stage.h")
 #include "auv/recon/mesh/mesh_stage.h"
-#define AUV_RECON_HAS_MESH 1
-#endif
-#if __has_include("auv/recon/texture/texture_stage.h")
+#include "auv/recon/sfm/sfm_stage.h"
 #include "auv/recon/texture/texture_stage.h"
-#define AUV_RECON_HAS_TEXTURE 1
-#endif
 
 namespace auv::recon::pipeline {
 
@@ -51,8 +34,6 @@ std::string stageOutcomeName(StageOutcome outcome) {
       return "ran";
     case StageOutcome::UP_TO_DATE:
       return "up to date";
-    case StageOutcome::NOT_BUILT:
-      return "not built yet";
   }
   return "?";
 }
@@ -129,146 +110,134 @@ void PipelineOptions::bind(OptionSet& set) {
 
 namespace {
 
-/// One stage of the chain: where it reads and writes, and how it runs (empty: not built).
+/// Sections of a recon.yaml that `run` leaves to other `auv recon` commands reading the same
+/// file (its own `run:` is applied by the command); any other name that is not a stage is a
+/// typo, refused rather than silently ignored.
+const std::vector<std::string> kOtherSections = {"run", "calibrate", "evaluate", "figures"};
+
+/// One stage of the chain: where it reads and writes, and how it runs with its options.
 struct StageSpec {
   std::string name;
   std::vector<fs::path> inputs, outputs;
   std::function<std::string()> run;  ///< returns the stage's one-line result
-  bool binds_options = false;        ///< its options take the config file's section
 };
 
-/// Options of a stage from the config file's section, through the stage's own bindings.
+/// Options of a stage from the config file's section, through the stage's own bindings; a
+/// value out of range names the file and the section too.
 template <class Options>
 Options configured(const std::string& section, const std::string& config) {
   Options options;
-  if (!config.empty()) {
-    OptionSet set(section);
-    options.bind(set);
-    set.applyConfigFile(config);
+  if (config.empty()) return options;
+  OptionSet set(section);
+  options.bind(set);
+  set.applyConfigFile(config);
+  try {
+    options.check();
+  } catch (const std::invalid_argument& e) {
+    throw OptionError(config + ": " + section + ": " + e.what());
   }
-  options.check();
   return options;
 }
 
+/// Every stage with its options read from the config file, so that a bad value in any
+/// section is an error before the first stage runs, not after hours of work.
 std::vector<StageSpec> stages(const Survey& survey, const PipelineOptions& options) {
   const std::string& config = options.config;
   const fs::path features = survey.root() / "features";
   std::vector<StageSpec> specs;
-  StageSpec keyframes{"keyframes", {survey.recordings()}, {survey.keyframes()}, nullptr, false};
-#ifdef AUV_RECON_HAS_KEYFRAMES
-  keyframes.run = [&survey] {
-    keyframes::KeyframeStageOptions o;
-    o.check();
-    const auto r = keyframes::selectSurveyKeyframes(survey, o);
-    int n = 0;
-    for (const auto& c : r.cameras) n += c.keyframes;
-    return std::to_string(n) + " keyframes from " + std::to_string(r.cameras.size()) + " cameras";
-  };
-#endif
-  specs.push_back(keyframes);
-  StageSpec correct{
-      "correct", {survey.keyframes(), survey.calibration()}, {survey.corrected()}, nullptr, false};
-#ifdef AUV_RECON_HAS_CORRECT
-  correct.run = [&survey] {
-    color::CorrectStageOptions o;
-    o.check();
-    const auto r = color::correctSurvey(survey, o);
-    int n = 0;
-    for (const auto& c : r.cameras) n += c.images;
-    return std::to_string(n) + " images corrected";
-  };
-#endif
-  specs.push_back(correct);
+  specs.push_back({"keyframes",
+                   {survey.recordings()},
+                   {survey.keyframes()},
+                   [&survey, o = configured<keyframes::KeyframeStageOptions>("keyframes", config)] {
+                     const auto r = keyframes::selectSurveyKeyframes(survey, o);
+                     int n = 0;
+                     for (const auto& c : r.cameras) n += c.keyframes;
+                     return std::to_string(n) + " keyframes from " +
+                            std::to_string(r.cameras.size()) + " cameras";
+                   }});
+  specs.push_back({"correct",
+                   {survey.keyframes(), survey.calibration()},
+                   {survey.corrected()},
+                   [&survey, o = configured<color::CorrectStageOptions>("correct", config)] {
+                     const auto r = color::correctSurvey(survey, o);
+                     int n = 0;
+                     for (const auto& c : r.cameras) n += c.images;
+                     return std::to_string(n) + " images corrected";
+                   }});
   specs.push_back({"features",
                    {survey.corrected()},
                    {features / "index.csv"},
-                   [&survey, config] {
-                     const auto o = configured<features::ExtractionOptions>("features", config);
+                   [&survey, o = configured<features::ExtractionOptions>("features", config)] {
                      const auto r = features::extractSurveyFeatures(survey, o);
                      return std::to_string(r.images) + " images, " + std::to_string(r.features) +
                             " keypoints";
-                   },
-                   true});
+                   }});
   specs.push_back({"match",
                    {features / "index.csv"},
                    {features / "matches"},
-                   [&survey, config] {
-                     const auto o = configured<features::MatchStageOptions>("match", config);
+                   [&survey, o = configured<features::MatchStageOptions>("match", config)] {
                      const auto r = features::matchSurvey(survey, o);
                      return std::to_string(r.verified_pairs) + " of " +
                             std::to_string(r.candidate_pairs) + " pairs verified, " +
                             std::to_string(r.verified_matches) + " matches";
-                   },
-                   true});
+                   }});
   specs.push_back({"sfm",
                    {features / "matches", survey.corrected()},
                    {survey.sparse()},
-                   [&survey, config] {
-                     const auto o = configured<sfm::SfmStageOptions>("sfm", config);
+                   [&survey, o = configured<sfm::SfmStageOptions>("sfm", config)] {
                      const auto r = sfm::reconstructSurvey(survey, o);
                      std::ostringstream line;
                      line << r.images_registered << " of " << r.images_total
                           << " images registered, " << r.points << " points, "
                           << r.mean_reprojection_error_px << " px";
                      return line.str();
-                   },
-                   true});
-  StageSpec dense{"dense", {survey.sparse()}, {survey.dense()}, nullptr, false};
-#ifdef AUV_RECON_HAS_DENSE
-  dense.run = [&survey] {
-    dense::DenseOptions o;
-    o.check();
-    dense::runDense(survey, o);
-    return std::string("dense cloud in ") + survey.dense().string();
-  };
-#endif
-  specs.push_back(dense);
-  StageSpec mesh{"mesh", {survey.dense()}, {survey.mesh()}, nullptr, false};
-#ifdef AUV_RECON_HAS_MESH
-  mesh.run = [&survey] {
-    mesh::MeshStageOptions o;
-    o.check();
-    mesh::runMeshStage(survey, o);
-    return std::string("mesh in ") + survey.mesh().string();
-  };
-#endif
-  specs.push_back(mesh);
-  StageSpec texture{
-      "texture", {survey.mesh(), survey.sparse()}, {survey.textured()}, nullptr, false};
-#ifdef AUV_RECON_HAS_TEXTURE
-  texture.run = [&survey] {
-    texture::TextureStageOptions o;
-    o.check();
-    texture::runTextureStage(survey, o);
-    return std::string("textured model in ") + survey.textured().string();
-  };
-#endif
-  specs.push_back(texture);
+                   }});
+  specs.push_back({"dense",
+                   {survey.sparse()},
+                   {survey.dense()},
+                   [&survey, o = configured<dense::DenseOptions>("dense", config)] {
+                     const auto r = dense::runDense(survey, o);
+                     return std::to_string(r.depth_maps) + " depth maps, " +
+                            std::to_string(r.points) + " points";
+                   }});
+  specs.push_back({"mesh",
+                   {survey.dense()},
+                   {survey.mesh()},
+                   [&survey, o = configured<mesh::MeshStageOptions>("mesh", config)] {
+                     mesh::runMeshStage(survey, o);
+                     return std::string("mesh in ") + survey.mesh().string();
+                   }});
+  specs.push_back({"texture",
+                   {survey.mesh(), survey.sparse()},
+                   {survey.textured()},
+                   [&survey, o = configured<texture::TextureStageOptions>("texture", config)] {
+                     texture::runTextureStage(survey, o);
+                     return std::string("textured model in ") + survey.textured().string();
+                   }});
   return specs;
 }
 
-/// Sections of the config file for stages whose options `run` cannot bind yet: an error
-/// rather than settings silently ignored.
-void checkConfigSections(const std::string& config, const std::vector<StageSpec>& specs) {
+/// Every top-level key of the config file must name a stage (or another command's section):
+/// a typo such as `sfn:` would otherwise leave the stage on its defaults without a word.
+void checkConfigSections(const std::string& config) {
   if (config.empty()) return;
   YAML::Node root;
   try {
     root = YAML::LoadFile(config);
   } catch (const YAML::Exception& e) {
-    throw std::invalid_argument(config + ": not YAML: " + e.what());
+    throw std::invalid_argument("--config: " + config + ": " + e.what());
   }
-  if (!root.IsMap()) return;
+  if (!root || root.IsNull()) return;
+  if (!root.IsMap()) throw std::invalid_argument(config + ": expected a map of stage sections");
   for (const auto& entry : root) {
     const std::string section = entry.first.as<std::string>();
-    auto spec = std::find_if(specs.begin(), specs.end(),
-                             [&](const StageSpec& s) { return s.name == section; });
-    if (spec != specs.end() && !spec->binds_options) {
-      throw std::invalid_argument(config + ": section '" + section +
-                                  "': `auv recon run` cannot pass options to this stage yet; "
-                                  "run `auv recon " +
-                                  section + " --config " + config +
-                                  "` on its own, then `auv recon run --from` the next stage");
+    if (stageIndex(section) < stageNames().size()) continue;
+    if (std::find(kOtherSections.begin(), kOtherSections.end(), section) != kOtherSections.end()) {
+      continue;
     }
+    throw std::invalid_argument(config + ": section '" + section +
+                                "': unknown (stages: keyframes, correct, features, match, sfm, "
+                                "dense, mesh, texture; also run, calibrate, evaluate, figures)");
   }
 }
 
@@ -278,18 +247,15 @@ PipelineSummary runPipeline(const Survey& survey, const PipelineOptions& options
                             std::ostream& log) {
   options.check();
   const auto start = std::chrono::steady_clock::now();
+  checkConfigSections(options.config);
   const std::vector<StageSpec> specs = stages(survey, options);
-  checkConfigSections(options.config, specs);
   PipelineSummary summary;
   for (size_t i = stageIndex(options.from); i <= stageIndex(options.to); ++i) {
     const StageSpec& spec = specs[i];
     StageReport report;
     report.stage = spec.name;
     const auto stage_start = std::chrono::steady_clock::now();
-    if (!spec.run) {
-      report.outcome = StageOutcome::NOT_BUILT;
-      report.note = "its library is not built yet: left out";
-    } else if (!options.force && upToDate(spec.inputs, spec.outputs)) {
+    if (!options.force && upToDate(spec.inputs, spec.outputs)) {
       report.outcome = StageOutcome::UP_TO_DATE;
       report.note = "output newer than its input: skipped (--force to run it)";
     } else {

@@ -26,8 +26,8 @@ struct PipelineOptions {
   std::string from = "keyframes";  ///< first stage run
   std::string to = "texture";      ///< last stage run
   bool force = false;              ///< run stages even when their output is up to date
-  /// recon.yaml: one section per stage (`sfm:`, `features:`, ...), the same keys as the
-  /// stages' flags. Empty: defaults.
+  /// recon.yaml: one section per stage (`sfm:`, `dense:`, ...), the same keys as the stages'
+  /// flags (each stage's Options::bind). Empty: defaults.
   std::string config;
 
   /// Throws OptionError naming the field: unknown stage, `from` after `to`, missing config.
@@ -35,7 +35,7 @@ struct PipelineOptions {
   void bind(OptionSet& set);
 };
 
-enum class StageOutcome { RAN, UP_TO_DATE, NOT_BUILT };
+enum class StageOutcome { RAN, UP_TO_DATE };
 std::string stageOutcomeName(StageOutcome outcome);
 
 struct StageReport {
@@ -50,9 +50,12 @@ struct PipelineSummary {
   double seconds = 0;
 };
 
-/// Runs the stages from `options.from` to `options.to`; `log` gets one line per stage. A
-/// stage's failure (StageError naming it) stops the run and propagates; the outputs of the
-/// stages before it stay (each stage writes through a staging folder).
+/// Runs the stages from `options.from` to `options.to`; `log` gets one line per stage. The
+/// config file is read before any stage runs: a section that names no stage (nor `run`,
+/// `calibrate`, `evaluate`, `figures`), an unknown key or a bad value throws
+/// std::invalid_argument naming the file, section and key. A stage's failure (StageError
+/// naming it) stops the run and propagates; the outputs of the stages before it stay (each
+/// stage writes through a staging folder).
 PipelineSummary runPipeline(const Survey& survey, const PipelineOptions& options,
                             std::ostream& log);
 

@@ -16,22 +16,7 @@ int correctMain(const std::vector<std::string>& args) {
     OptionSet set("correct");
     set.positional("survey", &survey,
                    "survey folder (reads keyframes/ and calibration/, writes corrected/)");
-    set.add("camera", &options.cameras, "camera id (folder of keyframes/); repeatable; all");
-    set.add("undistort", &options.undistort_images,
-            "undistort with calibration/<camera>.yaml (--no-undistort: keep the distortion)");
-    set.add("correct_colors", &options.correct_colors,
-            "lαβ colour correction (--no-correct-colors: undistortion only)");
-    set.add("chroma_strength", &options.color.chroma_strength,
-            "fraction of the α, β shift to the white point applied (0-1)");
-    set.add("cutoff_low", &options.color.cutoff_low,
-            "fraction of the pixels cut off at the dark end of the luminance");
-    set.add("cutoff_high", &options.color.cutoff_high,
-            "fraction of the pixels cut off at the bright end of the luminance");
-    set.add("stretch_luminance", &options.color.stretch_luminance,
-            "luminance cut-off and stretch (--no-stretch-luminance: off)");
-    set.add("alpha", &options.undistort.alpha,
-            "0: undistorted images hold valid pixels only; 1: every source pixel kept");
-    set.add("png_compression", &options.png_compression, "PNG compression level 0-9");
+    options.bind(set);
     if (!set.parse(args)) return tools::kExitOk;
     options.check();
     const color::CorrectStageResult result = color::correctSurvey(Survey(survey), options);
