@@ -170,7 +170,13 @@ VideoKeyframes selectVideoKeyframes(const fs::path& video, const fs::path& out_f
     if (!ok || frame.empty()) break;
     if (!result.has_sidecar) positions.push_back(capture.get(cv::CAP_PROP_POS_MSEC) / 1000.0);
     const int index = result.frames_read++;
-    if (auto keyframe = selector.addFrame(index, frame)) {
+    std::optional<Keyframe> keyframe;
+    try {
+      keyframe = selector.addFrame(index, frame);
+    } catch (const std::invalid_argument& e) {  // a frame of another size or type
+      throw StageError(kStage, video.string() + ": " + e.what());
+    }
+    if (keyframe) {
       write(*keyframe, result.has_sidecar ? 0 : positions[static_cast<size_t>(keyframe->frame)]);
     }
     if (on_frame) on_frame();

@@ -326,7 +326,7 @@ bool IncrementalMapper::findInitialPair(MapperResult& result) {
       buildInitialPair(pair);
       // Two-view bundle adjustment; the pair must still hold enough points.
       initial_pair_ = {pair.a, pair.b};
-      globalBundleAdjustment(result, options_.global_ba_max_iterations);
+      globalBundleAdjustment(result, options_.global_ba_max_iterations, false);
       std::set<uint64_t> all;
       for (const auto& [id, p] : rec_.points) all.insert(id);
       filterPoints(all);
@@ -450,8 +450,10 @@ void IncrementalMapper::localBundleAdjustment(uint32_t id, MapperResult& result)
   filterPoints(points);
 }
 
-void IncrementalMapper::globalBundleAdjustment(MapperResult& result, int max_iterations) {
-  ScopedTimer timer(timings_->global_ba);
+void IncrementalMapper::globalBundleAdjustment(MapperResult& result, int max_iterations,
+                                               bool timed) {
+  double untimed = 0;
+  ScopedTimer timer(timed ? timings_->global_ba : untimed);
   BundleAdjustmentConfig config;
   for (const auto& [id, image] : rec_.images) config.images.insert(id);
   config.constant_images.insert(initial_pair_.first != initial_pair_.second

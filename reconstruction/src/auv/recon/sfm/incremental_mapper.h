@@ -118,7 +118,8 @@ class IncrementalMapper {
   /// got too short or too narrow. Returns the observations removed.
   size_t filterPoints(const std::set<uint64_t>& points);
   void localBundleAdjustment(uint32_t id, MapperResult& result);
-  void globalBundleAdjustment(MapperResult& result, int max_iterations);
+  /// `timed`: counted as global BA time (the initial pair's two-view BA counts as initial pair).
+  void globalBundleAdjustment(MapperResult& result, int max_iterations, bool timed = true);
   /// Triangulates every track not yet in the model and completes every point.
   size_t retriangulate();
   std::vector<uint32_t> nextCandidates() const;
