@@ -65,6 +65,41 @@ TEST(SurfaceDetailTest, ContinuousAcrossTileEdgesAndVaryingWithinATile) {
   EXPECT_GT(largest, 0.2f);
 }
 
+// Pearson correlation of the log-factors at points and the same points moved by `shift`.
+double shiftedCorrelation(const SurfaceDetail& detail, const Eigen::Vector3f& shift) {
+  const Eigen::Vector3f n(0, 0, 1);
+  std::vector<double> a, b;
+  for (int i = 0; i < 400; ++i) {
+    const Eigen::Vector3f p(0.0137f * i, 0.0071f * (i % 37), 0);
+    a.push_back(std::log(detail.factor(p, n)));
+    b.push_back(std::log(detail.factor(p + shift, n)));
+  }
+  auto mean = [](const std::vector<double>& v) {
+    double s = 0;
+    for (double x : v) s += x;
+    return s / v.size();
+  };
+  const double ma = mean(a), mb = mean(b);
+  double sab = 0, saa = 0, sbb = 0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    sab += (a[i] - ma) * (b[i] - mb);
+    saa += (a[i] - ma) * (a[i] - ma);
+    sbb += (b[i] - mb) * (b[i] - mb);
+  }
+  return sab / std::sqrt(saa * sbb);
+}
+
+// Plain sand shows nothing but the detail: a pattern repeating every tile made image matching
+// find the same patch one tile away (the canyon survey registered 16 of 55 keyframes).
+TEST(SurfaceDetailTest, DoesNotRepeatAtTheTileSizeOrItsMultiples) {
+  const SurfaceDetail detail(options(0.8, 1));  // tile 0.5 m
+  EXPECT_GT(shiftedCorrelation(detail, {0.001f, 0, 0}), 0.9);  // the measure sees likeness
+  for (float shift : {0.5f, 1.0f, 0.809017f, 1.618034f, 4.0f, 6.5f, 10.0f}) {
+    EXPECT_LT(std::abs(shiftedCorrelation(detail, {shift, 0, 0})), 0.6) << shift;
+    EXPECT_LT(std::abs(shiftedCorrelation(detail, {0, shift, 0})), 0.6) << shift;
+  }
+}
+
 TEST(SurfaceDetailTest, BadOptionsNameTheField) {
   SurfaceDetailOptions o;
   o.tile_size = 0;
