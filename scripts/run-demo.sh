@@ -1,18 +1,23 @@
 #!/usr/bin/env bash
-# The main job: installs, builds, then runs the richest end-to-end run we have so far:
+# The main job: installs, builds, then runs a simulated inspection and its reconstruction:
 #   1. the whole vehicle stack in the procedurally generated canyon (simulator, mapping,
 #      planning, mission handler and controller on Cyclone DDS), inspected with `auv` from
 #      Fast DDS;
 #   2. the canyon inspection mission (traverse, go round the outer rock, traverse again) run
 #      autonomously with `auv mission start`, faster than real time, ending with the mission
 #      figure and summary (collisions, clearance, navigation error, path lengths);
-#   3. the cameras' videos of part of the mission rendered from the true trajectory;
+#   3. the three cameras' videos of the first canyon traverse rendered from the true trajectory
+#      (1352x1014 at 4 fps, reconstruction/bench/pipeline/make_canyon_survey.sh), and a survey
+#      folder with the cameras' calibration;
 #   4. the shore's side after recovery: `auv recon pull` (Fast DDS) fetches and verifies the
-#      recordings from the vehicle's recorder (Cyclone DDS) into a survey folder.
-# The 3D reconstruction comes with a later issue.
+#      recordings from the vehicle's recorder (Cyclone DDS) into the survey folder;
+#   5. `auv recon run`: keyframes, colour correction and undistortion, SIFT + AC-RANSAC,
+#      incremental SfM, dense matching, Poisson surface, texturing -> a textured 3D model;
+#   6. `auv recon evaluate` against the simulator's world (F-scores, camera error, texture PSNR)
+#      and `auv recon figures` (per-camera contribution, navigation vs SfM trajectory).
 # Options: AUV_DEMO_WORLD (canyon), AUV_DEMO_SEED (1), AUV_DEMO_SPEED (real-time factor, 8),
-#          AUV_DEMO_SCALE (video resolution scale, 0.5 of 960x720),
-#          AUV_DEMO_VIDEO_SECONDS (simulated seconds of video rendered, 60; 0 = the whole run).
+#          AUV_DEMO_VIDEO_SECONDS (simulated seconds of video from 55 s, 80),
+#          AUV_DEMO_RUN, AUV_DEMO_SURVEY (folders under auv_runs/).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/install-deps.sh
@@ -20,8 +25,8 @@ cd "$(dirname "$0")/.."
 set +u; source install/setup.bash; set -u
 export AUV_DOMAIN_ID=42
 export AUV_DEMO_WORLD=${AUV_DEMO_WORLD:-canyon} AUV_DEMO_SEED=${AUV_DEMO_SEED:-1}
-export AUV_DEMO_SPEED=${AUV_DEMO_SPEED:-8} AUV_DEMO_SCALE=${AUV_DEMO_SCALE:-0.5}
-export AUV_DEMO_VIDEO_SECONDS=${AUV_DEMO_VIDEO_SECONDS:-60}
+export AUV_DEMO_SPEED=${AUV_DEMO_SPEED:-8}
+export AUV_DEMO_VIDEO_SECONDS=${AUV_DEMO_VIDEO_SECONDS:-80}
 export AUV_DEMO_RUN=${AUV_DEMO_RUN:-auv_runs/demo-$AUV_DEMO_WORLD}
 export AUV_DEMO_SURVEY=${AUV_DEMO_SURVEY:-auv_runs/survey-$AUV_DEMO_WORLD}
 guard=()
@@ -54,21 +59,30 @@ step "auv mission status"
 auv mission status || true
 kill -INT $launch_pid; wait $launch_pid || true; trap - EXIT
 grep -E "COLLISION" /tmp/auv-demo-vehicle.log | tail -3 || true
-end=""
-[ "$AUV_DEMO_VIDEO_SECONDS" != 0 ] && end="--end $AUV_DEMO_VIDEO_SECONDS"
-step "auv sim render $AUV_DEMO_RUN --scale $AUV_DEMO_SCALE $end   (cameras from the true trajectory)"
-auv sim render "$AUV_DEMO_RUN" --scale "$AUV_DEMO_SCALE" $end --quiet
-find "$AUV_DEMO_RUN" -type f -not -name "tree_*" | sort | sed "s/^/  /"
+[ $status = 0 ] || { echo "demo: the mission did not succeed: no survey (run folder $AUV_DEMO_RUN)" >&2; exit $status; }
+step "survey cameras: make_canyon_survey.sh --run $AUV_DEMO_RUN --seconds $AUV_DEMO_VIDEO_SECONDS   (rendered from the true trajectory)"
+reconstruction/bench/pipeline/make_canyon_survey.sh --run "$AUV_DEMO_RUN" --survey "$AUV_DEMO_SURVEY" \
+  --seconds "$AUV_DEMO_VIDEO_SECONDS" --no-recordings
 step "auv recon pull --vehicle auv --into $AUV_DEMO_SURVEY   (shore on Fast DDS; the recorder on Cyclone DDS)"
-rm -rf "$AUV_DEMO_SURVEY"
-auv run recorder -p root:="$AUV_DEMO_RUN/vehicle/recordings" -p vehicle_name:=auv \
+auv run recorder -p root:="$AUV_DEMO_SURVEY.truth/vehicle/recordings" -p vehicle_name:=auv \
   > /tmp/auv-demo-recorder.log 2>&1 &
 recorder_pid=$!
 AUV_DDS=fastdds auv recon pull --vehicle auv --into "$AUV_DEMO_SURVEY" --timeout 30 || status=$?
 kill -INT $recorder_pid; wait $recorder_pid || true
-find "$AUV_DEMO_SURVEY" -type f | sort | sed "s/^/  /"
-step "mission figure: $AUV_DEMO_RUN/mission/report.png (and .svg); summary: $AUV_DEMO_RUN/mission/summary.json"
+[ $status = 0 ] || exit $status
+step "auv recon run $AUV_DEMO_SURVEY   (keyframes -> textured model)"
+auv recon run "$AUV_DEMO_SURVEY"
+step "auv recon evaluate $AUV_DEMO_SURVEY   (against the simulated world)"
+auv recon evaluate "$AUV_DEMO_SURVEY" || status=$?
+step "auv recon figures $AUV_DEMO_SURVEY"
+auv recon figures "$AUV_DEMO_SURVEY" || status=$?
+step "results"
+echo "  mission figure  $AUV_DEMO_RUN/mission/report.png (and .svg); summary $AUV_DEMO_RUN/mission/summary.json"
+for f in sparse/points.ply dense/fused.ply mesh/mesh.ply textured/model.obj figures/cameras.png \
+         figures/trajectory.png evaluation.json report.json; do
+  echo "  $(printf "%-18s" "$f") $AUV_DEMO_SURVEY/$f"
+done
 exit $status
 '
 echo
-echo "demo: done (traffic stayed on loopback); run folder: $AUV_DEMO_RUN"
+echo "demo: done (traffic stayed on loopback); run folder: $AUV_DEMO_RUN, survey: $AUV_DEMO_SURVEY"

@@ -22,7 +22,9 @@
 # traverse and most of the way round the outer rock), 4800 frames, for ~300 keyframes. Usage:
 #   reconstruction/bench/pipeline/make_canyon_survey.sh [--survey DIR] [--run DIR] [--full]
 #       [--start S] [--seconds S] [--fps F] [--width W] [--height H] [--visibility M]
-#       [--threads N] [--seed N] [--calibrate]
+#       [--threads N] [--seed N] [--calibrate] [--no-recordings]
+# --no-recordings leaves recordings/ to `auv recon pull` from a recorder serving
+# <survey>.truth/vehicle/recordings (what scripts/run-demo.sh does).
 # Paths are relative to the workspace root (default survey auv_runs/survey-canyon-eval, mission
 # run auv_runs/canyon-survey-mission, render folder <survey>.truth).
 set -euo pipefail
@@ -40,6 +42,7 @@ visibility=12
 threads=2
 seed=1
 calibrate=0
+recordings=1
 while [ $# -gt 0 ]; do
   case "$1" in
     --survey) survey=$2; shift 2 ;;
@@ -54,7 +57,8 @@ while [ $# -gt 0 ]; do
     --threads) threads=$2; shift 2 ;;
     --seed) seed=$2; shift 2 ;;
     --calibrate) calibrate=1; shift ;;
-    -h|--help) sed -n '2,27p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    --no-recordings) recordings=0; shift ;;
+    -h|--help) sed -n '2,29p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) echo "make_canyon_survey: unknown option $1 (--help)" >&2; exit 2 ;;
   esac
 done
@@ -117,6 +121,7 @@ step "survey $survey"
 rm -rf "$survey"
 mkdir -p "$survey/recordings" "$survey/calibration"
 for dir in "$truth"/vehicle/recordings/*/; do
+  [ "$recordings" = 1 ] || break
   camera=$(basename "$dir")
   mkdir -p "$survey/recordings/$camera"
   cp "$dir"/*.mp4 "$dir"/*.frames.csv "$survey/recordings/$camera/"
@@ -162,7 +167,7 @@ python3 - "$survey" "$truth" "$run" "$start" "$end" "$fps" "$width" "$height" "$
 import glob, json, os, sys
 survey, truth, run, start, end, fps, width, height, visibility, mission_s, render_s = sys.argv[1:12]
 frames = {}
-for sidecar in sorted(glob.glob(os.path.join(survey, "recordings", "*", "*.frames.csv"))):
+for sidecar in sorted(glob.glob(os.path.join(truth, "vehicle", "recordings", "*", "*.frames.csv"))):
     frames[os.path.basename(os.path.dirname(sidecar))] = sum(1 for _ in open(sidecar)) - 1
 record = {
     "ground_truth_run": os.path.relpath(truth, survey),

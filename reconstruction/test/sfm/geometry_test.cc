@@ -37,8 +37,8 @@ TEST(Tracks, JoinsMatchesAcrossImagesAndLeavesOutConflictingOnes) {
   // Pair (1, 2), 3 matches, joined first: track A 1:0 - 2:1, track B 1:1 - 2:2, and 1:3 - 2:2
   // conflicts with B (two keypoints of image 1): left out. Pair (2, 3), 2 matches: A gets 3:2
   // through 2:1; C = 2:4 - 3:4.
-  input.pairs.push_back({2, 3, {{1, 2}, {4, 4}}});
-  input.pairs.push_back({1, 2, {{0, 1}, {1, 2}, {3, 2}}});
+  input.pairs.push_back({2, 3, {{1, 2}, {4, 4}}, -1, std::nullopt});
+  input.pairs.push_back({1, 2, {{0, 1}, {1, 2}, {3, 2}}, -1, std::nullopt});
   input.check();
   const Tracks tracks = Tracks::build(input);
   EXPECT_EQ(tracks.size(), 3u);
@@ -92,7 +92,7 @@ TEST(Tracks, WrongMatchesDoNotChainTracksTogether) {
 
 TEST(SfmInput, RejectsBrokenReferencesNamingThem) {
   SfmInput input = tinyInput();
-  input.pairs.push_back({1, 2, {{0, 7}}});
+  input.pairs.push_back({1, 2, {{0, 7}}, -1, std::nullopt});
   try {
     input.check();
     FAIL() << "expected an error";
@@ -100,9 +100,9 @@ TEST(SfmInput, RejectsBrokenReferencesNamingThem) {
     EXPECT_NE(std::string(e.what()).find("pair (1, 2)"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("(0, 7)"), std::string::npos) << e.what();
   }
-  input.pairs = {{2, 2, {}}};
+  input.pairs = {{2, 2, {}, -1, std::nullopt}};
   EXPECT_THROW(input.check(), std::invalid_argument);
-  input.pairs = {{1, 9, {}}};
+  input.pairs = {{1, 9, {}, -1, std::nullopt}};
   EXPECT_THROW(input.check(), std::invalid_argument);
   input.pairs.clear();
   input.views[0].camera_id = 4;

@@ -124,7 +124,7 @@ inline SyntheticScene makeSyntheticScene(const SyntheticOptions& o) {
       const View& b = s.input.views[j];
       std::map<size_t, uint32_t> in_b;
       for (const auto& [k, p] : s.keypoint_point[b.id]) in_b[p] = k;
-      ViewPair pair{a.id, b.id, {}};
+      ViewPair pair{a.id, b.id, {}, -1, std::nullopt};
       for (const auto& [k, p] : s.keypoint_point[a.id]) {
         auto it = in_b.find(p);
         if (it != in_b.end()) pair.matches.push_back({k, it->second});
