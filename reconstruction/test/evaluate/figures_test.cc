@@ -5,10 +5,12 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <stdexcept>
 
 #include <open3d/geometry/PointCloud.h>
 #include <open3d/io/PointCloudIO.h>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "auv/recon/common/stage_error.h"
 #include "synthetic_survey.h"
@@ -51,6 +53,105 @@ TEST(TopDown, ShallowPointsCoverDeepOnesAtTheirPlaces) {
   // North is up, east is right.
   EXPECT_LT(view.pixel({10, 0}).y, view.pixel({0, 0}).y);
   EXPECT_GT(view.pixel({0, 10}).x, view.pixel({0, 0}).x);
+}
+
+TEST(TopDown, LongStraightTraverseIsFramedWithReliefBesideIt) {
+  // An 18 m traverse due north, as the canyon survey: 15 % (2.7 m) < 4 m of margin, so 4 m on
+  // each side; 26 m north, 8 m east widened to half of 26 m: 13 m, centred on the path.
+  std::vector<Eigen::Vector2d> path;
+  for (int i = 0; i <= 18; ++i) path.emplace_back(10.0 + i, -2.0);
+  TopDownFraming framing;
+  framing.margin = 0.15;
+  framing.min_margin_m = 4.0;
+  framing.min_aspect = 0.5;
+  const TopDownView view(path, 1600, framing);
+  EXPECT_EQ(view.size(), cv::Size(800, 1600));
+  EXPECT_NEAR(view.pixelsPerMetre(), 1600 / 26.0, 1e-9);
+  EXPECT_NEAR(view.pixel({19, -2}).x, 400, 1e-3);  // centred
+  EXPECT_NEAR(view.pixel({19, -2}).y, 800, 1e-3);
+  EXPECT_NEAR(view.pixel({28, -2}).y, 4 * 1600 / 26.0, 1e-3);  // 4 m above the north end
+  EXPECT_NEAR(view.pixel({19, -8.5}).x, 0, 1e-3);              // 6.5 m either side
+  EXPECT_NEAR(view.pixel({19, 4.5}).x, 800, 1e-3);
+  // An east-west traverse: the same, turned.
+  std::vector<Eigen::Vector2d> across;
+  for (const auto& p : path) across.emplace_back(p.y(), p.x());
+  EXPECT_EQ(TopDownView(across, 1600, framing).size(), cv::Size(1600, 800));
+  // Room for a legend: the same scale, more of the world about the centre.
+  framing.min_size_px = cv::Size(1000, 100);
+  const TopDownView wide(path, 1600, framing);
+  EXPECT_EQ(wide.size(), cv::Size(1000, 1600));
+  EXPECT_NEAR(wide.pixelsPerMetre(), view.pixelsPerMetre(), 1e-9);
+  EXPECT_NEAR(wide.pixel({19, -2}).x, 500, 1e-3);
+  // Without framing the old behaviour: the path's own strip.
+  EXPECT_EQ(TopDownView(path, 1600).size().height, 1600);
+  EXPECT_LT(TopDownView(path, 1600).size().width, 10);
+  // Bad framings.
+  TopDownFraming bad;
+  bad.min_aspect = 1.5;
+  EXPECT_THROW(TopDownView(path, 1600, bad), std::invalid_argument);
+  bad = TopDownFraming{};
+  bad.min_margin_m = -1;
+  EXPECT_THROW(TopDownView(path, 1600, bad), std::invalid_argument);
+}
+
+/// The legend box drawLegend left on `image`, found as the region darkened against the
+/// undarkened strip left of and above it (the box starts 8 px from the corner): its right end
+/// along row 10 (against row 3) and its bottom along column 10 (against column 3). Empty when
+/// there is no darkened run from the corner.
+cv::Rect observedLegendBox(const cv::Mat& image) {
+  auto darker = [&](int r, int c, int r0, int c0) {
+    const cv::Vec3b p = image.at<cv::Vec3b>(r, c), q = image.at<cv::Vec3b>(r0, c0);
+    for (int k = 0; k < 3; ++k) {
+      if (q[k] < 10 || p[k] > 0.5 * q[k]) return false;
+    }
+    return true;
+  };
+  int right = 8, bottom = 8;
+  while (right < image.cols && darker(10, right, 3, right)) ++right;
+  while (bottom < image.rows && darker(bottom, 10, bottom, 3)) ++bottom;
+  return cv::Rect(8, 8, right - 8, bottom - 8);
+}
+
+/// Checks that the legend box lies inside `image` with undarkened image right of it and that
+/// every bright (text) pixel of its rows lies inside it.
+void expectLegendInside(const cv::Mat& image) {
+  const cv::Rect box = observedLegendBox(image);
+  ASSERT_GT(box.width, 50);
+  ASSERT_GT(box.height, 30);
+  EXPECT_LE(box.br().x, image.cols - 4) << "legend box reaches the right edge";
+  EXPECT_LE(box.br().y, image.rows - 4);
+  int rightmost_text = 0;
+  for (int r = box.y; r < box.br().y; ++r) {
+    for (int c = 0; c < image.cols; ++c) {
+      const cv::Vec3b p = image.at<cv::Vec3b>(r, c);
+      if (p[0] > 200 && p[1] > 200 && p[2] > 200) rightmost_text = std::max(rightmost_text, c);
+    }
+  }
+  EXPECT_GT(rightmost_text, box.x + box.width / 2);  // there is text
+  EXPECT_LT(rightmost_text, box.br().x);
+}
+
+TEST(Legend, MeasuredTextFitsItsBoxAndTheImage) {
+  const std::vector<LegendEntry> entries{{{60, 200, 60}, "vehicle navigation (dead reckoning)"},
+                                         {{50, 50, 230}, "SfM cameras (aligned to the truth)"},
+                                         {{230, 230, 230}, "true trajectory"}};
+  for (int size_px : {200, 1600, 6000}) {
+    const double font = legendFontScale(size_px);
+    const cv::Size need = legendImageSize(entries, font);
+    int baseline = 0;
+    const int text =
+        cv::getTextSize(entries[0].second, cv::FONT_HERSHEY_SIMPLEX, font, 1, &baseline).width;
+    EXPECT_GT(need.width, text + 8) << size_px;
+    cv::Mat image(need, CV_8UC3, cv::Scalar(100, 100, 100));
+    const cv::Rect box = drawLegend(image, entries, 10.0, font);
+    EXPECT_EQ(box & cv::Rect(0, 0, image.cols, image.rows), box) << size_px;
+    EXPECT_GE(box.width, text) << size_px;
+    expectLegendInside(image);
+    // One pixel too narrow or too low: refused, not cut.
+    cv::Mat narrow(need - cv::Size(1, 0), CV_8UC3), low(need - cv::Size(0, 1), CV_8UC3);
+    EXPECT_THROW(drawLegend(narrow, entries, 10.0, font), std::invalid_argument) << size_px;
+    EXPECT_THROW(drawLegend(low, entries, 10.0, font), std::invalid_argument) << size_px;
+  }
 }
 
 /// A sparse model of two cameras, "left" and "right": points x < -1 seen by left only, x > 1
@@ -100,10 +201,22 @@ TEST(Figures, PerCameraContributionOfTwoCameras) {
   ASSERT_EQ(cloud.points_.size(), result.points);
   const cv::Mat image = cv::imread((survey / "figures" / "cameras.png").string());
   ASSERT_FALSE(image.empty());
+  // The cloud is a 8.8 x 2.2 m strip (150 px wide at 600 px): the image is widened for the
+  // legend, whose box and text lie inside it.
+  const std::vector<LegendEntry> legend{{combinationColor(0b01, 2), "left  37.0 %"},
+                                        {combinationColor(0b10, 2), "right  37.0 %"},
+                                        {combinationColor(0b11, 2), "left + right  25.9 %"}};
+  const double font = legendFontScale(options.image_size_px);
+  TopDownFraming framing;
+  framing.min_size_px = legendImageSize(legend, font);
+  EXPECT_GT(framing.min_size_px.width, 150);
   std::vector<Eigen::Vector2d> xy;
   for (const auto& p : cloud.points_) xy.push_back(p.head<2>());
-  const TopDownView view(xy, options.image_size_px);
+  const TopDownView view(xy, options.image_size_px, framing);
   ASSERT_EQ(image.size(), view.size());
+  EXPECT_EQ(image.rows, 600);
+  expectLegendInside(image);
+  const cv::Rect legend_box = observedLegendBox(image);
   size_t red = 0, green = 0, yellow = 0, checked = 0;
   for (size_t i = 0; i < cloud.points_.size(); i += 7) {
     const cv::Point2f q = view.pixel(xy[i]);
@@ -114,7 +227,7 @@ TEST(Figures, PerCameraContributionOfTwoCameras) {
     if (pixel[0] < 100 && pixel[1] > 200 && pixel[2] < 100) ++green;
     if (pixel[0] < 100 && pixel[1] > 200 && pixel[2] > 200) ++yellow;
     // In the legend's corner the box darkens what is below it; elsewhere the colours agree.
-    if (q.x > 300 || q.y > 150) {
+    if (!legend_box.contains(cv::Point(static_cast<int>(q.x), static_cast<int>(q.y)))) {
       EXPECT_NEAR(pixel[2], c.x(), 1.0) << i;
       EXPECT_NEAR(pixel[1], c.y(), 1.0) << i;
       ++checked;
@@ -135,6 +248,10 @@ TEST_F(SyntheticSurvey, TrajectoryFigureWithGroundTruth) {
   const cv::Mat figure = cv::imread((survey_ / "figures" / "trajectory.png").string());
   ASSERT_FALSE(figure.empty());
   EXPECT_EQ(std::max(figure.cols, figure.rows), 500);
+  // The path runs 6 m north and sways 0.3 m: the figure is still at least half as wide as
+  // tall, the legend inside.
+  EXPECT_GE(2 * figure.cols, figure.rows);
+  expectLegendInside(figure);
   // The navigation (green) and the aligned cameras (red) are drawn.
   size_t green = 0, red = 0;
   for (int r = 0; r < figure.rows; ++r) {
@@ -146,10 +263,42 @@ TEST_F(SyntheticSurvey, TrajectoryFigureWithGroundTruth) {
   }
   EXPECT_GT(green, 100u);
   EXPECT_GT(red, 50u);
+  // At least 4 m of relief around the cameras (keyframes from x = -3 to 3 m north, dots of
+  // radius 3 px; 3.8 m for the dots' size): their pixel span gives the scale; the world plane
+  // reaches 6 m either side.
+  cv::Mat red_mask;
+  cv::inRange(figure, cv::Scalar(0, 0, 181), cv::Scalar(99, 99, 255), red_mask);
+  red_mask(observedLegendBox(figure)).setTo(0);  // its red swatch
+  const cv::Rect cameras = cv::boundingRect(red_mask);
+  const double pixels_per_metre = (cameras.height - 6) / 6.0;
+  const int margin = static_cast<int>(3.8 * pixels_per_metre);  // dots and anti-aliasing
+  EXPECT_GE(cameras.x, margin);
+  EXPECT_GE(figure.cols - cameras.br().x, margin);
+  EXPECT_GE(cameras.y, margin);
+  EXPECT_GE(figure.rows - cameras.br().y, margin);
+  const cv::Vec3b beside = figure.at<cv::Vec3b>(cameras.y + cameras.height / 2, cameras.x - margin);
+  EXPECT_NEAR(beside[0], 150 - 11 * 5, 2);  // the seabed's relief at depth 5, not background
+  // The SVG: the same size, its legend text (textLength) inside.
   std::ifstream svg(survey_ / "figures" / "trajectory.svg");
   const std::string text(std::istreambuf_iterator<char>(svg), {});
   EXPECT_NE(text.find("<svg"), std::string::npos);
   EXPECT_NE(text.find("rgb(60,200,60)"), std::string::npos);  // navigation polyline
+  EXPECT_NE(text.find("width=\"" + std::to_string(figure.cols) + "\" height=\"" +
+                      std::to_string(figure.rows) + "\""),
+            std::string::npos);
+  auto attribute = [&](size_t from, const std::string& name) {
+    const size_t at = text.find(" " + name + "=\"", from);
+    return at == std::string::npos ? -1.0 : std::stod(text.substr(at + name.size() + 3));
+  };
+  int labels = 0;
+  for (size_t at = text.find("<text"); at != std::string::npos; at = text.find("<text", at + 1)) {
+    const double x = attribute(at, "x"), length = attribute(at, "textLength");
+    EXPECT_GT(length, 0);
+    EXPECT_LE(x + length, figure.cols - 8) << text.substr(at, 200);
+    ++labels;
+  }
+  EXPECT_EQ(labels, 4);  // three legend rows and the scale bar
+  EXPECT_NE(text.find("vehicle navigation (dead reckoning)"), std::string::npos);
   // The cloud in the truth's frame: the seabed at depth 5 (and the rock's top at 4).
   open3d::geometry::PointCloud cloud;
   ASSERT_TRUE(open3d::io::ReadPointCloud((survey_ / "figures" / "cameras.ply").string(), cloud));

@@ -4,9 +4,11 @@
 #include <cmath>
 #include <fstream>
 #include <iomanip>
+#include <limits>
 #include <numeric>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 
 #include <open3d/geometry/PointCloud.h>
 #include <open3d/geometry/TriangleMesh.h>
@@ -35,6 +37,15 @@ constexpr const char* kStage = "figures";
 const cv::Vec3b kNavigation(60, 200, 60);  // BGR green, as the paper's Figure 20
 const cv::Vec3b kCameras(50, 50, 230);     // red
 const cv::Vec3b kTruth(230, 230, 230);     // white
+
+// Figure 20's framing: a long straight traverse would otherwise be a strip of its own width.
+constexpr double kTrajectoryReliefM = 4.0;    // m of relief at least around the paths
+constexpr double kTrajectoryMinAspect = 0.5;  // shorter side / longer side at least
+
+constexpr int kFont = cv::FONT_HERSHEY_SIMPLEX;
+constexpr int kCorner = 8;  // px, from the image's edges to the legend and scale bar
+const char* const kWidestScale = "0.0005 m";  // no scale-bar label is wider
+const cv::Scalar kLegendText(240, 240, 240);
 
 std::string cameraOfName(const std::string& name) {
   const size_t slash = name.find('/');
@@ -150,6 +161,93 @@ std::string svgPolyline(const TopDownView& view, const std::vector<Eigen::Vector
   return out.str();
 }
 
+/// Where the legend and the scale bar go: one layout for the PNG and the SVG.
+struct LegendLayout {
+  int line = 0;                    // px, height of a row
+  cv::Rect box;                    // the darkened box behind the rows
+  std::vector<cv::Rect> swatches;  // colour squares
+  std::vector<cv::Point> origins;  // text origins (left end of the baseline)
+  std::vector<int> widths;         // px, measured width of each label
+  cv::Size scale_text;             // px, the widest scale-bar label
+  int scale_baseline = 0;          // px, below the scale-bar label's baseline
+};
+
+LegendLayout layoutLegend(const std::vector<LegendEntry>& entries, double font) {
+  LegendLayout layout;
+  layout.line = static_cast<int>(std::lround(56 * font));
+  int width = 0, baseline = 0;
+  for (const auto& entry : entries) {
+    layout.widths.push_back(cv::getTextSize(entry.second, kFont, font, 1, &baseline).width);
+    width = std::max(width, layout.widths.back());
+  }
+  const int rows = static_cast<int>(entries.size());
+  layout.box = cv::Rect(kCorner, kCorner, width + layout.line + 24, layout.line * rows + 12);
+  for (int i = 0; i < rows; ++i) {
+    const int y = kCorner + 6 + layout.line * i;
+    layout.swatches.emplace_back(16, y, layout.line - 8, layout.line - 8);
+    layout.origins.emplace_back(16 + layout.line, y + layout.line - 12);
+  }
+  layout.scale_text = cv::getTextSize(kWidestScale, kFont, font, 1, &layout.scale_baseline);
+  return layout;
+}
+
+/// A round length near a fifth of the image's width, bottom-left, below the legend.
+struct ScaleBar {
+  cv::Point start;  // left end
+  int length_px = 0;
+  cv::Point label_origin;
+  std::string label;
+};
+
+ScaleBar scaleBar(const cv::Size& image, double pixels_per_metre, const LegendLayout& layout) {
+  const double target = image.width / 5.0 / pixels_per_metre;
+  const double decade = std::pow(10.0, std::floor(std::log10(target)));
+  double length = decade;
+  for (double step : {2.0, 5.0}) {
+    if (decade * step <= target) length = decade * step;
+  }
+  ScaleBar bar;
+  bar.length_px = static_cast<int>(length * pixels_per_metre);
+  bar.label = metres(length);
+  const int baseline_y = image.height - kCorner - layout.scale_baseline;
+  bar.start = cv::Point(16, baseline_y - layout.scale_text.height / 2);
+  bar.label_origin = cv::Point(16 + bar.length_px + 8, baseline_y);
+  return bar;
+}
+
+std::string svgLegend(const std::vector<LegendEntry>& entries, double font, const cv::Size& image,
+                      double pixels_per_metre) {
+  const LegendLayout layout = layoutLegend(entries, font);
+  const ScaleBar bar = scaleBar(image, pixels_per_metre, layout);
+  // textLength: the viewer's font may be wider than OpenCV's; the text is squeezed, never cut.
+  auto text = [&](const cv::Point& origin, int width, const std::string& label) {
+    std::ostringstream out;
+    out << "<text x=\"" << origin.x << "\" y=\"" << origin.y << "\" font-size=\""
+        << std::lround(30 * font) << "\" textLength=\"" << width
+        << "\" lengthAdjust=\"spacingAndGlyphs\" fill=\"rgb(240,240,240)\" "
+           "font-family=\"sans-serif\">"
+        << label << "</text>\n";
+    return out.str();
+  };
+  std::ostringstream out;
+  out << "<rect x=\"" << layout.box.x << "\" y=\"" << layout.box.y << "\" width=\""
+      << layout.box.width << "\" height=\"" << layout.box.height
+      << "\" fill=\"black\" fill-opacity=\"0.7\"/>\n";
+  for (size_t i = 0; i < entries.size(); ++i) {
+    const cv::Rect& s = layout.swatches[i];
+    out << "<rect x=\"" << s.x << "\" y=\"" << s.y << "\" width=\"" << s.width << "\" height=\""
+        << s.height << "\" fill=\"" << svgColor(entries[i].first) << "\"/>\n"
+        << text(layout.origins[i], layout.widths[i], entries[i].second);
+  }
+  int baseline = 0;
+  out << "<line x1=\"" << bar.start.x << "\" y1=\"" << bar.start.y << "\" x2=\""
+      << bar.start.x + bar.length_px << "\" y2=\"" << bar.start.y
+      << "\" stroke=\"rgb(240,240,240)\" stroke-width=\"3\"/>\n"
+      << text(bar.label_origin, cv::getTextSize(bar.label, kFont, font, 1, &baseline).width,
+              bar.label);
+  return out.str();
+}
+
 }  // namespace
 
 void FiguresOptions::check() const {
@@ -190,7 +288,15 @@ std::string combinationName(uint32_t mask, const std::vector<std::string>& camer
   return name.empty() ? "none" : name;
 }
 
-TopDownView::TopDownView(const std::vector<Eigen::Vector2d>& points, int size_px, double margin) {
+TopDownView::TopDownView(const std::vector<Eigen::Vector2d>& points, int size_px,
+                         const TopDownFraming& framing) {
+  if (!(framing.margin >= 0 && framing.min_margin_m >= 0 && framing.min_aspect >= 0 &&
+        framing.min_aspect <= 1)) {
+    throw std::invalid_argument("TopDownView: margin " + std::to_string(framing.margin) +
+                                ", min_margin_m " + std::to_string(framing.min_margin_m) +
+                                ", min_aspect " + std::to_string(framing.min_aspect) +
+                                ": margins must be >= 0, min_aspect in [0, 1]");
+  }
   min_ = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
   max_ = -min_;
   for (const auto& p : points) {
@@ -198,12 +304,24 @@ TopDownView::TopDownView(const std::vector<Eigen::Vector2d>& points, int size_px
     max_ = max_.cwiseMax(p);
   }
   if (points.empty()) min_ = max_ = Eigen::Vector2d::Zero();
-  Eigen::Vector2d extent = (max_ - min_).cwiseMax(1e-3);
-  min_ -= margin * extent;
-  max_ += margin * extent;
-  extent = max_ - min_;
+  const Eigen::Vector2d pad =
+      (framing.margin * (max_ - min_).cwiseMax(1e-3)).cwiseMax(framing.min_margin_m);
+  min_ -= pad;
+  max_ += pad;
+  // Widens axis (0 north, 1 east) to at least `length` m about its centre.
+  auto widen = [&](int axis, double length) {
+    const double centre = 0.5 * (min_[axis] + max_[axis]);
+    const double half = 0.5 * std::max(length, max_[axis] - min_[axis]);
+    min_[axis] = centre - half;
+    max_[axis] = centre + half;
+  };
+  widen(0, framing.min_aspect * (max_.y() - min_.y()));
+  widen(1, framing.min_aspect * (max_.x() - min_.x()));
   // Rows along north (x, decreasing downwards), columns along east (y).
-  scale_ = size_px / std::max(extent.x(), extent.y());
+  scale_ = size_px / (max_ - min_).maxCoeff();
+  widen(0, framing.min_size_px.height / scale_);
+  widen(1, framing.min_size_px.width / scale_);
+  const Eigen::Vector2d extent = max_ - min_;
   size_ = cv::Size(std::max(1, static_cast<int>(std::lround(extent.y() * scale_))),
                    std::max(1, static_cast<int>(std::lround(extent.x() * scale_))));
 }
@@ -232,38 +350,39 @@ cv::Mat drawTopDownCloud(const std::vector<Eigen::Vector3d>& points,
   return image;
 }
 
-void drawLegend(cv::Mat& image, const std::vector<std::pair<cv::Vec3b, std::string>>& entries,
-                double pixels_per_metre) {
-  const double font = std::max(0.4, image.cols / 2400.0);
-  const int line = static_cast<int>(28 * font / 0.5);
-  int width = 0;
-  for (const auto& [color, label] : entries) {
-    int baseline = 0;
-    width =
-        std::max(width, cv::getTextSize(label, cv::FONT_HERSHEY_SIMPLEX, font, 1, &baseline).width);
+double legendFontScale(int size_px) { return std::max(0.4, size_px / 2400.0); }
+
+cv::Size legendImageSize(const std::vector<LegendEntry>& entries, double font_scale) {
+  const LegendLayout layout = layoutLegend(entries, font_scale);
+  // The scale bar is at most a fifth of the width; its label follows it.
+  const int bar_width = (5 * (16 + 8 + layout.scale_text.width + kCorner) + 3) / 4;
+  return cv::Size(
+      std::max(layout.box.br().x + kCorner, bar_width),
+      layout.box.br().y + 2 * kCorner + layout.scale_text.height + layout.scale_baseline + kCorner);
+}
+
+cv::Rect drawLegend(cv::Mat& image, const std::vector<LegendEntry>& entries,
+                    double pixels_per_metre, double font_scale) {
+  const cv::Size need = legendImageSize(entries, font_scale);
+  if (image.cols < need.width || image.rows < need.height) {
+    throw std::invalid_argument("drawLegend: a " + std::to_string(image.cols) + "x" +
+                                std::to_string(image.rows) + " image cannot hold the legend (" +
+                                std::to_string(need.width) + "x" + std::to_string(need.height) +
+                                " px)");
   }
-  const cv::Rect box(8, 8, width + line + 24, line * static_cast<int>(entries.size()) + 12);
-  cv::Mat roi = image(box & cv::Rect(0, 0, image.cols, image.rows));
+  const LegendLayout layout = layoutLegend(entries, font_scale);
+  cv::Mat roi = image(layout.box);
   roi = roi * 0.3;
   for (size_t i = 0; i < entries.size(); ++i) {
-    const int y = 14 + line * static_cast<int>(i);
     const auto& c = entries[i].first;
-    cv::rectangle(image, cv::Rect(16, y, line - 8, line - 8), cv::Scalar(c[0], c[1], c[2]),
-                  cv::FILLED);
-    cv::putText(image, entries[i].second, cv::Point(16 + line, y + line - 12),
-                cv::FONT_HERSHEY_SIMPLEX, font, cv::Scalar(240, 240, 240), 1, cv::LINE_AA);
+    cv::rectangle(image, layout.swatches[i], cv::Scalar(c[0], c[1], c[2]), cv::FILLED);
+    cv::putText(image, entries[i].second, layout.origins[i], kFont, font_scale, kLegendText, 1,
+                cv::LINE_AA);
   }
-  // Scale bar: a round length near a fifth of the width.
-  const double target = image.cols / 5.0 / pixels_per_metre;
-  double length = std::pow(10.0, std::floor(std::log10(target)));
-  for (double step : {2.0, 5.0}) {
-    if (length * step <= target) length = std::pow(10.0, std::floor(std::log10(target))) * step;
-  }
-  const int bar = static_cast<int>(length * pixels_per_metre);
-  const cv::Point start(16, image.rows - 20);
-  cv::line(image, start, start + cv::Point(bar, 0), cv::Scalar(240, 240, 240), 3);
-  cv::putText(image, metres(length), start + cv::Point(bar + 8, 6), cv::FONT_HERSHEY_SIMPLEX, font,
-              cv::Scalar(240, 240, 240), 1, cv::LINE_AA);
+  const ScaleBar bar = scaleBar(image.size(), pixels_per_metre, layout);
+  cv::line(image, bar.start, bar.start + cv::Point(bar.length_px, 0), kLegendText, 3);
+  cv::putText(image, bar.label, bar.label_origin, kFont, font_scale, kLegendText, 1, cv::LINE_AA);
+  return layout.box;
 }
 
 FiguresResult writeFigures(const Survey& survey, const fs::path& ground_truth_run,
@@ -372,11 +491,7 @@ FiguresResult writeFigures(const Survey& survey, const fs::path& ground_truth_ru
     colors.push_back(combinationColor(mask, cameras.size()));
     ++count_of[mask];
   }
-  std::vector<Eigen::Vector2d> xy;
-  for (const auto& p : points) xy.push_back(p.head<2>());
-  const TopDownView view(xy, options.image_size_px);
-  cv::Mat image = drawTopDownCloud(points, colors, view, options.point_size_px);
-  std::vector<std::pair<cv::Vec3b, std::string>> legend;
+  std::vector<LegendEntry> legend;
   for (const auto& [mask, count] : count_of) {
     std::ostringstream label;
     label << combinationName(mask, cameras) << "  " << std::fixed << std::setprecision(1)
@@ -384,7 +499,14 @@ FiguresResult writeFigures(const Survey& survey, const fs::path& ground_truth_ru
     legend.push_back({combinationColor(mask, cameras.size()), label.str()});
     result.points_per_combination[combinationName(mask, cameras)] = count;
   }
-  drawLegend(image, legend, view.pixelsPerMetre());
+  const double font = legendFontScale(options.image_size_px);
+  std::vector<Eigen::Vector2d> xy;
+  for (const auto& p : points) xy.push_back(p.head<2>());
+  TopDownFraming framing;
+  framing.min_size_px = legendImageSize(legend, font);
+  const TopDownView view(xy, options.image_size_px, framing);
+  cv::Mat image = drawTopDownCloud(points, colors, view, options.point_size_px);
+  drawLegend(image, legend, view.pixelsPerMetre(), font);
   if (!cv::imwrite((output.path() / "cameras.png").string(), image)) {
     throw StageError(kStage, (output.path() / "cameras.png").string() + ": cannot write");
   }
@@ -423,7 +545,16 @@ FiguresResult writeFigures(const Survey& survey, const fs::path& ground_truth_ru
     for (const auto& p : true_path) true_xy.push_back(p.position.head<2>());
     everything.insert(everything.end(), nav_xy.begin(), nav_xy.end());
     everything.insert(everything.end(), true_xy.begin(), true_xy.end());
-    const TopDownView tview(everything, options.image_size_px, 0.15);
+    const std::vector<LegendEntry> trajectory_legend = {
+        {kNavigation, "vehicle navigation (dead reckoning)"},
+        {kCameras, "SfM cameras (aligned to the truth)"},
+        {kTruth, "true trajectory"}};
+    TopDownFraming tframing;
+    tframing.margin = 0.15;
+    tframing.min_margin_m = kTrajectoryReliefM;
+    tframing.min_aspect = kTrajectoryMinAspect;
+    tframing.min_size_px = legendImageSize(trajectory_legend, font);
+    const TopDownView tview(everything, options.image_size_px, tframing);
     cv::Mat figure(tview.size(), CV_8UC3, cv::Scalar(25, 25, 25));
     drawWorldRelief(figure, tview, *truth->worldMesh());
     drawPolyline(figure, tview, true_xy, kTruth, 1);
@@ -445,17 +576,8 @@ FiguresResult writeFigures(const Survey& survey, const fs::path& ground_truth_ru
       }
       svg << svgPolyline(tview, centres, kCameras, 1.5);
     }
-    drawLegend(figure,
-               {{kNavigation, "vehicle navigation (dead reckoning)"},
-                {kCameras, "SfM cameras (aligned to the truth)"},
-                {kTruth, "true trajectory"}},
-               tview.pixelsPerMetre());
-    svg << "<text x=\"16\" y=\"24\" fill=\"" << svgColor(kNavigation)
-        << "\" font-family=\"sans-serif\">vehicle navigation</text>\n"
-        << "<text x=\"16\" y=\"44\" fill=\"" << svgColor(kCameras)
-        << "\" font-family=\"sans-serif\">SfM cameras (aligned)</text>\n"
-        << "<text x=\"16\" y=\"64\" fill=\"" << svgColor(kTruth)
-        << "\" font-family=\"sans-serif\">true trajectory</text>\n</svg>\n";
+    drawLegend(figure, trajectory_legend, tview.pixelsPerMetre(), font);
+    svg << svgLegend(trajectory_legend, font, tview.size(), tview.pixelsPerMetre()) << "</svg>\n";
     if (!cv::imwrite((output.path() / "trajectory.png").string(), figure)) {
       throw StageError(kStage, (output.path() / "trajectory.png").string() + ": cannot write");
     }

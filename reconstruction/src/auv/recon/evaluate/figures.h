@@ -7,7 +7,10 @@
 //   (b) trajectory comparison (Figure 20): the vehicle's navigation estimate against the SfM
 //       camera trajectory, over the true trajectory and a top-down relief of the true world
 //       (figures/trajectory.png and .svg). Needs the ground-truth run (navigation.tum and the
-//       alignment; the paper had to guess the scale by hand, section 4.3).
+//       alignment; the paper had to guess the scale by hand, section 4.3). Framed with at least
+//       4 m of relief around the paths and width:height within 1:2 and 2:1, so a long straight
+//       traverse still shows what lies beside it (the walls of a canyon).
+// Both images are made large enough for their legend (text measured, never cut).
 // Top-down = looking down the world's z axis (NED, north up) once aligned to the truth;
 // without ground truth, down the cloud's axis of least spread.
 
@@ -16,6 +19,7 @@
 #include <filesystem>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -41,11 +45,24 @@ cv::Vec3b combinationColor(uint32_t mask, size_t camera_count);
 /// "left + forward" for a mask over `cameras`.
 std::string combinationName(uint32_t mask, const std::vector<std::string>& cameras);
 
+/// How a TopDownView frames its points beyond their bounds.
+struct TopDownFraming {
+  double margin = 0.05;       ///< fraction of the points' extent added on each side
+  double min_margin_m = 0.0;  ///< m, at least this much added on each side
+  double min_aspect = 0.0;    ///< in [0, 1]: the shorter side at least this fraction of the
+                              ///< longer one (widened about the centre)
+  cv::Size min_size_px;       ///< px, the image at least this large (room for the legend): more
+                              ///< of the world about the centre, same scale
+};
+
 /// Maps world points to the pixels of a top-down image: north (x) up, east (y) right, the
-/// bounds of `points` (plus a margin) filling `size_px` on the longer side.
+/// framed bounds of `points` filling `size_px` on the longer side (more only when
+/// `framing.min_size_px` asks for it).
 class TopDownView {
  public:
-  TopDownView(const std::vector<Eigen::Vector2d>& points, int size_px, double margin = 0.05);
+  /// Throws std::invalid_argument on a negative margin or a min_aspect outside [0, 1].
+  TopDownView(const std::vector<Eigen::Vector2d>& points, int size_px,
+              const TopDownFraming& framing = {});
   cv::Point2f pixel(const Eigen::Vector2d& xy) const;  ///< xy = (north, east)
   cv::Size size() const { return size_; }
   double pixelsPerMetre() const { return scale_; }
@@ -62,9 +79,17 @@ cv::Mat drawTopDownCloud(const std::vector<Eigen::Vector3d>& points,
                          const std::vector<cv::Vec3b>& colors, const TopDownView& view,
                          int point_size_px);
 
-/// A legend box (colour, label) in the top-left corner and a scale bar (m) bottom-left.
-void drawLegend(cv::Mat& image, const std::vector<std::pair<cv::Vec3b, std::string>>& entries,
-                double pixels_per_metre);
+using LegendEntry = std::pair<cv::Vec3b, std::string>;  ///< colour (BGR), label
+
+/// Font scale (cv::FONT_HERSHEY_SIMPLEX) of legends on an image whose longer side is `size_px`.
+double legendFontScale(int size_px);
+/// The smallest image (px) that holds drawLegend's box and scale bar, text measured with
+/// cv::getTextSize: give it to TopDownFraming::min_size_px so no label is ever cut.
+cv::Size legendImageSize(const std::vector<LegendEntry>& entries, double font_scale);
+/// A legend box (colour, label) in the top-left corner and a scale bar (m) bottom-left; returns
+/// the box. Throws std::invalid_argument when `image` is smaller than legendImageSize().
+cv::Rect drawLegend(cv::Mat& image, const std::vector<LegendEntry>& entries,
+                    double pixels_per_metre, double font_scale);
 
 struct FiguresResult {
   std::vector<std::filesystem::path> files;
