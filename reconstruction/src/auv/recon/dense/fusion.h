@@ -26,7 +26,7 @@ namespace auv::recon::dense {
 
 struct FusionOptions {
   int min_consistent = 2;         ///< neighbours whose depth maps must agree
-  double depth_tolerance = 0.01;  ///< relative depth difference allowed
+  double depth_tolerance = 0.02;  ///< relative depth difference allowed
   double reprojection_px = 2.0;   ///< forward-backward reprojection error allowed, px
   int normal_step = 2;            ///< px between the depths normals are computed from
   int pixel_step = 2;  ///< new points start only at master pixels on this grid (density 1/step^2)

@@ -37,7 +37,7 @@ struct MatcherOptions {
   int p2 = 160;                   ///< SGM penalty for jumps, cost units
   double p2_edge_grey = 10;       ///< grey levels: P2 / (1 + |dI| / this) across edges
   int directions = 8;             ///< SGM paths: 4 or 8
-  double min_ncc = 0.5;           ///< a final depth needs this aggregated NCC
+  double min_ncc = 0.35;          ///< a final depth needs this aggregated NCC
   double uniqueness = 0.03;       ///< second-best aggregated cost (beyond +-1 label) must exceed
                                   ///< the best by this fraction
   double min_texture_grey = 1.0;  ///< std of the master window, grey levels: less is not matched
