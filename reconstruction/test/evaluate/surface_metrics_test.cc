@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "auv/recon/common/stage_error.h"
 #include "auv/recon/evaluate/well_imaged_region.h"
 #include "synthetic_scene.h"
@@ -27,6 +29,24 @@ TEST(ScoreDistances, DefinitionOnKnownDistances) {
   // Nothing reconstructed: F = 0, not NaN.
   const SurfaceScores empty = scoreDistances({}, {0.1}, {0.05});
   EXPECT_EQ(empty.scores[0].fscore, 0.0);
+}
+
+// Poisson meshes hold a few zero-area triangles; Open3D 0.16's closest-point query aborted the
+// process on them (an internal assertion) when the canyon survey's mesh was evaluated.
+TEST(DistancesToMesh, ExactAndUnharmedByDegenerateTriangles) {
+  open3d::geometry::TriangleMesh mesh;
+  mesh.vertices_ = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {2, 0, 0}, {3, 0, 0}, {4, 0, 0}};
+  mesh.triangles_ = {{0, 1, 2}, {3, 4, 5}, {1, 1, 2}, {0, 0, 0}};  // collinear, repeated corners
+  const std::vector<double> d =
+      distancesToMesh({{0.2, 0.2, 0.5}, {0.2, 0.2, -2.0}, {3, 0, 1}}, mesh);
+  ASSERT_EQ(d.size(), 3u);
+  EXPECT_NEAR(d[0], 0.5, 1e-6);
+  EXPECT_NEAR(d[1], 2.0, 1e-6);
+  // (3, 0, 1) lies 1 m above the collinear triangle's segment: left out, the nearest surface
+  // is the corner (1, 0, 0) of the real triangle.
+  EXPECT_NEAR(d[2], std::sqrt(5.0), 1e-6);
+  mesh.triangles_ = {{1, 1, 2}};  // nothing but degenerate triangles: no surface
+  EXPECT_TRUE(std::isinf(distancesToMesh({{0, 0, 0}}, mesh)[0]));
 }
 
 TEST(SampleSurface, DensityDeterminismAndPlacement) {

@@ -68,14 +68,23 @@ std::vector<double> distancesToMesh(const std::vector<Eigen::Vector3d>& points,
   for (size_t i = 0; i < mesh.vertices_.size(); ++i) {
     for (int j = 0; j < 3; ++j) vertices[3 * i + j] = static_cast<float>(mesh.vertices_[i](j));
   }
-  std::vector<uint32_t> triangles(3 * mesh.triangles_.size());
-  for (size_t i = 0; i < mesh.triangles_.size(); ++i) {
-    for (int j = 0; j < 3; ++j) triangles[3 * i + j] = static_cast<uint32_t>(mesh.triangles_[i](j));
+  // Triangles degenerate in float (zero area: collinear or coincident corners, as Poisson
+  // meshes have a few of) are left out: Open3D 0.16's closest-point query turns them into NaN
+  // and aborts on an internal assertion. They add no surface, so no distance changes.
+  std::vector<uint32_t> triangles;
+  triangles.reserve(3 * mesh.triangles_.size());
+  auto corner = [&](int index) { return Eigen::Map<const Eigen::Vector3f>(&vertices[3 * index]); };
+  for (const Eigen::Vector3i& t : mesh.triangles_) {
+    const Eigen::Vector3f a = corner(t(0)), b = corner(t(1)), c = corner(t(2));
+    const float twice_area = (b - a).cross(c - a).norm();
+    if (!(twice_area > 0.0f) || !std::isfinite(twice_area)) continue;
+    for (int j = 0; j < 3; ++j) triangles.push_back(static_cast<uint32_t>(t(j)));
   }
+  if (triangles.empty()) return distances;
   open3d::t::geometry::RaycastingScene scene;
   scene.AddTriangles(
       core::Tensor(vertices, {static_cast<int64_t>(mesh.vertices_.size()), 3}, core::Float32),
-      core::Tensor(triangles, {static_cast<int64_t>(mesh.triangles_.size()), 3}, core::UInt32));
+      core::Tensor(triangles, {static_cast<int64_t>(triangles.size() / 3), 3}, core::UInt32));
   // In blocks, so the float copies stay small for clouds of millions of points.
   constexpr size_t kBlock = 1 << 20;
   std::vector<float> query;
