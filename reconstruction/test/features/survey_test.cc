@@ -273,7 +273,7 @@ TEST(SurveyStages, UncalibratedCamerasUseTheFundamentalMatrix) {
     matchSurvey(survey, matching);
     FAIL() << "no exception";
   } catch (const StageError& e) {
-    EXPECT_NE(std::string(e.what()).find("cam.yaml: non-zero distortion"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("cam.yaml: non-zero distortion_coefficients"), std::string::npos)
         << e.what();
   }
   fs::remove_all(root);

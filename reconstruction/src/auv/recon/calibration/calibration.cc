@@ -364,4 +364,16 @@ CameraCalibration readCalibration(const fs::path& file, const std::string& stage
   return c;
 }
 
+scene::Camera readUndistortedCamera(const fs::path& file, uint32_t id, const std::string& stage) {
+  const CameraCalibration c = readCalibration(file, stage);
+  if (cv::countNonZero(c.distortion != 0) > 0) {
+    throw StageError(stage, file.string() +
+                                ": non-zero distortion_coefficients (the intrinsics of undistorted "
+                                "images are expected: zeros)");
+  }
+  const cv::Mat& k = c.camera_matrix;
+  return scene::Camera::pinhole(id, c.image_size.width, c.image_size.height, k.at<double>(0, 0),
+                                k.at<double>(1, 1), k.at<double>(0, 2), k.at<double>(1, 2));
+}
+
 }  // namespace auv::recon::calibration

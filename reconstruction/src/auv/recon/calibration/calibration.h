@@ -11,6 +11,8 @@
 
 #include <opencv2/core.hpp>
 
+#include "auv/recon/scene/camera.h"
+
 namespace auv::recon::calibration {
 
 struct CalibrationOptions {
@@ -81,5 +83,11 @@ void writeCalibration(const std::filesystem::path& file, const CameraCalibration
 /// Reads what writeCalibration writes (the extra keys are optional). Throws StageError(stage,
 /// ...) naming the file and the missing or malformed key.
 CameraCalibration readCalibration(const std::filesystem::path& file, const std::string& stage);
+
+/// The pinhole camera of undistorted images (`corrected/<camera>.yaml`, which the correct
+/// stage writes) with id `id`. Throws StageError(stage, ...) naming the file when it cannot be
+/// read (readCalibration) or has non-zero distortion_coefficients.
+scene::Camera readUndistortedCamera(const std::filesystem::path& file, uint32_t id,
+                                    const std::string& stage);
 
 }  // namespace auv::recon::calibration

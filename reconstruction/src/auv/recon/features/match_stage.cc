@@ -18,6 +18,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 
+#include "auv/recon/calibration/calibration.h"
 #include "auv/recon/common/option_set.h"
 #include "auv/recon/common/progress.h"
 #include "auv/recon/common/report.h"
@@ -74,44 +75,6 @@ std::map<std::string, double> keyframeTimes(const fs::path& index_csv) {
     }
   }
   return times;
-}
-
-// corrected/<camera>.yaml (OpenCV FileStorage: image_width, image_height, camera_matrix,
-// distortion_coefficients) as a pinhole camera; nullopt when absent. Throws StageError naming
-// the file when it exists but is unusable.
-std::unique_ptr<scene::Camera> readPinhole(const fs::path& yaml, uint32_t id) {
-  std::error_code error;
-  if (!fs::exists(yaml, error)) return nullptr;
-  cv::FileStorage storage;
-  try {
-    storage.open(yaml.string(), cv::FileStorage::READ);
-  } catch (const cv::Exception& e) {
-    throw StageError(kStage, yaml.string() + ": cannot parse: " + e.what());
-  }
-  if (!storage.isOpened()) throw StageError(kStage, yaml.string() + ": cannot open");
-  int width = 0, height = 0;
-  cv::Mat k, distortion;
-  storage["image_width"] >> width;
-  storage["image_height"] >> height;
-  storage["camera_matrix"] >> k;
-  storage["distortion_coefficients"] >> distortion;
-  if (width <= 0 || height <= 0 || k.rows != 3 || k.cols != 3) {
-    throw StageError(kStage,
-                     yaml.string() + ": needs image_width, image_height and a 3x3 camera_matrix");
-  }
-  k.convertTo(k, CV_64F);
-  if (!distortion.empty() && cv::norm(distortion) > 1e-9) {
-    throw StageError(kStage, yaml.string() +
-                                 ": non-zero distortion_coefficients (corrected images are "
-                                 "undistorted: expected zeros)");
-  }
-  auto camera = std::make_unique<scene::Camera>(
-      scene::Camera::pinhole(id, width, height, k.at<double>(0, 0), k.at<double>(1, 1),
-                             k.at<double>(0, 2), k.at<double>(1, 2)));
-  if (!(camera->fx > 0) || !(camera->fy > 0)) {
-    throw StageError(kStage, yaml.string() + ": camera_matrix has a non-positive focal length");
-  }
-  return camera;
 }
 
 // A bounded cache of images' features shared by the matching threads.
@@ -274,8 +237,14 @@ MatchSummary matchSurvey(const Survey& survey, const MatchStageOptions& options)
   for (size_t i = 0; i < entries.size(); ++i) {
     const FeatureIndexEntry& e = entries[i];
     if (!cameras.count(e.camera)) {
-      cameras[e.camera] = readPinhole(survey.corrected() / (e.camera + ".yaml"),
-                                      static_cast<uint32_t>(cameras.size() + 1));
+      // Without corrected/<camera>.yaml (uncalibrated images) the pair takes a fundamental
+      // matrix instead of an essential one.
+      const fs::path yaml = survey.corrected() / (e.camera + ".yaml");
+      std::error_code error;
+      cameras[e.camera] = fs::exists(yaml, error)
+                              ? std::make_unique<scene::Camera>(calibration::readUndistortedCamera(
+                                    yaml, static_cast<uint32_t>(cameras.size() + 1), kStage))
+                              : nullptr;
       times[e.camera] = keyframeTimes(survey.keyframes() / e.camera / "index.csv");
     }
     PairImage& image = images[i];

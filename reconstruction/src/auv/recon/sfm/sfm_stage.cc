@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 
+#include "auv/recon/calibration/calibration.h"
 #include "auv/recon/common/option_set.h"
 #include "auv/recon/common/progress.h"
 #include "auv/recon/common/report.h"
@@ -37,41 +38,7 @@ scene::Camera readCorrectedCamera(const fs::path& file, uint32_t id) {
     throw StageError(kStage, "calibration of the corrected images not found: " + file.string() +
                                  " (run `auv recon correct` first)");
   }
-  cv::FileStorage storage;
-  try {
-    storage.open(file.string(), cv::FileStorage::READ);
-  } catch (const cv::Exception& e) {
-    throw StageError(kStage, file.string() + ": not an OpenCV YAML file: " + e.what());
-  }
-  if (!storage.isOpened()) throw StageError(kStage, file.string() + ": cannot be read");
-  int width = 0, height = 0;
-  cv::Mat k, distortion;
-  storage["image_width"] >> width;
-  storage["image_height"] >> height;
-  storage["camera_matrix"] >> k;
-  storage["distortion_coefficients"] >> distortion;
-  if (width <= 0 || height <= 0) {
-    throw StageError(kStage, file.string() + ": image_width / image_height missing or <= 0");
-  }
-  if (k.rows != 3 || k.cols != 3) {
-    throw StageError(kStage, file.string() + ": camera_matrix missing or not 3x3");
-  }
-  k.convertTo(k, CV_64F);
-  if (!distortion.empty()) {
-    distortion.convertTo(distortion, CV_64F);
-    if (cv::countNonZero(distortion != 0) > 0) {
-      throw StageError(kStage, file.string() +
-                                   ": distortion_coefficients are not zero (SfM reads the "
-                                   "undistorted images' intrinsics)");
-    }
-  }
-  const scene::Camera camera =
-      scene::Camera::pinhole(id, width, height, k.at<double>(0, 0), k.at<double>(1, 1),
-                             k.at<double>(0, 2), k.at<double>(1, 2));
-  if (!(camera.fx > 0) || !(camera.fy > 0)) {
-    throw StageError(kStage, file.string() + ": camera_matrix has a focal length <= 0");
-  }
-  return camera;
+  return calibration::readUndistortedCamera(file, id, kStage);
 }
 }  // namespace
 
