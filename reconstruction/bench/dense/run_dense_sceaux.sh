@@ -17,13 +17,11 @@ while [[ $# -gt 0 ]]; do
     *) echo "usage: $0 [--work DIR] [--max-image-size PX]" >&2; exit 2 ;;
   esac
 done
-tool="$(command -v auv-recon || true)"
-bench="$(command -v dense_bench || true)"
-for build in "$repo"/build-*/ "$repo/build/"; do
-  [[ -z "$tool" && -x "$build/auv-recon" ]] && tool="$build/auv-recon"
-  [[ -z "$bench" && -x "$build/dense_bench" ]] && bench="$build/dense_bench"
-done
-[[ -x "$tool" && -x "$bench" ]] || { echo "$0: build auv-recon and dense_bench first" >&2; exit 1; }
+# The workspace's installed tools (./scripts/build.sh), never a developer's build folder.
+if [[ -f "$repo/install/setup.bash" ]]; then set +u; source "$repo/install/setup.bash"; set -u; fi
+tool="$repo/install/bin/auv-recon"
+bench="$repo/install/lib/auv_reconstruction/dense_bench"
+[[ -x "$tool" && -x "$bench" ]] || { echo "$0: $tool or $bench not found: run ./scripts/build.sh first" >&2; exit 1; }
 [[ -d "$data" ]] || { echo "$0: $data not found" >&2; exit 1; }
 read -r fx _ cx < <(sed -n 1p "$data/K.txt")
 read -r _ fy cy < <(sed -n 2p "$data/K.txt")

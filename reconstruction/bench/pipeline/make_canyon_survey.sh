@@ -17,8 +17,8 @@
 # simulator's water (Koschmieder: 2 % contrast at the visibility) leaves the canyon walls 2-4 m
 # away as faint haze at the image edges; at 12 m both walls and the floor are textured.
 # 4 fps moves the image ~25 px between frames at 2 m (0.23 m/s): easy for Lucas-Kanade.
-# Default span: 80 s of the first canyon traverse (sim time 55-135 s: the vehicle enters the
-# canyon at ~55 s), 960 frames, ~10 CPU-minutes of rendering. --full: 400 s (55-455 s: the
+# Default span: 80 s of the first canyon traverse (55-135 s after the mission started, the first
+# row of <run>/mission/events.csv: the vehicle enters the canyon ~55 s after it sets off), 960 frames, ~10 CPU-minutes of rendering. --full: 400 s (55-455 s: the
 # traverse and most of the way round the outer rock), 4800 frames, for ~300 keyframes. Usage:
 #   reconstruction/bench/pipeline/make_canyon_survey.sh [--survey DIR] [--run DIR] [--full]
 #       [--start S] [--seconds S] [--fps F] [--width W] [--height H] [--visibility M]
@@ -63,7 +63,6 @@ while [ $# -gt 0 ]; do
   esac
 done
 truth="$survey.truth"
-end=$(python3 -c "print($start + $seconds)")
 
 set +u; source install/setup.bash; set -u
 guard=()
@@ -93,7 +92,19 @@ fi
 t1=$(date +%s)
 
 # 2. The render folder: the run's scenario with the survey's cameras, its trajectories.
-step "render folder $truth: ${width}x${height} at $fps fps, sim time $start-$end s"
+# --start counts from the mission's start: a mission started by hand (the main job inspects the
+# vehicle first) sets off later in simulated time than an auto_mission run.
+mission_start=$(python3 - "$run/mission/events.csv" <<'EOF'
+import csv, sys
+try:
+    print(float(next(csv.DictReader(open(sys.argv[1])))["t"]))
+except Exception:
+    print(0.0)
+EOF
+)
+start=$(python3 -c "print(round($mission_start + $start, 2))")
+end=$(python3 -c "print(round($start + $seconds, 2))")
+step "render folder $truth: ${width}x${height} at $fps fps, sim time $start-$end s (mission start $mission_start s)"
 rm -rf "$truth"
 mkdir -p "$truth/ground_truth"
 cp "$run/ground_truth/trajectory.tum" "$run/ground_truth/navigation.tum" "$truth/ground_truth/"

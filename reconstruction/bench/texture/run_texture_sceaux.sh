@@ -24,13 +24,11 @@ while [[ $# -gt 0 ]]; do
     *) echo "usage: $0 [--work DIR] [--max-image-size PX] [--yaw-deg D] [--scale F]" >&2; exit 2 ;;
   esac
 done
-tool="$(command -v auv-recon || true)"
-render="$(command -v render_model || true)"
-for build in "$repo"/build-*/ "$repo/build/"; do
-  [[ -z "$tool" && -x "$build/auv-recon" ]] && tool="$build/auv-recon"
-  [[ -z "$render" && -x "$build/render_model" ]] && render="$build/render_model"
-done
-[[ -x "$tool" && -x "$render" ]] || { echo "$0: build auv-recon and render_model first" >&2; exit 1; }
+# The workspace's installed tools (./scripts/build.sh), never a developer's build folder.
+if [[ -f "$repo/install/setup.bash" ]]; then set +u; source "$repo/install/setup.bash"; set -u; fi
+tool="$repo/install/bin/auv-recon"
+render="$repo/install/lib/auv_reconstruction/render_model"
+[[ -x "$tool" && -x "$render" ]] || { echo "$0: $tool or $render not found: run ./scripts/build.sh first" >&2; exit 1; }
 
 # Sparse model and dense cloud: run_dense_sceaux.sh's (it caches the COLMAP model in --work);
 # run again only when the work folder has no fused cloud yet.
