@@ -86,6 +86,21 @@ TEST(Sift, KeypointsFollowAKnownHomographyAndDescriptorsAreRootSift) {
   EXPECT_EQ(capped.keypoints[0].response, f1.keypoints[0].response);
 }
 
+// A cap fit for video frames is too tight for a large photo: it keeps proportionally more.
+TEST(Sift, CapGrowsWithTheImageBeyondItsReferenceSize) {
+  const cv::Mat image = texture(2000, 1500, 5);  // 3 MP
+  SiftOptions options;
+  options.max_features = 200;
+  options.max_features_megapixels = 1.5;
+  EXPECT_EQ(extractSift(image, "a.png", options).size(), 400u);
+  options.max_features_megapixels = 3.0;  // up to its reference size: the cap as given
+  EXPECT_EQ(extractSift(image, "a.png", options).size(), 200u);
+  options.max_features_megapixels = 0;  // fixed
+  EXPECT_EQ(extractSift(image, "a.png", options).size(), 200u);
+  options.max_features_megapixels = -1;
+  EXPECT_THROW(options.check(), OptionError);
+}
+
 TEST(Sift, DownscaledDetectionReturnsFullResolutionPixels) {
   const cv::Mat image = texture(1200, 900, 2);
   SiftOptions full, small;
@@ -273,7 +288,8 @@ TEST(SurveyStages, UncalibratedCamerasUseTheFundamentalMatrix) {
     matchSurvey(survey, matching);
     FAIL() << "no exception";
   } catch (const StageError& e) {
-    EXPECT_NE(std::string(e.what()).find("cam.yaml: non-zero distortion_coefficients"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("cam.yaml: non-zero distortion_coefficients"),
+              std::string::npos)
         << e.what();
   }
   fs::remove_all(root);

@@ -54,6 +54,8 @@ int threadCount(int requested) {
 
 void SiftOptions::check() const {
   AUV_RECON_CHECK_OPTION(max_features >= 0, max_features, "must be >= 0 (0: all)");
+  AUV_RECON_CHECK_OPTION(max_features_megapixels >= 0, max_features_megapixels,
+                         "must be >= 0 MP (0: a fixed cap)");
   AUV_RECON_CHECK_OPTION(contrast_threshold > 0 && contrast_threshold < 1, contrast_threshold,
                          "must be in (0, 1)");
   AUV_RECON_CHECK_OPTION(edge_threshold > 1, edge_threshold, "must be > 1");
@@ -71,6 +73,9 @@ void ExtractionOptions::check() const {
 
 void ExtractionOptions::bind(OptionSet& set) {
   set.add("max_features", &sift.max_features, "most SIFT keypoints per image (0: all)");
+  set.add("max_features_megapixels", &sift.max_features_megapixels,
+          "MP: max_features holds up to this image size, larger images keep proportionally more "
+          "(0: fixed)");
   set.add("contrast_threshold", &sift.contrast_threshold,
           "SIFT DoG contrast threshold (OpenCV's default 0.04 is too high underwater)");
   set.add("edge_threshold", &sift.edge_threshold, "SIFT edge response threshold");
@@ -109,8 +114,15 @@ ImageFeatures extractSift(const cv::Mat& image, const std::string& image_name,
     scale = static_cast<double>(gray.cols) / small.cols;
     gray = small;
   }
+  int max_features = options.max_features;
+  const double megapixels = static_cast<double>(gray.cols) * gray.rows / 1e6;
+  if (max_features > 0 && options.max_features_megapixels > 0 &&
+      megapixels > options.max_features_megapixels) {
+    max_features =
+        static_cast<int>(std::lround(max_features * megapixels / options.max_features_megapixels));
+  }
   const cv::Ptr<cv::SIFT> sift =
-      cv::SIFT::create(options.max_features, options.octave_layers, options.contrast_threshold,
+      cv::SIFT::create(max_features, options.octave_layers, options.contrast_threshold,
                        options.edge_threshold, options.sigma);
   std::vector<cv::KeyPoint> keypoints;
   cv::Mat descriptors;
@@ -121,8 +133,8 @@ ImageFeatures extractSift(const cv::Mat& image, const std::string& image_name,
   for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
   std::stable_sort(order.begin(), order.end(),
                    [&](int a, int b) { return keypoints[a].response > keypoints[b].response; });
-  if (options.max_features > 0 && order.size() > static_cast<size_t>(options.max_features)) {
-    order.resize(options.max_features);
+  if (max_features > 0 && order.size() > static_cast<size_t>(max_features)) {
+    order.resize(max_features);
   }
 
   ImageFeatures features;
@@ -258,6 +270,7 @@ ExtractionSummary extractSurveyFeatures(const Survey& survey, const ExtractionOp
                            {"threads", threads},
                            {"options",
                             {{"max_features", options.sift.max_features},
+                             {"max_features_megapixels", options.sift.max_features_megapixels},
                              {"contrast_threshold", options.sift.contrast_threshold},
                              {"edge_threshold", options.sift.edge_threshold},
                              {"sigma", options.sift.sigma},
