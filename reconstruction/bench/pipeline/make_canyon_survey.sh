@@ -131,12 +131,13 @@ t2=$(date +%s)
 step "survey $survey"
 rm -rf "$survey"
 mkdir -p "$survey/recordings" "$survey/calibration"
-for dir in "$truth"/vehicle/recordings/*/; do
-  [ "$recordings" = 1 ] || break
-  camera=$(basename "$dir")
-  mkdir -p "$survey/recordings/$camera"
-  cp "$dir"/*.mp4 "$dir"/*.frames.csv "$survey/recordings/$camera/"
-done
+if [ "$recordings" = 1 ]; then
+  for dir in "$truth"/vehicle/recordings/*/; do
+    camera=$(basename "$dir")
+    mkdir -p "$survey/recordings/$camera"
+    cp "$dir"/*.mp4 "$dir"/*.frames.csv "$survey/recordings/$camera/"
+  done
+fi
 if [ "$calibrate" = 1 ]; then
   auv sim calibration "$truth/scenario.yaml" --out "$survey.chessboard" --frames 40 \
     --threads "$threads" --quiet
