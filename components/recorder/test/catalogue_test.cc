@@ -174,6 +174,26 @@ TEST(Catalogue, IncompleteFilesAreListedOnRequestAndCompletedWhenRenamed) {
   EXPECT_EQ(served->relative_path, "forward/forward_0001.mp4.frames.csv");
 }
 
+TEST(Catalogue, RecordingClosedSinceTheLastScanIsPendingBeforeTheNextScan) {
+  TempDir dir("pending_now");
+  const fs::path camera = dir.path() / "forward";
+  writeFile(camera / "forward_0001.incomplete.mp4", randomBytes(3000, 5));
+  writeRecording(dir.path(), "left", 1, 2000, 2, 6);
+  Catalogue catalogue({dir.path(), {".mp4"}});
+  catalogue.scan();
+  EXPECT_EQ(catalogue.pendingNow(), 0u) << "open files are not pending, hashed ones neither";
+
+  // The writer closes its file and a new recording appears: the catalogue has not scanned yet,
+  // but it knows it is behind the disk (a pull asking now must wait, not finish).
+  fs::rename(camera / "forward_0001.incomplete.mp4", camera / "forward_0001.mp4");
+  writeRecording(dir.path(), "left", 2, 1000, 2, 7);
+  EXPECT_EQ(catalogue.pendingFiles(), 0u);
+  EXPECT_EQ(catalogue.pendingNow(), 2u);
+  catalogue.scan();
+  EXPECT_EQ(catalogue.pendingNow(), 0u);
+  EXPECT_EQ(catalogue.list("", false).size(), 3u);
+}
+
 TEST(Catalogue, HashesEachFileOnceAndAgainOnlyWhenSizeOrTimeChange) {
   TempDir dir("once");
   const std::string path = writeRecording(dir.path(), "left", 1, 20000, 5, 4);

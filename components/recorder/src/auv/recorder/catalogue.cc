@@ -116,17 +116,6 @@ SidecarSummary readSidecarSummary(const fs::path& path, bool partial) {
   return summary;
 }
 
-struct Catalogue::Found {
-  std::string camera_id;
-  std::string file_path;  // final name
-  std::string disk_path;  // current name
-  bool closed = false;
-  FileStamp stamp;
-  std::string sidecar_disk_path;  // empty: none
-  bool sidecar_closed = false;
-  FileStamp sidecar_stamp;
-};
-
 Catalogue::Catalogue(CatalogueOptions options) : options_(std::move(options)) { options_.check(); }
 
 std::map<std::string, Catalogue::Found> Catalogue::walk(ScanReport& report) const {
@@ -221,7 +210,7 @@ std::map<std::string, Catalogue::Found> Catalogue::walk(ScanReport& report) cons
 Recording Catalogue::refresh(const Found& found, const std::optional<Recording>& known,
                              ScanReport& report) const {
   const bool has_sidecar = !found.sidecar_disk_path.empty();
-  const bool closed = found.closed && (!has_sidecar || found.sidecar_closed);
+  const bool closed = found.closedWithSidecar();
   if (known && closed && !known->disk_path.empty() && known->disk_path == found.disk_path &&
       known->stamp == found.stamp && known->sidecar_disk_path == found.sidecar_disk_path &&
       (!has_sidecar || known->sidecar_stamp == found.sidecar_stamp) &&
@@ -333,6 +322,7 @@ ScanReport Catalogue::scan() {
     }
     pending_ = pending;
     walked_ = true;
+    last_walk_ = found;
   }
   for (const auto& [path, f] : found) {
     auto it = known.find(path);
@@ -400,6 +390,22 @@ bool Catalogue::hasCamera(const std::string& camera_id) const {
 size_t Catalogue::pendingFiles() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return pending_;
+}
+
+size_t Catalogue::pendingNow() const {
+  ScanReport ignored;  // the next scan reports the same problems
+  const std::map<std::string, Found> found = walk(ignored);
+  std::lock_guard<std::mutex> lock(mutex_);
+  size_t changed_since_scan = 0;
+  for (const auto& [path, f] : found) {
+    // Compared with what the last scan saw, not with what it hashed: a file the scan could not
+    // hash stays in the same state and must not look pending for ever.
+    auto seen = last_walk_.find(path);
+    if (f.closedWithSidecar() && (seen == last_walk_.end() || !seen->second.sameState(f))) {
+      ++changed_since_scan;
+    }
+  }
+  return pending_ + changed_since_scan;
 }
 
 bool Catalogue::walked() const {

@@ -106,6 +106,11 @@ class Catalogue {
   bool hasCamera(const std::string& camera_id) const;
   /// Closed files found by the current/last scan but not hashed yet.
   size_t pendingFiles() const;
+  /// pendingFiles() plus the closed files that appeared or changed on disk since the last scan
+  /// walked the root (a cheap walk, no hashing). Answers "is the catalogue behind the disk?"
+  /// at the moment of asking, so that a pull right after a recording closes waits for it
+  /// instead of finishing before the next periodic scan.
+  size_t pendingNow() const;
   /// +1 whenever the catalogue changes.
   uint64_t generation() const;
   /// True once a scan has walked the root (before that, an empty list means "not yet known").
@@ -126,7 +131,23 @@ class Catalogue {
   const CatalogueOptions& options() const { return options_; }
 
  private:
-  struct Found;  // one recording found on disk by a walk
+  struct Found {  // one recording found on disk by a walk
+    std::string camera_id;
+    std::string file_path;  // final name
+    std::string disk_path;  // current name
+    bool closed = false;
+    FileStamp stamp;
+    std::string sidecar_disk_path;  // empty: none
+    bool sidecar_closed = false;
+    FileStamp sidecar_stamp;
+    bool closedWithSidecar() const {
+      return closed && (sidecar_disk_path.empty() || sidecar_closed);
+    }
+    bool sameState(const Found& other) const {
+      return disk_path == other.disk_path && stamp == other.stamp &&
+             sidecar_disk_path == other.sidecar_disk_path && sidecar_stamp == other.sidecar_stamp;
+    }
+  };
   std::map<std::string, Found> walk(ScanReport& report) const;
   /// Hashes what needs it and returns the new entry (no lock held).
   Recording refresh(const Found& found, const std::optional<Recording>& known,
@@ -138,6 +159,7 @@ class Catalogue {
   std::map<std::string, Recording> recordings_;  // by file_path
   std::vector<std::string> cameras_;
   size_t pending_ = 0;
+  std::map<std::string, Found> last_walk_;  // what the last scan found, by file_path
   uint64_t generation_ = 0;
   bool walked_ = false;
 };

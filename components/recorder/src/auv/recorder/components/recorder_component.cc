@@ -155,6 +155,14 @@ void RecorderComponent::scanLoop() {
 
 void RecorderComponent::scanNow() { scanAndPublish(); }
 
+void RecorderComponent::requestScan() {
+  {
+    std::lock_guard<std::mutex> lock(scanner_mutex_);
+    scan_requested_ = true;
+  }
+  scanner_wake_.notify_all();
+}
+
 void RecorderComponent::scanAndPublish() {
   std::lock_guard<std::mutex> lock(publish_mutex_);
   const ScanReport report = catalogue_->scan();
@@ -182,8 +190,11 @@ void RecorderComponent::onList(const msg::RecordingCatalogueRequest& request,
     recordings.push_back(toRecordingInfo(r));
   }
   reply.recordings(std::move(recordings));
-  reply.pending_files(catalogue_->walked() ? static_cast<uint32_t>(catalogue_->pendingFiles())
-                                           : 1u);
+  // Asked of the disk now, not of the last scan: a recording closed a moment ago makes the
+  // requester wait for its hash (and the scanner is woken for it) instead of being missed.
+  const size_t pending = catalogue_->walked() ? catalogue_->pendingNow() : 1;
+  if (pending > 0) requestScan();
+  reply.pending_files(static_cast<uint32_t>(pending));
   reply.max_chunk_bytes(options_.max_chunk_bytes);
 }
 
@@ -224,11 +235,7 @@ void RecorderComponent::onFetch(const msg::FileChunkRequest& request, msg::FileC
       case ChunkError::Kind::CHANGED: {
         catalogue_->reportChanged(request.file_path(), e.what());
         AUV_WARN(node_->logger(), e.what() << ": no longer served as complete");
-        {
-          std::lock_guard<std::mutex> lock(scanner_mutex_);
-          scan_requested_ = true;
-        }
-        scanner_wake_.notify_all();
+        requestScan();
         throw interfaces::ServiceError(msg::REPLY_CODE_REJECTED, e.what());
       }
       case ChunkError::Kind::IO:

@@ -60,6 +60,7 @@ class RecorderComponent : public interfaces::Component {
   void onFetch(const msg::FileChunkRequest& request, msg::FileChunkReply& reply);
   void scanLoop();
   void scanAndPublish();
+  void requestScan();  // wakes the scanner thread before its period ends
   void stopScanner();
 
   interfaces::Node* node_ = nullptr;
