@@ -1,7 +1,10 @@
 // Ratio + mutual matching on synthetic descriptors, pair selection on a synthetic similarity
 // structure, the vocabulary's similarity.
+#include <algorithm>
+#include <iterator>
 #include <random>
 #include <set>
+#include <thread>
 
 #include <gtest/gtest.h>
 
@@ -97,12 +100,53 @@ TEST(DescriptorMatcher, FlannAgreesWithBruteForce) {
   EXPECT_GE(b.size(), 0.95 * a.size());
 }
 
+TEST(DescriptorMatcher, OneIndexPerImageServesEveryPairFromSeveralThreads) {
+  // Three images sharing 400 descriptors (noisy copies); each image's forest is built once and
+  // queried by both directions of every pair it is in, from two threads at once: the answers
+  // are those of matching each pair from scratch.
+  std::mt19937_64 random(3);
+  const cv::Mat base = randomDescriptors(400, random);
+  const std::vector<cv::Mat> images = {withNoise(base, 2.f, random), withNoise(base, 2.f, random),
+                                       withNoise(base, 2.f, random)};
+  MatchingOptions options;
+  options.flann_above = 100;
+  std::vector<DescriptorIndex> indexes;
+  for (const cv::Mat& d : images) indexes.emplace_back(d, options);
+  ASSERT_TRUE(indexes[0].approximate());
+  EXPECT_FALSE(DescriptorIndex(base.rowRange(0, 50), options).approximate());
+
+  const std::vector<std::pair<int, int>> pairs = {{0, 1}, {0, 2}, {1, 2}, {1, 0}};
+  std::vector<std::vector<MatchIndices>> shared(pairs.size()), expected(pairs.size());
+  for (size_t p = 0; p < pairs.size(); ++p) {
+    expected[p] = matchDescriptors(images[pairs[p].first], images[pairs[p].second], options);
+    EXPECT_GE(expected[p].size(), 380u) << p;
+  }
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 2; ++t) {
+    threads.emplace_back([&, t] {
+      for (size_t p = t; p < pairs.size(); p += 2) {
+        shared[p] = matchDescriptors(indexes[pairs[p].first], indexes[pairs[p].second], options);
+      }
+    });
+  }
+  for (std::thread& t : threads) t.join();
+  for (size_t p = 0; p < pairs.size(); ++p) {
+    // FLANN's randomised trees differ between builds: the same matches up to a few misses.
+    std::vector<MatchIndices> common;
+    std::set_intersection(shared[p].begin(), shared[p].end(), expected[p].begin(),
+                          expected[p].end(), std::back_inserter(common));
+    EXPECT_GE(common.size(), 0.97 * expected[p].size()) << p;
+    EXPECT_GE(common.size(), 0.97 * shared[p].size()) << p;
+  }
+}
+
 TEST(DescriptorMatcher, BadInputs) {
   EXPECT_TRUE(matchDescriptors(cv::Mat(), cv::Mat::zeros(5, 128, CV_32F), {}).empty());
   EXPECT_THROW(matchDescriptors(cv::Mat::zeros(5, 128, CV_32F), cv::Mat::zeros(5, 64, CV_32F), {}),
                std::invalid_argument);
   MatchingOptions options;
   options.ratio = 1.5;
+  EXPECT_THROW(DescriptorIndex(cv::Mat::zeros(5, 128, CV_64F), {}), std::invalid_argument);
   try {
     options.check();
     FAIL() << "no exception";

@@ -77,12 +77,21 @@ std::map<std::string, double> keyframeTimes(const fs::path& index_csv) {
   return times;
 }
 
-// A bounded cache of images' features shared by the matching threads.
+// An image's features with their nearest-neighbour index, built once for all its pairs.
+struct IndexedFeatures {
+  IndexedFeatures(ImageFeatures f, const MatchingOptions& options)
+      : features(std::move(f)), index(features.descriptors, options) {}
+  ImageFeatures features;
+  DescriptorIndex index;
+};
+
+// A bounded cache of indexed images shared by the matching threads.
 class FeatureCache {
  public:
-  FeatureCache(const FeatureStore& store, size_t capacity) : store_(store), capacity_(capacity) {}
+  FeatureCache(const FeatureStore& store, const MatchingOptions& options, size_t capacity)
+      : store_(store), options_(options), capacity_(capacity) {}
 
-  std::shared_ptr<const ImageFeatures> get(const std::string& image) {
+  std::shared_ptr<const IndexedFeatures> get(const std::string& image) {
     {
       std::lock_guard<std::mutex> lock(mutex_);
       const auto it = entries_.find(image);
@@ -91,7 +100,7 @@ class FeatureCache {
         return it->second.first;
       }
     }
-    auto features = std::make_shared<const ImageFeatures>(store_.read(image));
+    auto features = std::make_shared<const IndexedFeatures>(store_.read(image), options_);
     std::lock_guard<std::mutex> lock(mutex_);
     if (entries_.count(image) == 0) {
       order_.push_front(image);
@@ -106,10 +115,11 @@ class FeatureCache {
 
  private:
   const FeatureStore& store_;
+  const MatchingOptions& options_;
   size_t capacity_;
   std::mutex mutex_;
   std::list<std::string> order_;  // most recent first
-  std::unordered_map<std::string, std::pair<std::shared_ptr<const ImageFeatures>,
+  std::unordered_map<std::string, std::pair<std::shared_ptr<const IndexedFeatures>,
                                             std::list<std::string>::iterator>>
       entries_;
 };
@@ -138,7 +148,8 @@ void MatchStageOptions::bind(OptionSet& set) {
   set.add("ratio", &matching.ratio, "Lowe's ratio test: best < ratio x second best");
   set.add("mutual", &matching.mutual, "keep only mutual best matches");
   set.add("flann_above", &matching.flann_above,
-          "approximate (FLANN) matching when both images have more descriptors");
+          "images with more descriptors are searched approximately (FLANN k-d forest)");
+  set.add("flann_trees", &matching.flann_trees, "randomised k-d trees of a FLANN forest");
   set.add("flann_checks", &matching.flann_checks, "FLANN leaf checks");
   set.add("exhaustive_max_images", &pairs.exhaustive_max_images,
           "at most this many images: match every pair");
@@ -300,7 +311,8 @@ MatchSummary matchSurvey(const Survey& survey, const MatchStageOptions& options)
   // Match and verify every candidate pair.
   const int threads = threadCount(options.threads);
   FeatureCache cache(
-      store, static_cast<size_t>(std::max(16, 2 * options.pairs.sequential_window + 4 * threads)));
+      store, options.matching,
+      static_cast<size_t>(std::max(16, 2 * options.pairs.sequential_window + 4 * threads)));
   std::vector<PairOutcome> outcomes(candidates.size());
   Progress progress("match", "pairs", candidates.size());
   std::mutex error_mutex;
@@ -313,11 +325,11 @@ MatchSummary matchSurvey(const Survey& survey, const MatchStageOptions& options)
         const auto f1 = cache.get(images[c.index1].name);
         const auto f2 = cache.get(images[c.index2].name);
         PairGeometryInput input;
-        input.features1 = f1.get();
-        input.features2 = f2.get();
+        input.features1 = &f1->features;
+        input.features2 = &f2->features;
         input.camera1 = cameras[images[c.index1].camera].get();
         input.camera2 = cameras[images[c.index2].camera].get();
-        input.putative = matchDescriptors(f1->descriptors, f2->descriptors, options.matching);
+        input.putative = matchDescriptors(f1->index, f2->index, options.matching);
         PairOutcome& out = outcomes[i];
         out.pair = verifyPair(input, options.verification);
         out.pair.source = c.source;
@@ -397,6 +409,9 @@ MatchSummary matchSurvey(const Survey& survey, const MatchStageOptions& options)
                 {"options",
                  {{"ratio", options.matching.ratio},
                   {"mutual", options.matching.mutual},
+                  {"flann_above", options.matching.flann_above},
+                  {"flann_trees", options.matching.flann_trees},
+                  {"flann_checks", options.matching.flann_checks},
                   {"sequential_window", options.pairs.sequential_window},
                   {"exhaustive_max_images", options.pairs.exhaustive_max_images},
                   {"cross_camera_max_dt_s", options.pairs.cross_camera_max_dt_s},
