@@ -196,5 +196,22 @@ TEST_F(SyntheticSurvey, CommandExitCodes) {
   EXPECT_EQ(run("evaluate " + survey_.string()), 0) << output();
 }
 
+TEST_F(SyntheticSurvey, SimulationJsonNamesTheRunsRelativeToTheSurvey) {
+  const Survey survey(survey_);
+  EXPECT_TRUE(recordedGroundTruth(survey).empty());  // no simulation.json
+  std::ofstream(survey_ / "simulation.json")
+      << R"({"ground_truth_run": "../run", "true_texture_run": "/elsewhere/clear"})";
+  EXPECT_EQ(recordedGroundTruth(survey), survey_ / "../run");
+  EXPECT_EQ(recordedRun(survey, "true_texture_run"), fs::path("/elsewhere/clear"));
+  EXPECT_TRUE(recordedRun(survey, "mission_run").empty());
+  std::ofstream(survey_ / "simulation.json") << R"({"ground_truth_run": )";
+  try {
+    recordedRun(survey, "true_texture_run");
+    FAIL() << "no exception";
+  } catch (const StageError& e) {
+    EXPECT_NE(std::string(e.what()).find("simulation.json"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace auv::recon::evaluate

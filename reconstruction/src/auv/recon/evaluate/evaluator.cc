@@ -16,6 +16,7 @@
 #include <open3d/io/TriangleMeshIO.h>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include "auv/recon/common/progress.h"
 #include "auv/recon/common/report.h"
@@ -134,18 +135,22 @@ void EvaluateOptions::check() const {
   alignment.check();
 }
 
-fs::path recordedGroundTruth(const Survey& survey) {
+fs::path recordedRun(const Survey& survey, const std::string& key) {
   const fs::path file = survey.root() / "simulation.json";
   if (!fs::exists(file)) return {};
   try {
     std::ifstream in(file);
     const json j = json::parse(in);
-    if (!j.contains("ground_truth_run")) return {};
-    fs::path run = j.at("ground_truth_run").get<std::string>();
+    if (!j.contains(key)) return {};
+    fs::path run = j.at(key).get<std::string>();
     return run.is_relative() ? survey.root() / run : run;
   } catch (const std::exception& e) {
     throw StageError(kStage, file.string() + ": " + e.what());
   }
+}
+
+fs::path recordedGroundTruth(const Survey& survey) {
+  return recordedRun(survey, "ground_truth_run");
 }
 
 json evaluateSurvey(const Survey& survey, const fs::path& ground_truth_run,
@@ -342,7 +347,8 @@ json evaluateSurvey(const Survey& survey, const fs::path& ground_truth_run,
   result["surfaces"] = surfaces;
   progress.advance();
 
-  // 5. Texture: the textured model at held-out frames against the simulator's frames.
+  // 5. Texture: the textured model at held-out frames against the simulator's frames (as
+  //    filmed, through water) and against the world's true texture at the same views.
   json texture = {{"status", "not evaluated"}};
   const fs::path model = survey.textured() / "model.obj";
   if (!fs::exists(model)) {
@@ -369,7 +375,11 @@ json evaluateSurvey(const Survey& survey, const fs::path& ground_truth_run,
     }
     const size_t per_video = std::max<size_t>(
         1, static_cast<size_t>(options.psnr_views) / std::max<size_t>(1, keyframes_of.size()));
-    std::vector<double> raw, gain;
+    std::vector<double> raw, gain, true_raw, true_gain;
+    const fs::path true_texture_run = options.true_texture_run.empty()
+                                          ? recordedRun(survey, "true_texture_run")
+                                          : fs::path(options.true_texture_run);
+    texture["true_texture_run"] = true_texture_run.string();
     json frames = json::array();
     for (const auto& [stem, list] : keyframes_of) {
       if (!frame_count.count(stem)) continue;
@@ -379,6 +389,17 @@ json evaluateSurvey(const Survey& survey, const fs::path& ground_truth_run,
       if (!fs::exists(video))
         video = ground_truth_run / "vehicle" / "recordings" / camera_of[stem] / video_file[stem];
       const std::vector<cv::Mat> references = readVideoFrames(video, held);
+      // The same frames rendered in clear water (the true texture), when there is such a run.
+      std::vector<cv::Mat> true_frames;
+      if (!true_texture_run.empty()) {
+        const fs::path clear =
+            true_texture_run / "vehicle" / "recordings" / camera_of[stem] / video_file[stem];
+        if (!fs::exists(clear)) {
+          throw StageError(kStage, clear.string() + ": missing from the true-texture run (" +
+                                       true_texture_run.string() + ")");
+        }
+        true_frames = readVideoFrames(clear, held);
+      }
       for (size_t i = 0; i < held.size(); ++i) {
         const GroundTruthFrame* frame = truth.find(frameKey(stem, held[i]));
         if (!frame) continue;
@@ -399,10 +420,36 @@ json evaluateSurvey(const Survey& survey, const fs::path& ground_truth_run,
         if (p.pixels == 0) continue;
         raw.push_back(p.psnr_db);
         gain.push_back(p.psnr_gain_db);
-        frames.push_back({{"frame", frameKey(stem, held[i])},
-                          {"psnr_db", number(p.psnr_db)},
-                          {"psnr_gain_offset_db", number(p.psnr_gain_db)},
-                          {"coverage", static_cast<double>(p.pixels) / reference.total()}});
+        json entry = {{"frame", frameKey(stem, held[i])},
+                      {"psnr_db", number(p.psnr_db)},
+                      {"psnr_gain_offset_db", number(p.psnr_gain_db)},
+                      {"coverage", static_cast<double>(p.pixels) / reference.total()}};
+        cv::Mat true_image;
+        if (i < true_frames.size() && !true_frames[i].empty()) {
+          cv::undistort(true_frames[i], true_image, K, distortion, K);
+          const PsnrResult q = psnr(true_image, image, mask);
+          if (q.pixels > 0) {
+            true_raw.push_back(q.psnr_db);
+            true_gain.push_back(q.psnr_gain_db);
+            entry["psnr_true_texture_db"] = number(q.psnr_db);
+            entry["psnr_true_texture_gain_offset_db"] = number(q.psnr_gain_db);
+          }
+        }
+        if (options.write_views) {
+          cv::Mat model_view = cv::Mat::zeros(image.size(), image.type());
+          image.copyTo(model_view, mask);
+          if (true_image.size() != image.size())
+            true_image = cv::Mat::zeros(image.size(), image.type());
+          cv::Mat side_by_side;
+          cv::hconcat(std::vector<cv::Mat>{reference, model_view, true_image}, side_by_side);
+          fs::create_directories(survey.root() / "evaluation" / "views");
+          const fs::path file =
+              survey.root() / "evaluation" / "views" / (frameKey(stem, held[i]) + ".png");
+          if (!cv::imwrite(file.string(), side_by_side)) {
+            throw StageError(kStage, file.string() + ": cannot write");
+          }
+        }
+        frames.push_back(entry);
       }
     }
     texture["status"] = raw.empty() ? "no held-out frame could be rendered" : "evaluated";
@@ -410,6 +457,10 @@ json evaluateSurvey(const Survey& survey, const fs::path& ground_truth_run,
     if (!raw.empty()) {
       texture["median_psnr_db"] = number(median(raw));
       texture["median_psnr_gain_offset_db"] = number(median(gain));
+    }
+    if (!true_raw.empty()) {
+      texture["median_psnr_true_texture_db"] = number(median(true_raw));
+      texture["median_psnr_true_texture_gain_offset_db"] = number(median(true_gain));
     }
   }
   result["texture"] = texture;

@@ -44,9 +44,17 @@ struct EvaluateOptions {
   double min_inlier_m = 0.05;
   /// Held-out frames rendered for the texture PSNR (over all cameras).
   int psnr_views = 12;
+  /// A run rendered like the ground truth but in clear water, without noise, vignetting or
+  /// motion blur (reconstruction/bench/pipeline/render_true_texture.sh): its frames are the
+  /// true texture the held-out views are also compared with. Empty: simulation.json's
+  /// "true_texture_run", if any.
+  std::string true_texture_run;
   /// Also write evaluation/region.ply (true samples coloured by region) and the aligned
   /// clouds with their errors, for viewing.
   bool write_clouds = false;
+  /// Also write evaluation/views/<frame>.png for each held-out frame: filmed | textured model |
+  /// true texture, side by side.
+  bool write_views = false;
   int64_t seed = 1;
 
   /// The thresholds as numbers; throws OptionError naming thresholds_m.
@@ -70,8 +78,10 @@ nlohmann::json evaluateSurvey(const Survey& survey, const std::filesystem::path&
                               const EvaluateOptions& options,
                               const TexturedModelRenderer& renderer = {});
 
-/// The ground-truth run a survey records (<survey>/simulation.json, key "ground_truth_run",
-/// relative to the survey folder); empty when it records none.
+/// The run folder a survey records under `key` in <survey>/simulation.json (relative to the
+/// survey folder); empty when it records none. Throws StageError for a malformed file.
+std::filesystem::path recordedRun(const Survey& survey, const std::string& key);
+/// recordedRun(survey, "ground_truth_run").
 std::filesystem::path recordedGroundTruth(const Survey& survey);
 
 }  // namespace auv::recon::evaluate

@@ -43,7 +43,12 @@ int evaluateMain(const std::vector<std::string>& args) {
     set.add("inlier_sigmas", &o.inlier_sigmas, "alignment: inlier bound in robust sigmas");
     set.add("min_inlier_m", &o.min_inlier_m, "m: alignment: residuals always accepted");
     set.add("psnr_views", &o.psnr_views, "held-out frames rendered for the texture PSNR");
+    set.add("true_texture_run", &o.true_texture_run,
+            "run rendered in clear water: held-out frames also compared with it (default: "
+            "simulation.json's true_texture_run)");
     set.add("write_clouds", &o.write_clouds, "also write evaluation/region.ply");
+    set.add("write_views", &o.write_views,
+            "also write evaluation/views/<frame>.png: filmed | model | true texture");
     set.add("seed", &o.seed, "sampling seed");
     if (!set.parse(args)) return tools::kExitOk;
     o.check();
@@ -101,7 +106,12 @@ int evaluateMain(const std::vector<std::string>& args) {
     if (texture.contains("median_psnr_db") && !texture["median_psnr_db"].is_null()) {
       std::cout << ", median PSNR " << fixed(texture["median_psnr_db"], 2) << " dB ("
                 << fixed(texture["median_psnr_gain_offset_db"], 2)
-                << " dB after per-channel gain/offset)";
+                << " dB after per-channel gain/offset) against the filmed frames";
+    }
+    if (texture.contains("median_psnr_true_texture_db")) {
+      std::cout << "; " << fixed(texture["median_psnr_true_texture_db"], 2) << " dB ("
+                << fixed(texture["median_psnr_true_texture_gain_offset_db"], 2)
+                << " dB) against the true texture";
     }
     std::cout << "\nevaluate: " << fixed(result["seconds"], 1) << " s -> "
               << (survey.root() / "evaluation.json").string() << std::endl;
