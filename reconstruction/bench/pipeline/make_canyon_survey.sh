@@ -12,6 +12,7 @@
 #      OpenCV FileStorage; --calibrate renders chessboard videos and runs `auv recon
 #      calibrate` instead), and simulation.json recording where the ground truth is
 #      (`auv recon evaluate <survey>` finds it there).
+#      navigation.tum is the vehicle's navigation estimate (match places keyframes with it).
 #
 # Why these settings (reconstruction/bench/pipeline/README.md): at the scenario's 4.5 m the
 # simulator's water (Koschmieder: 2 % contrast at the visibility) leaves the canyon walls 2-4 m
@@ -58,7 +59,7 @@ while [ $# -gt 0 ]; do
     --seed) seed=$2; shift 2 ;;
     --calibrate) calibrate=1; shift ;;
     --no-recordings) recordings=0; shift ;;
-    -h|--help) sed -n '2,29p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h|--help) sed -n '2,30p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) echo "make_canyon_survey: unknown option $1 (--help)" >&2; exit 2 ;;
   esac
 done
@@ -131,6 +132,10 @@ t2=$(date +%s)
 step "survey $survey"
 rm -rf "$survey"
 mkdir -p "$survey/recordings" "$survey/calibration"
+# The vehicle's navigation estimate (drifting dead reckoning, not the truth), as the vehicle
+# logs it: `auv recon match` places keyframes with it (look-alike surfaces far apart are not
+# matched).
+cp "$truth/ground_truth/navigation.tum" "$survey/navigation.tum"
 if [ "$recordings" = 1 ]; then
   for dir in "$truth"/vehicle/recordings/*/; do
     camera=$(basename "$dir")

@@ -229,12 +229,58 @@ TEST(PairSelection, SequentialLoopAndCrossCameraPairsOnASyntheticStructure) {
   }
 }
 
+TEST(PairSelection, NavigationKeepsLookAlikesFarApartOutOfTheLoopCandidates) {
+  // 60 keyframes of one camera along a straight 59 m track (1 m apart). Keyframe 40 + k looks
+  // just like keyframe k (a repeated texture 40 m further on), and keyframe 55 revisits the
+  // place of keyframe 5 (the track turns back: both at x = 5 m).
+  const int n = 60;
+  std::vector<PairImage> images;
+  for (int i = 0; i < n; ++i) {
+    PairImage image{"c/" + std::to_string(i) + ".png", "c", i, 1.0 * i};
+    image.has_position = true;
+    image.position = Eigen::Vector3d(i, 0, 3);
+    images.push_back(image);
+  }
+  images[55].position = Eigen::Vector3d(5, 1, 3);
+  cv::Mat similarity = cv::Mat::zeros(n, n, CV_32F);
+  auto set = [&](int a, int b, float s) {
+    similarity.at<float>(a, b) = s;
+    similarity.at<float>(b, a) = s;
+  };
+  for (int k = 0; k < 20; ++k) set(k, 40 + k, 0.9f);  // look-alikes 40 m apart
+  set(5, 55, 0.8f);                                   // the true revisit
+  PairSelectionOptions options;
+  options.sequential_window = 2;
+  options.loop_top_k = 2;
+  options.cross_camera_max_dt_s = 0;
+
+  // Without navigation (images without positions) the look-alikes are candidates.
+  std::vector<PairImage> blind = images;
+  for (PairImage& image : blind) image.has_position = false;
+  const auto blind_loops = pairSet(selectPairs(blind, similarity, options), PairSource::LOOP);
+  for (int k = 0; k < 20; ++k) EXPECT_TRUE(blind_loops.count({k, 40 + k})) << k;
+
+  // With it, only candidates within loop_max_distance_m (10 m) remain: the revisit.
+  const auto loops = pairSet(selectPairs(images, similarity, options), PairSource::LOOP);
+  EXPECT_TRUE(loops.count({5, 55}));
+  for (const auto& [a, b] : loops) {
+    EXPECT_LE((images[a].position - images[b].position).norm(), 10.0) << a << "," << b;
+  }
+  // 0: no limit.
+  options.loop_max_distance_m = 0;
+  const auto unlimited = pairSet(selectPairs(images, similarity, options), PairSource::LOOP);
+  EXPECT_TRUE(unlimited.count({0, 40}));
+}
+
 TEST(PairSelection, BadSimilaritySizeAndOptions) {
   std::vector<PairImage> images(60);
   for (int i = 0; i < 60; ++i) images[i] = {"c/" + std::to_string(i), "c", i};
   EXPECT_THROW(selectPairs(images, cv::Mat::zeros(5, 5, CV_32F), {}), std::invalid_argument);
   PairSelectionOptions options;
   options.sequential_window = -1;
+  EXPECT_THROW(options.check(), OptionError);
+  options.sequential_window = 6;
+  options.loop_max_distance_m = -1;
   EXPECT_THROW(options.check(), OptionError);
 }
 

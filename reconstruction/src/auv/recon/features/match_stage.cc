@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <iostream>
 #include <list>
 #include <map>
 #include <memory>
@@ -24,6 +25,7 @@
 #include "auv/recon/common/report.h"
 #include "auv/recon/common/stage_error.h"
 #include "auv/recon/common/staged_output.h"
+#include "auv/recon/common/trajectory.h"
 #include "auv/recon/estimators/essential.h"
 #include "auv/recon/estimators/fundamental.h"
 #include "auv/recon/estimators/homography.h"
@@ -162,6 +164,11 @@ void MatchStageOptions::bind(OptionSet& set) {
           "same-camera keyframes closer than this are not loop candidates");
   set.add("loop_min_score", &pairs.loop_min_score,
           "appearance candidates need this fraction of the image's best similarity");
+  set.add("loop_max_distance_m", &pairs.loop_max_distance_m,
+          "m: appearance candidates at most this far apart by navigation (0: no limit)");
+  set.add("navigation", &navigation,
+          "TUM trajectory of the vehicle's navigation: keyframe positions (default: the "
+          "survey's navigation.tum, if any)");
   set.add("vocabulary_words", &pairs.vocabulary_words, "visual words of the vocabulary");
   set.add("min_inliers", &verification.min_inliers, "pairs with fewer inliers are dropped");
   set.add("max_threshold_px", &verification.max_threshold_px,
@@ -240,7 +247,22 @@ MatchSummary matchSurvey(const Survey& survey, const MatchStageOptions& options)
                                  " image(s): at least 2 are needed");
   }
 
-  // Images with their camera order and times; cameras with their calibration.
+  // The vehicle's navigation: the option, else the survey's navigation.tum when it has one.
+  fs::path navigation = options.navigation;
+  if (navigation.empty() && fs::exists(survey.root() / "navigation.tum")) {
+    navigation = survey.root() / "navigation.tum";
+  }
+  std::vector<TimedPosition> trajectory;
+  if (!navigation.empty()) {
+    try {
+      trajectory = readTumTrajectory(navigation);
+    } catch (const std::exception& e) {
+      throw StageError(kStage, std::string("navigation: ") + e.what());
+    }
+  }
+
+  // Images with their camera order, times and navigation positions; cameras with their
+  // calibration.
   std::map<std::string, std::unique_ptr<scene::Camera>> cameras;
   std::map<std::string, std::map<std::string, double>> times;
   std::vector<PairImage> images(entries.size());
@@ -265,6 +287,16 @@ MatchSummary matchSurvey(const Survey& survey, const MatchStageOptions& options)
     const std::string file = fs::path(e.image).filename().string();
     const auto t = times[e.camera].find(file);
     if (t != times[e.camera].end()) image.time_s = t->second;
+    if (!trajectory.empty() && !std::isnan(image.time_s)) {
+      image.has_position = positionAt(trajectory, image.time_s, image.position);
+    }
+  }
+  if (!trajectory.empty()) {
+    std::cout << "match: navigation " << navigation.string() << ": "
+              << std::count_if(images.begin(), images.end(),
+                               [](const PairImage& i) { return i.has_position; })
+              << " of " << images.size() << " keyframes placed; appearance pairs at most "
+              << options.pairs.loop_max_distance_m << " m apart" << std::endl;
   }
 
   // Appearance similarity for loop candidates (only where pairs are not exhaustive).
@@ -395,29 +427,34 @@ MatchSummary matchSurvey(const Survey& survey, const MatchStageOptions& options)
 
   nlohmann::json sources = nlohmann::json::object();
   for (const auto& [source, count] : by_source) sources[source] = count;
-  updateReport(survey.report(), kStage,
-               {{"images", summary.images},
-                {"candidate_pairs", summary.candidate_pairs},
-                {"verified_pairs", summary.verified_pairs},
-                {"verified_pairs_by_source", sources},
-                {"verified_matches", summary.verified_matches},
-                {"essential_pairs", summary.essential_pairs},
-                {"fundamental_pairs", summary.fundamental_pairs},
-                {"exhaustive", exhaustive},
-                {"seconds", summary.seconds},
-                {"threads", threads},
-                {"options",
-                 {{"ratio", options.matching.ratio},
-                  {"mutual", options.matching.mutual},
-                  {"flann_above", options.matching.flann_above},
-                  {"flann_trees", options.matching.flann_trees},
-                  {"flann_checks", options.matching.flann_checks},
-                  {"sequential_window", options.pairs.sequential_window},
-                  {"exhaustive_max_images", options.pairs.exhaustive_max_images},
-                  {"cross_camera_max_dt_s", options.pairs.cross_camera_max_dt_s},
-                  {"loop_top_k", options.pairs.loop_top_k},
-                  {"min_inliers", options.verification.min_inliers},
-                  {"max_threshold_px", options.verification.max_threshold_px}}}});
+  updateReport(
+      survey.report(), kStage,
+      {{"images", summary.images},
+       {"images_with_navigation", std::count_if(images.begin(), images.end(),
+                                                [](const PairImage& i) { return i.has_position; })},
+       {"candidate_pairs", summary.candidate_pairs},
+       {"verified_pairs", summary.verified_pairs},
+       {"verified_pairs_by_source", sources},
+       {"verified_matches", summary.verified_matches},
+       {"essential_pairs", summary.essential_pairs},
+       {"fundamental_pairs", summary.fundamental_pairs},
+       {"exhaustive", exhaustive},
+       {"seconds", summary.seconds},
+       {"threads", threads},
+       {"options",
+        {{"ratio", options.matching.ratio},
+         {"mutual", options.matching.mutual},
+         {"flann_above", options.matching.flann_above},
+         {"flann_trees", options.matching.flann_trees},
+         {"flann_checks", options.matching.flann_checks},
+         {"sequential_window", options.pairs.sequential_window},
+         {"exhaustive_max_images", options.pairs.exhaustive_max_images},
+         {"cross_camera_max_dt_s", options.pairs.cross_camera_max_dt_s},
+         {"loop_top_k", options.pairs.loop_top_k},
+         {"loop_max_distance_m", options.pairs.loop_max_distance_m},
+         {"navigation", navigation.string()},
+         {"min_inliers", options.verification.min_inliers},
+         {"max_threshold_px", options.verification.max_threshold_px}}}});
   return summary;
 }
 

@@ -50,6 +50,11 @@ struct MatchStageOptions {
   MatchingOptions matching;
   PairSelectionOptions pairs;
   VerificationOptions verification;
+  /// TUM trajectory of the vehicle's navigation (e.g. <run>/ground_truth/navigation.tum): gives
+  /// each keyframe (by sim_time_s) a position, and appearance pairs farther apart than
+  /// pairs.loop_max_distance_m are not matched. Empty: <survey>/navigation.tum if it exists,
+  /// else no navigation.
+  std::string navigation;
   /// Pairs matched at once (0: the machine's cores).
   int threads = 0;
 

@@ -18,6 +18,7 @@ void PairSelectionOptions::check() const {
   AUV_RECON_CHECK_OPTION(loop_min_separation >= 0, loop_min_separation, "must be >= 0");
   AUV_RECON_CHECK_OPTION(loop_min_score >= 0 && loop_min_score <= 1, loop_min_score,
                          "must be in [0, 1]");
+  AUV_RECON_CHECK_OPTION(loop_max_distance_m >= 0, loop_max_distance_m, "must be >= 0 m");
   AUV_RECON_CHECK_OPTION(vocabulary_words >= 2, vocabulary_words, "must be >= 2");
 }
 
@@ -79,6 +80,10 @@ std::vector<CandidatePair> selectPairs(const std::vector<PairImage>& images,
           if (same_camera &&
               std::abs(images[a].sequence - images[b].sequence) < options.loop_min_separation) {
             continue;
+          }
+          if (options.loop_max_distance_m > 0 && images[a].has_position && images[b].has_position &&
+              (images[a].position - images[b].position).norm() > options.loop_max_distance_m) {
+            continue;  // cannot share a view: a look-alike elsewhere
           }
           ranked.emplace_back(row[b], b);
         }

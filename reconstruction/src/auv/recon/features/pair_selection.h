@@ -9,13 +9,17 @@
 //  * loop closures and cross-camera by appearance: for each image the `loop_top_k` most similar
 //    images by global descriptor (vocabulary.h) that are not already its sequential neighbours
 //    (at least `loop_min_separation` keyframes apart in one camera), with a similarity of at
-//    least `loop_min_score` times the image's best.
+//    least `loop_min_score` times the image's best; when the vehicle's navigation gives the
+//    images positions, only among images at most `loop_max_distance_m` apart (look-alike
+//    surfaces far apart, e.g. a repeated texture, give geometrically consistent false pairs
+//    that verification cannot reject and that attach parts of a model in the wrong place).
 
 #include <cstdint>
 #include <limits>
 #include <string>
 #include <vector>
 
+#include <Eigen/Core>
 #include <opencv2/core.hpp>
 
 #include "auv/recon/features/match_store.h"
@@ -35,6 +39,10 @@ struct PairSelectionOptions {
   int loop_min_separation = 10;
   /// Appearance candidates need a similarity >= this fraction of the image's best one.
   double loop_min_score = 0.5;
+  /// Appearance candidates: at most this far apart by navigation position, m (images without
+  /// a position are not limited; 0: no limit). Two keyframes can only share a view when the
+  /// vehicle was within about twice the cameras' range; the margin covers navigation drift.
+  double loop_max_distance_m = 10.0;
   /// Visual words of the vocabulary trained on the survey's descriptors (vocabulary.h).
   int vocabulary_words = 1024;
 
@@ -47,6 +55,8 @@ struct PairImage {
   std::string camera;
   int sequence = 0;  ///< position in its camera's keyframe order
   double time_s = std::numeric_limits<double>::quiet_NaN();  ///< NaN: unknown
+  bool has_position = false;  ///< the navigation gives the vehicle's position at time_s
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  ///< m, navigation frame
 };
 
 struct CandidatePair {

@@ -16,23 +16,16 @@
 
 #include <Eigen/Core>
 
+#include "auv/recon/common/trajectory.h"
 #include "auv/recon/scene/reconstruction.h"
 #include "auv/recon/sfm/alignment.h"
 
 namespace auv::recon::sfm {
 
-struct TimedPosition {
-  double time = 0;  ///< s
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();
-};
-
-/// A TUM trajectory file, sorted by time. Throws std::runtime_error naming the file and line
-/// for a malformed line; an empty or missing file is an error too.
-std::vector<TimedPosition> readTumTrajectory(const std::filesystem::path& file);
-
-/// Linear interpolation; false outside the trajectory's time span.
-bool positionAt(const std::vector<TimedPosition>& trajectory, double time,
-                Eigen::Vector3d& position);
+// The TUM reader lives in common/ (the match stage uses it too).
+using recon::positionAt;
+using recon::readTumTrajectory;
+using recon::TimedPosition;
 
 /// Image name "<camera>/<file>" -> sim_time_s from keyframes/<camera>/index.csv of each
 /// camera folder present; images with an empty time are left out. Missing index files give no
