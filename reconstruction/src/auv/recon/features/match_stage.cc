@@ -267,6 +267,7 @@ MatchSummary matchSurvey(const Survey& survey, const MatchStageOptions& options)
   std::map<std::string, std::map<std::string, double>> times;
   std::vector<PairImage> images(entries.size());
   std::map<std::string, int> next_sequence;
+  size_t images_placed = 0;  // with a navigation position
   for (size_t i = 0; i < entries.size(); ++i) {
     const FeatureIndexEntry& e = entries[i];
     if (!cameras.count(e.camera)) {
@@ -289,13 +290,12 @@ MatchSummary matchSurvey(const Survey& survey, const MatchStageOptions& options)
     if (t != times[e.camera].end()) image.time_s = t->second;
     if (!trajectory.empty() && !std::isnan(image.time_s)) {
       image.has_position = positionAt(trajectory, image.time_s, image.position);
+      if (image.has_position) ++images_placed;
     }
   }
   if (!trajectory.empty()) {
-    std::cout << "match: navigation " << navigation.string() << ": "
-              << std::count_if(images.begin(), images.end(),
-                               [](const PairImage& i) { return i.has_position; })
-              << " of " << images.size() << " keyframes placed; appearance pairs at most "
+    std::cout << "match: navigation " << navigation.string() << ": " << images_placed << " of "
+              << images.size() << " keyframes placed; appearance pairs at most "
               << options.pairs.loop_max_distance_m << " m apart" << std::endl;
   }
 
@@ -427,34 +427,32 @@ MatchSummary matchSurvey(const Survey& survey, const MatchStageOptions& options)
 
   nlohmann::json sources = nlohmann::json::object();
   for (const auto& [source, count] : by_source) sources[source] = count;
-  updateReport(
-      survey.report(), kStage,
-      {{"images", summary.images},
-       {"images_with_navigation", std::count_if(images.begin(), images.end(),
-                                                [](const PairImage& i) { return i.has_position; })},
-       {"candidate_pairs", summary.candidate_pairs},
-       {"verified_pairs", summary.verified_pairs},
-       {"verified_pairs_by_source", sources},
-       {"verified_matches", summary.verified_matches},
-       {"essential_pairs", summary.essential_pairs},
-       {"fundamental_pairs", summary.fundamental_pairs},
-       {"exhaustive", exhaustive},
-       {"seconds", summary.seconds},
-       {"threads", threads},
-       {"options",
-        {{"ratio", options.matching.ratio},
-         {"mutual", options.matching.mutual},
-         {"flann_above", options.matching.flann_above},
-         {"flann_trees", options.matching.flann_trees},
-         {"flann_checks", options.matching.flann_checks},
-         {"sequential_window", options.pairs.sequential_window},
-         {"exhaustive_max_images", options.pairs.exhaustive_max_images},
-         {"cross_camera_max_dt_s", options.pairs.cross_camera_max_dt_s},
-         {"loop_top_k", options.pairs.loop_top_k},
-         {"loop_max_distance_m", options.pairs.loop_max_distance_m},
-         {"navigation", navigation.string()},
-         {"min_inliers", options.verification.min_inliers},
-         {"max_threshold_px", options.verification.max_threshold_px}}}});
+  updateReport(survey.report(), kStage,
+               {{"images", summary.images},
+                {"images_with_navigation", images_placed},
+                {"candidate_pairs", summary.candidate_pairs},
+                {"verified_pairs", summary.verified_pairs},
+                {"verified_pairs_by_source", sources},
+                {"verified_matches", summary.verified_matches},
+                {"essential_pairs", summary.essential_pairs},
+                {"fundamental_pairs", summary.fundamental_pairs},
+                {"exhaustive", exhaustive},
+                {"seconds", summary.seconds},
+                {"threads", threads},
+                {"options",
+                 {{"ratio", options.matching.ratio},
+                  {"mutual", options.matching.mutual},
+                  {"flann_above", options.matching.flann_above},
+                  {"flann_trees", options.matching.flann_trees},
+                  {"flann_checks", options.matching.flann_checks},
+                  {"sequential_window", options.pairs.sequential_window},
+                  {"exhaustive_max_images", options.pairs.exhaustive_max_images},
+                  {"cross_camera_max_dt_s", options.pairs.cross_camera_max_dt_s},
+                  {"loop_top_k", options.pairs.loop_top_k},
+                  {"loop_max_distance_m", options.pairs.loop_max_distance_m},
+                  {"navigation", navigation.string()},
+                  {"min_inliers", options.verification.min_inliers},
+                  {"max_threshold_px", options.verification.max_threshold_px}}}});
   return summary;
 }
 
