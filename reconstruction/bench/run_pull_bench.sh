@@ -5,9 +5,12 @@
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 workspace="${AUV_WORKSPACE:-$(pwd)}"
-bench="$(command -v pull_bench || true)"
+# pull_bench installs into lib/auv_reconstruction/ (not on PATH): the workspace's install, else
+# PATH, else next to this script (a plain CMake build).
+bench="$here/../../install/lib/auv_reconstruction/pull_bench"
+[ -x "$bench" ] || bench="$(command -v pull_bench || true)"
 [ -z "$bench" ] && [ -x "$here/pull_bench" ] && bench="$here/pull_bench"
-if [ -z "$bench" ]; then echo "run_pull_bench: pull_bench not found (source install/setup.bash)" >&2; exit 1; fi
+if [ -z "$bench" ]; then echo "run_pull_bench: pull_bench not built (./scripts/build.sh)" >&2; exit 1; fi
 mkdir -p "$workspace/bench_results"
 out="$workspace/bench_results/pull_bench_$(date +%Y%m%d_%H%M%S).md"
 "$bench" --out "$out" "$@"

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <signal.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -208,6 +209,29 @@ TEST(CliTest, BadInputGivesOneClearLineAndNonZeroExit) {
   const Result r = run("AUV_DDS=bogus", "topic list");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.out.find("unknown DDS vendor 'bogus'"), std::string::npos) << r.out;
+}
+
+// `auv <command> <sub>` runs auv-<command>-<sub> where it exists (auv-recon-pull, a lean
+// program), else auv-<command> with <sub> as its first argument; options are never <sub>.
+TEST(CliTest, SubcommandProgramIsPreferredOverTheCommandProgram) {
+  char pattern[] = "/tmp/auv-cli-sub-XXXXXX";
+  const std::string dir = mkdtemp(pattern);
+  const auto script = [&](const std::string& name, const std::string& tag) {
+    const std::string path = dir + "/" + name;
+    FILE* f = fopen(path.c_str(), "w");
+    fprintf(f, "#!/bin/sh\necho \"%s:$*\"\n", tag.c_str());
+    fclose(f);
+    chmod(path.c_str(), 0755);
+  };
+  script("auv-probetool", "whole");
+  script("auv-probetool-fast", "lean");
+  const std::string path_env = "PATH=" + dir + ":$PATH";
+  EXPECT_EQ(run(path_env, "probetool fast a b").out, "lean:a b\n");
+  EXPECT_EQ(run(path_env, "probetool slow a").out, "whole:slow a\n");
+  EXPECT_EQ(run(path_env, "probetool --help").out, "whole:--help\n");
+  std::remove((dir + "/auv-probetool").c_str());
+  std::remove((dir + "/auv-probetool-fast").c_str());
+  rmdir(dir.c_str());
 }
 
 }  // namespace

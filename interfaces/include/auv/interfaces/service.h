@@ -154,9 +154,11 @@ class Client {
     return send(std::move(request), &sequence);
   }
 
-  /// Sends `request` and waits for its reply up to `timeout`. NO_SERVICE when no service
-  /// was matched within the timeout, TIMEOUT when it was but did not answer.
-  CallStatus call(const Req& request, Rep* reply, std::chrono::milliseconds timeout) {
+  /// Sends `request` and waits for its reply up to `timeout`, resending it every
+  /// `resend_period` until answered. NO_SERVICE when no service was matched within the
+  /// timeout, TIMEOUT when it was but did not answer.
+  CallStatus call(const Req& request, Rep* reply, std::chrono::milliseconds timeout,
+                  std::chrono::milliseconds resend_period = kResendPeriod) {
     const auto start = std::chrono::steady_clock::now();
     if (!waitForService(timeout)) return CallStatus::NO_SERVICE;
     auto remaining = timeout - std::chrono::duration_cast<std::chrono::milliseconds>(
@@ -166,7 +168,7 @@ class Client {
     std::future<Rep> future = send(sent, &sequence);
     const auto deadline = std::chrono::steady_clock::now() + remaining;
     while (future.wait_until(std::min(deadline, std::chrono::steady_clock::now() +
-                                                    kResendPeriod)) != std::future_status::ready) {
+                                                    resend_period)) != std::future_status::ready) {
       if (std::chrono::steady_clock::now() >= deadline) {
         std::lock_guard<std::mutex> lock(mutex_);
         pending_.erase(sequence);
@@ -189,7 +191,7 @@ class Client {
       if (reply.header().client_guid() != client_id_) continue;
       std::lock_guard<std::mutex> lock(mutex_);
       auto it = pending_.find(reply.header().sequence_number());
-      if (it == pending_.end()) continue;  // late reply to a call that timed out
+      if (it == pending_.end()) continue;      // late reply to a call that timed out
       it->second.set_value(std::move(reply));  // no copy of a large reply
       pending_.erase(it);
     }

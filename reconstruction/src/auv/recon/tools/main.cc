@@ -23,13 +23,16 @@ std::string usage() {
 
 int main(int argc, char** argv) {
   std::vector<std::string> args(argv + 1, argv + argc);
+  // A program built with one command (auv-recon-pull) is that command: no name to give.
+  const auto all = auv::recon::tools::commands();
+  if (all.size() == 1) return all.front().run(args);
   if (args.empty() || args[0] == "--help" || args[0] == "-h") {
     std::cout << usage();
     return args.empty() ? auv::recon::tools::kExitUsage : 0;
   }
   const std::string name = args[0];
   args.erase(args.begin());
-  for (const auto& command : auv::recon::tools::commands()) {
+  for (const auto& command : all) {
     if (command.name == name) return command.run(args);
   }
   std::cerr << "auv recon: unknown command '" << name << "'\n" << usage();

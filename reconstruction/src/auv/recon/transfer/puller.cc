@@ -405,9 +405,11 @@ PullResult Puller::run() {
     uint64_t rate_bytes = 0;
     bool service_was_ready = impl_->fetch->serviceReady();
     // Until the recorder has answered one fetch_chunk request, its reply writer may not have
-    // discovered our reader yet (discovery is asymmetric) and would drop what it writes: the
-    // first request goes out alone with call(), which repeats it every 500 ms; the rest are
-    // pipelined with callAsync(). Again after the vehicle comes back (new writers).
+    // discovered our reader yet (discovery is asymmetric) and would drop what it writes: a
+    // zero-length request goes out first with call(), repeated every 50 ms (cheap, where
+    // repeating a whole chunk would send it twice on a slow link; the default 500 ms cost
+    // half a second of many pulls); the chunks are pipelined with callAsync() once it is
+    // answered. Again after the vehicle comes back (new writers).
     bool fetch_answered = false;
     while (!queue.empty() || !flight.empty()) {
       if (stop_) {
@@ -430,8 +432,10 @@ PullResult Puller::run() {
       progress.waiting = ready ? "" : "waiting for vehicle '" + options_.vehicle + "'";
       // Fill the window.
       const auto now = Clock::now();
-      const size_t window = fetch_answered ? static_cast<size_t>(options_.in_flight) : 1;
-      while (ready && flight.size() < window && !queue.empty()) {
+      const auto window = [&] {
+        return fetch_answered ? static_cast<size_t>(options_.in_flight) : 1;
+      };
+      while (ready && flight.size() < window() && !queue.empty()) {
         auto it = std::find_if(queue.begin(), queue.end(),
                                [&](const Work& w) { return w.not_before <= now; });
         if (it == queue.end()) break;
@@ -442,20 +446,17 @@ PullResult Puller::run() {
         request.file_path(work.file->partial->remote().path);
         request.offset(work.offset);
         request.length(work.length);
-        stats_.bytes_requested += work.length;
         if (!fetch_answered) {
-          msg::FileChunkReply first;
-          if (impl_->fetch->call(request, &first, 2000ms) != interfaces::CallStatus::OK) {
+          msg::FileChunkRequest probe = request;
+          probe.length(0);
+          msg::FileChunkReply answer;  // its status does not matter: an answer came back
+          if (impl_->fetch->call(probe, &answer, 2000ms, 50ms) != interfaces::CallStatus::OK) {
             queue.push_front(work);  // --timeout (last_alive) decides when to give up
             break;
           }
           fetch_answered = true;
-          std::promise<msg::FileChunkReply> answered;
-          answered.set_value(std::move(first));
-          ++work.file->in_flight;
-          flight.push_back(InFlight{work, answered.get_future(), Clock::now()});
-          continue;
         }
+        stats_.bytes_requested += work.length;
         ++work.file->in_flight;
         flight.push_back(InFlight{work, impl_->fetch->callAsync(request), Clock::now()});
       }
