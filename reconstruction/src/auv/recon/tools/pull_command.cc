@@ -61,7 +61,8 @@ std::string summary(const transfer::PullStats& s, const std::string& result) {
   if (s.chunks_reused > 0) out << ", " << s.chunks_reused << " chunks reused from disk";
   if (s.chunks_corrupted > 0) out << ", " << s.chunks_corrupted << " corrupted chunks refetched";
   if (s.requests_timed_out > 0) out << ", " << s.requests_timed_out << " requests repeated";
-  if (s.vehicle_restarts > 0) out << ", vehicle came back " << s.vehicle_restarts << " times";
+  if (s.vehicle_restarts == 1) out << ", vehicle came back once";
+  if (s.vehicle_restarts > 1) out << ", vehicle came back " << s.vehicle_restarts << " times";
   return out.str();
 }
 
