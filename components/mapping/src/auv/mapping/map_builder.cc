@@ -6,6 +6,8 @@
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+#include <tuple>
+#include <vector>
 
 #include "auv/mapping/ot_stream.h"
 
@@ -54,8 +56,58 @@ void MapBuilder::configureTree(octomap::OcTree& tree) const {
 }
 
 void MapBuilder::update(const octomap::OcTreeKey& key, bool occupied) {
-  const octomap::OcTreeNode* node = tree_.updateNode(key, occupied);
+  const octomap::OcTreeNode* node = updateLazily(key, occupied);
   if (track_changes_) changed_.set(key, node->getLogOdds());
+  touched_.push_back(key);
+}
+
+octomap::OcTreeNode* MapBuilder::updateLazily(const octomap::OcTreeKey& key, bool occupied) {
+  octomap::OcTreeNode* node = tree_.getRoot();
+  if (node == nullptr) return tree_.updateNode(key, occupied, /*lazy_eval=*/true);
+  const float update = occupied ? tree_.getProbHitLog() : tree_.getProbMissLog();
+  // OctoMap's early abort: a cell (or a pruned node holding it) already clamped in the
+  // direction of the update is left alone, pruned nodes unexpanded.
+  const auto clamped = [&](const octomap::OcTreeNode* n) {
+    return (update >= 0 && n->getLogOdds() >= tree_.getClampingThresMaxLog()) ||
+           (update <= 0 && n->getLogOdds() <= tree_.getClampingThresMinLog());
+  };
+  const int depth_max = static_cast<int>(tree_.getTreeDepth());
+  bool created = false;  // below a node created by this update: nothing to expand or abort
+  for (int level = depth_max - 1; level >= 0; --level) {
+    const unsigned child = octomap::computeChildIdx(key, level);
+    if (!tree_.nodeChildExists(node, child)) {
+      if (!created && !tree_.nodeHasChildren(node)) {  // a pruned node
+        if (clamped(node)) return node;
+        tree_.expandNode(node);
+      } else {
+        tree_.createNodeChild(node, child);
+        created = true;
+      }
+    }
+    node = tree_.getNodeChild(node, child);
+  }
+  if (!created && clamped(node)) return node;
+  tree_.updateNodeLogOdds(node, update);
+  return node;
+}
+
+void MapBuilder::settleInnerNodes() {
+  const unsigned depth_max = tree_.getTreeDepth();
+  for (unsigned depth = depth_max; depth-- > 0;) {
+    // The touched nodes' parents at `depth`: each once, deeper levels already settled.
+    for (auto& key : touched_) key = tree_.adjustKeyAtDepth(key, depth);
+    std::sort(touched_.begin(), touched_.end(), [](const auto& a, const auto& b) {
+      return std::tie(a[0], a[1], a[2]) < std::tie(b[0], b[1], b[2]);
+    });
+    touched_.erase(std::unique(touched_.begin(), touched_.end()), touched_.end());
+    for (const auto& key : touched_) {
+      octomap::OcTreeNode* node = depth == 0 ? tree_.getRoot() : tree_.search(key, depth);
+      // A node above `depth` (pruned meanwhile) or without children has nothing to settle.
+      if (node == nullptr || !tree_.nodeHasChildren(node)) continue;
+      if (!tree_.pruneNode(node)) node->updateOccupancyChildren();
+    }
+  }
+  touched_.clear();
 }
 
 InsertStats MapBuilder::integrate(const octomap::KeySet& free_keys,
@@ -70,6 +122,7 @@ InsertStats MapBuilder::integrate(const octomap::KeySet& free_keys,
     update(key, true);
     ++stats.occupied_cells;
   }
+  settleInnerNodes();
   cell_updates_ += stats.free_cells + stats.occupied_cells;
   ++version_;
   return stats;
@@ -106,6 +159,7 @@ InsertStats MapBuilder::insertBeam(const BeamGeometry& beam,
     update(hit, true);
     ++stats.occupied_cells;
   }
+  settleInnerNodes();
   cell_updates_ += stats.free_cells + stats.occupied_cells;
   ++beams_inserted_;
   ++version_;

@@ -142,8 +142,18 @@ class MapBuilder {
 
  private:
   InsertStats integrate(const octomap::KeySet& free_keys, const octomap::KeySet& occupied_keys);
-  /// updateNode, noting the cell's new log-odds for the next diff.
+  /// updateNode without touching inner nodes (lazy), noting the cell's new log-odds for the
+  /// next diff and the cell for settleInnerNodes().
   void update(const octomap::OcTreeKey& key, bool occupied);
+  /// OcTree::updateNode(key, occupied, lazy_eval = true) in one descent from the root where
+  /// OctoMap makes two (its early-abort search, then the update): the same nodes created,
+  /// expanded and updated. Returns the updated cell, or the clamped node left alone.
+  octomap::OcTreeNode* updateLazily(const octomap::OcTreeKey& key, bool occupied);
+  /// Brings the inner nodes above the cells update() touched to what OctoMap's eager
+  /// updateNode leaves (maximum of the children, collapsible nodes pruned), deepest first:
+  /// the same tree, byte for byte, but each inner node is settled once per beam or cloud
+  /// instead of once per cell (consecutive cells of a ray share all but the last levels).
+  void settleInnerNodes();
   void configureTree(octomap::OcTree& tree) const;
 
   Options options_;
@@ -153,6 +163,7 @@ class MapBuilder {
   // (updateNode returns the leaf, or its pruned parent, which holds the same value).
   detail::ChangedCells changed_;
   octomap::KeyRay ray_scratch_;
+  std::vector<octomap::OcTreeKey> touched_;  // cells updated since the last settleInnerNodes()
   octomap::KeySet free_scratch_;
   octomap::KeySet occupied_scratch_;
   std::shared_ptr<const octomap::OcTree> snapshot_;   // accessed with std::atomic_load/store
