@@ -211,6 +211,18 @@ TEST(CliTest, BadInputGivesOneClearLineAndNonZeroExit) {
   EXPECT_NE(r.out.find("unknown DDS vendor 'bogus'"), std::string::npos) << r.out;
 }
 
+TEST(CliTest, RunHelpListsTheComponentsParametersWithTheirValues) {
+  const Result r = run(env("cyclonedds", 180), "run demo_talker -p rate_hz:=5 --help");
+  EXPECT_EQ(r.exit_code, 0) << r.out;
+  const auto rate = r.out.find("rate_hz:");
+  ASSERT_NE(rate, std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("value: 5", rate), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("source: command line (-p)", rate), std::string::npos) << r.out;
+  const Result bad = run(env("cyclonedds", 180), "run demo_talker -p rate_hz:=fast --help");
+  EXPECT_EQ(bad.exit_code, 1) << bad.out;
+  EXPECT_NE(bad.out.find("rate_hz"), std::string::npos) << bad.out;
+}
+
 // `auv <command> <sub>` runs auv-<command>-<sub> where it exists (auv-recon-pull, a lean
 // program), else auv-<command> with <sub> as its first argument; options are never <sub>.
 TEST(CliTest, SubcommandProgramIsPreferredOverTheCommandProgram) {

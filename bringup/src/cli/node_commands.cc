@@ -1,5 +1,6 @@
 // `auv node list`, `auv interface list|show`, `auv run`.
 #include <iostream>
+#include <memory>
 
 #include "auv/interfaces/component.h"
 #include "auv/interfaces/graph.h"
@@ -50,8 +51,40 @@ int interfaceMain(const std::vector<std::string>& argv) {
   throw CliError("usage: auv interface list | auv interface show <type>");
 }
 
+/// The component and node name of `component[:node_name]`.
+interfaces::ComponentSpec parseSpec(const std::string& item) {
+  const auto colon = item.find(':');
+  return {item.substr(0, colon), colon == std::string::npos ? "" : item.substr(colon + 1)};
+}
+
+/// `auv run <component>... --help`: every declared parameter of each component with the values
+/// `options` give it. The component is configured on a node of the domain, never activated: it
+/// joins the domain for a moment and publishes nothing.
+int describeComponents(const std::vector<std::string>& items,
+                       const interfaces::NodeOptions& options) {
+  auto& registry = interfaces::ComponentRegistry::instance();
+  try {
+    for (const std::string& item : items) {
+      const interfaces::ComponentSpec spec = parseSpec(item);
+      const interfaces::ComponentInfo* info = registry.find(spec.component);
+      if (info == nullptr)
+        throw CliError("unknown component '" + spec.component + "' (see `auv run --list`)");
+      interfaces::Node node(spec.node_name.empty() ? spec.component : spec.node_name, options);
+      std::unique_ptr<interfaces::Component> component = info->create();
+      component->configure(node);
+      std::cout << "# " << spec.component << ": " << info->description << "\n"
+                << node.parameters().describe() << "\n";
+      component->cleanup();
+    }
+  } catch (const std::exception& e) {  // as `auv run` reports a bad configuration
+    std::cerr << "auv run: " << e.what() << std::endl;
+    return 1;
+  }
+  return 0;
+}
+
 int runMain(const std::vector<std::string>& argv) {
-  const Args args(argv, {"--list"}, {"--params", "-p"});
+  const Args args(argv, {"--list", "--help", "-h"}, {"--params", "-p"});
   // Options may repeat: collect them in order from the raw arguments.
   interfaces::NodeOptions options;
   for (size_t i = 0; i + 1 < argv.size(); ++i) {
@@ -65,15 +98,12 @@ int runMain(const std::vector<std::string>& argv) {
       std::cout << info.name << "  " << info.description << "\n";
     if (args.positional().empty() && !args.flag("--list"))
       std::cerr << "usage: auv run <component>[:<node_name>] ... [--params f.yaml]... "
-                   "[-p name:=value]...\n";
+                   "[-p name:=value]...\n       auv run <component> --help   # its parameters\n";
     return args.flag("--list") ? 0 : 2;
   }
+  if (args.flag("--help") || args.flag("-h")) return describeComponents(args.positional(), options);
   std::vector<interfaces::ComponentSpec> specs;
-  for (const std::string& item : args.positional()) {
-    const auto colon = item.find(':');
-    specs.push_back(
-        {item.substr(0, colon), colon == std::string::npos ? "" : item.substr(colon + 1)});
-  }
+  for (const std::string& item : args.positional()) specs.push_back(parseSpec(item));
   return interfaces::runComponents(specs, options);
 }
 

@@ -13,6 +13,7 @@ to bench_results/mission_campaign_<stamp>.{md,json}.
 
   components/mission/bench/run_mission_campaign.py [--worlds canyon,breakwater,dead_end_bay]
       [--seeds 20] [--first-seed 1] [--real-time-factor 8] [--domain 45] [--keep-runs]
+      [--navigation drift|ideal]   # ideal: no drift, no noise (planner and mapping alone)
   components/mission/bench/run_mission_campaign.py --evaluate RUN_DIR...   # finished runs again
 """
 import argparse
@@ -33,6 +34,12 @@ CLEARANCE = 1.2  # m, the planner's hull_radius + safety_margin (planning defaul
 ORACLE_GRID = 0.2  # m
 TRUE_MAP_RESOLUTION = 0.1  # m
 MAP_RESOLUTION = 0.5  # m, the mapping component's default
+# `--navigation ideal`: the simulator's navigation without drift or noise, so that what is left
+# of path length / oracle is the planner's and the mapping's own (exploration, quantisation).
+IDEAL_NAVIGATION = ("navigation: {dvl_scale_error: 0, dvl_velocity_noise: 0, "
+                    "dvl_dropout_rate: 0, dvl_dropout_roughness_gain: 0, heading_bias_deg: 0, "
+                    "heading_random_walk_deg: 0, heading_noise_deg: 0, attitude_noise_deg: 0, "
+                    "gyro_noise: 0}\n")
 
 
 def find_program(name):
@@ -158,10 +165,26 @@ def evaluate(row, world, seed, run_dir, summary, cache):
                      f'{len(mission["queries"])}'
 
 
+def ideal_navigation_scenario(world, seed, runs_dir):
+    """The generated world's scenario with IDEAL_NAVIGATION appended (same mesh and queries)."""
+    folder = os.path.join(runs_dir, "worlds", f"{world}-{seed}")
+    subprocess.run([find_program("auv"), "sim", "generate", world, "--seed", str(seed),
+                    "--out", folder], check=True, stdout=subprocess.DEVNULL)
+    scenario = os.path.join(folder, f"{world}.yaml")
+    with open(scenario) as text:
+        if any(line.startswith("navigation:") for line in text):
+            sys.exit(f"run_mission_campaign: {scenario} already has a navigation section")
+    with open(scenario, "a") as text:
+        text.write(IDEAL_NAVIGATION)
+    return scenario
+
+
 def run_mission(world, seed, args, runs_dir):
     run_dir = os.path.join(runs_dir, f"{world}-{seed}")
     shutil.rmtree(run_dir, ignore_errors=True)
-    command = [find_program("auv"), "launch", LAUNCH, f"world:={world}", f"seed:={seed}",
+    scenario = world if args.navigation == "drift" else \
+        ideal_navigation_scenario(world, seed, runs_dir)
+    command = [find_program("auv"), "launch", args.launch, f"world:={scenario}", f"seed:={seed}",
                "auto_mission:=true", f"real_time_factor:={args.real_time_factor}",
                f"domain:={args.domain}", f"run_dir:={run_dir}", f"objective:={args.objective}"]
     started = time.monotonic()
@@ -181,7 +204,7 @@ def write_results(rows, worlds, stamp, setup, quiet=False):
     """The campaign table (per world) and every run, as .md and .json in bench_results/."""
     results_dir = os.path.join(ROOT, "bench_results")
     lines = [f"# Mission campaign {stamp}", "",
-             f"{setup}; navigation drift on (simulator defaults), clearance {CLEARANCE} m; "
+             f"{setup}; clearance {CLEARANCE} m; "
              f"oracle: planning_oracle on the true map at {TRUE_MAP_RESOLUTION} m and at the "
              f"planner's {MAP_RESOLUTION} m, grid {ORACLE_GRID} m, between the executed query's "
              "true start and end; on the vehicle's final map (mission/map.bt, navigation frame) "
@@ -251,6 +274,10 @@ def main():
     parser.add_argument("--domain", type=int, default=45)
     parser.add_argument("--timeout", type=float, default=3600.0, help="s of wall time per mission")
     parser.add_argument("--objective", default="visibility", choices=["visibility", "path_length"])
+    parser.add_argument("--navigation", default="drift", choices=["drift", "ideal"],
+                        help="drift: the simulator's defaults; ideal: no drift or noise")
+    parser.add_argument("--launch", default=LAUNCH,
+                        help="the vehicle's launch file (default: bringup/launch/vehicle.yaml)")
     parser.add_argument("--keep-runs", action="store_true", help="keep the run folders")
     parser.add_argument("--seed-major", action="store_true",
                         help="run seed by seed across the worlds (default: world by world)")
@@ -274,8 +301,10 @@ def main():
     # Seed by seed across the worlds: a campaign stopped early still covers every world.
     order = [(w, s) for s in seeds for w in worlds] if args.seed_major else \
         [(w, s) for w in worlds for s in seeds]
-    setup = (f"vehicle.yaml, auto_mission, objective {args.objective}, "
-             f"real_time_factor {args.real_time_factor}")
+    setup = (f"{os.path.relpath(args.launch, ROOT)}, auto_mission, objective {args.objective}, "
+             f"real_time_factor {args.real_time_factor}, navigation "
+             + ("drift on (simulator defaults)" if args.navigation == "drift" else
+                "ideal (no drift, no noise)"))
     for world, seed in order:
         run_dir, code, wall, summary = run_mission(world, seed, args, runs_dir)
         row = {"world": world, "seed": seed, "exit": code, "wall_s": round(wall, 1)}

@@ -81,6 +81,7 @@ PlannerSettings PlannerSettings::componentDefaults() {
   PlannerSettings settings;
   settings.range = component.range;
   settings.goal_bias = component.goal_bias;
+  settings.narrow_passage_bias = component.narrow_passage_bias;
   settings.rewire_factor = component.rewire_factor;
   settings.clearance = component.clearance;
   settings.visibility_weight = component.visibility_weight;
@@ -93,7 +94,8 @@ PlannerSettings PlannerSettings::componentDefaults() {
 
 std::string PlannerSettings::describe() const {
   std::ostringstream out;
-  out << "range " << range << " m, goal bias " << goal_bias << ", rewire factor " << rewire_factor
+  out << "range " << range << " m, goal bias " << goal_bias << ", narrow-passage bias "
+      << narrow_passage_bias << " (OnlineRRTstar), rewire factor " << rewire_factor
       << ", clearance " << clearance.clearance() << " m (hull " << clearance.hull_radius
       << " + margin " << clearance.safety_margin << "), visibility objective d_e "
       << cost.expected_distance << " m, Δd_a " << cost.admissible_range << " m, weight "
@@ -185,6 +187,7 @@ ob::PlannerPtr makePlanner(const std::string& name, const QueryProblem& problem,
     auto planner = std::make_shared<OnlineRRTstar>(problem.si);
     planner->setRange(settings.range);
     planner->setGoalBias(settings.goal_bias);
+    planner->setNarrowPassageBias(settings.narrow_passage_bias);
     planner->setRewireFactor(settings.rewire_factor);
     planner->setGoalTolerance(problem.tolerance);
     return planner;

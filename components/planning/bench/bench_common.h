@@ -43,11 +43,12 @@ struct BenchScenario {
 BenchScenario readScenario(const std::string& path);
 
 /// What the planner is run with. Defaults: the `planning` component's (PlanningComponent::
-/// Options: range, goal_bias, rewire_factor, clearance, visibility_weight, max_distance) and
-/// the mission handler's Eq. (1) defaults d_e = 1 m, Δd_a = 1 m.
+/// Options: range, goal_bias, narrow_passage_bias, rewire_factor, clearance, visibility_weight,
+/// max_distance) and the mission handler's Eq. (1) defaults d_e = 1 m, Δd_a = 1 m.
 struct PlannerSettings {
   double range = 0.0;
   double goal_bias = 0.0;
+  double narrow_passage_bias = 0.0;  ///< OnlineRRTstar only
   double rewire_factor = 0.0;
   ClearanceOptions clearance;
   double visibility_weight = 0.0;

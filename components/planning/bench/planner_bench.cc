@@ -43,6 +43,8 @@ const char* kUsage =
     "  --3d                    plan in 3-D (default: fixed depth = the query's start depth)\n"
     "  --expected-distance M   d_e of Eq. (1) (default 1)\n"
     "  --admissible-range M    Δd_a of Eq. (1) (default 1)\n"
+    "  --narrow-passage-bias X OnlineRRTstar's share of bridge-test samples (default: the\n"
+    "                          planning component's)\n"
     "  --seed N                OMPL's global seed (default 1)\n"
     "  --out FILE.md           results (also FILE.csv with every run)\n";
 
@@ -55,6 +57,7 @@ struct Args {
   bool fixed_depth = true;
   double expected_distance = 1.0;
   double admissible_range = 1.0;
+  double narrow_passage_bias = -1.0;  // < 0: the component's default
   std::uint32_t seed = 1;
   std::string out;
 };
@@ -116,6 +119,11 @@ Args parseArgs(int argc, char** argv) {
       args.expected_distance = parseNumber(arg, value());
     } else if (arg == "--admissible-range") {
       args.admissible_range = parseNumber(arg, value());
+    } else if (arg == "--narrow-passage-bias") {
+      args.narrow_passage_bias = parseNumber(arg, value());
+      if (!(args.narrow_passage_bias >= 0.0 && args.narrow_passage_bias <= 1.0)) {
+        throw std::invalid_argument("--narrow-passage-bias: expected a number in [0, 1]");
+      }
     } else if (arg == "--seed") {
       args.seed = static_cast<std::uint32_t>(parseNumber(arg, value()));
     } else if (arg == "--out") {
@@ -268,6 +276,7 @@ int main(int argc, char** argv) {
   settings.fixed_depth = args.fixed_depth;
   settings.cost.expected_distance = args.expected_distance;
   settings.cost.admissible_range = args.admissible_range;
+  if (args.narrow_passage_bias >= 0.0) settings.narrow_passage_bias = args.narrow_passage_bias;
   std::vector<double> checkpoints;
   for (double c : {0.1, 0.5}) {
     if (c < args.budget) checkpoints.push_back(c);

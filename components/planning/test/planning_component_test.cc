@@ -4,7 +4,7 @@
 // and the waypoints go around it; a colliding root or approach cancels and replans from the
 // vehicle; a sequence gap calls map/request_full; a new query cancels the active waypoint; an
 // enclosed goal cancels with NO_SOLUTION; every planner/tree received is well formed. Each
-// test on its own domain id (90..99, test/README.md).
+// test on its own domain id (90..99 and 83, test/README.md).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -561,6 +561,20 @@ TEST(PlanningComponentTest, TreeMatchesPathAndWaypoints) {
     EXPECT_TRUE(harness.cancels.empty()) << describe(harness.cancels);
     EXPECT_VIEWS_WELL_FORMED(harness);
   });
+}
+
+TEST(PlanningComponentTest, SamplingSharesAboveOneAreRefusedNamingBoth) {
+  interfaces::Node node("planning",
+                        interfaces::nodeOptions(Vendor::CYCLONEDDS, 83,
+                                                {"goal_bias:=0.5", "narrow_passage_bias:=0.6"}));
+  PlanningComponent planning;
+  try {
+    planning.configure(node);
+    FAIL() << "configure() accepted goal_bias 0.5 + narrow_passage_bias 0.6";
+  } catch (const std::invalid_argument& error) {
+    EXPECT_NE(std::string(error.what()).find("goal_bias + narrow_passage_bias"), std::string::npos)
+        << error.what();
+  }
 }
 
 }  // namespace

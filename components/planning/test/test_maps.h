@@ -27,12 +27,14 @@ inline void addOccupiedBox(octomap::OcTree& tree, const Eigen::Vector3d& min,
   }
 }
 
-/// A 2-D world (fixed depth 5 m) x in [0, 20], y in [-10, 10], its map and planning space.
+/// A 2-D world (fixed depth 5 m) x in [0, size], y in [-size / 2, size / 2] (size 20 m unless
+/// set before build()), its map and planning space.
 struct FlatWorld {
   std::unique_ptr<octomap::OcTree> tree = std::make_unique<octomap::OcTree>(kResolution);
   std::shared_ptr<OctomapDistanceField> field;
   ompl::base::SpaceInformationPtr si;
   ClearanceOptions clearance;
+  double size = 20.0;
   static constexpr double kDepth = 5.0;
 
   FlatWorld() {
@@ -43,12 +45,12 @@ struct FlatWorld {
   void build() {
     OctomapDistanceFieldOptions field_options;
     field_options.max_distance = 8.0;
-    field_options.min_corner = {-2.0, -12.0, 0.0};
-    field_options.max_corner = {22.0, 12.0, 10.0};
+    field_options.min_corner = {-2.0, -0.5 * size - 2.0, 0.0};
+    field_options.max_corner = {size + 2.0, 0.5 * size + 2.0, 10.0};
     field = std::make_shared<OctomapDistanceField>(tree.get(), field_options);
     PlanningSpaceOptions space;
-    space.min_corner = {0.0, -10.0, 0.0};
-    space.max_corner = {20.0, 10.0, 10.0};
+    space.min_corner = {0.0, -0.5 * size, 0.0};
+    space.max_corner = {size, 0.5 * size, 10.0};
     space.fixed_depth = kDepth;
     si = makeSpaceInformation(space, field, clearance);
   }

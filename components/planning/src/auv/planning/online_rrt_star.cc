@@ -7,6 +7,7 @@
 
 #include <ompl/base/goals/GoalSampleableRegion.h>
 #include <ompl/base/objectives/PathLengthOptimizationObjective.h>
+#include <ompl/base/samplers/BridgeTestValidStateSampler.h>
 #include <ompl/base/spaces/RealVectorStateSpace.h>
 #include <ompl/geometric/PathGeometric.h>
 #include <ompl/tools/config/SelfConfig.h>
@@ -35,6 +36,10 @@ OnlineRRTstar::OnlineRRTstar(const ob::SpaceInformationPtr& si) : ob::Planner(si
                        &OnlineRRTstar::getGoalTolerance, "0.:.1:100.");
   declareParam<double>("rewire_factor", this, &OnlineRRTstar::setRewireFactor,
                        &OnlineRRTstar::getRewireFactor, "1.0:0.01:2.0");
+  declareParam<double>("narrow_passage_bias", this, &OnlineRRTstar::setNarrowPassageBias,
+                       &OnlineRRTstar::getNarrowPassageBias, "0.:.05:1.");
+  declareParam<double>("narrow_passage_spread", this, &OnlineRRTstar::setNarrowPassageSpread,
+                       &OnlineRRTstar::getNarrowPassageSpread, "0.:.1:100.");
   addPlannerProgressProperty("best cost REAL",
                              [this] { return std::to_string(published_best_cost_.load()); });
 }
@@ -77,10 +82,16 @@ void OnlineRRTstar::setup() {
                1.0 / d);
 }
 
+void OnlineRRTstar::setNarrowPassageSpread(double spread) {
+  narrow_passage_spread_ = spread;
+  bridge_sampler_.reset();  // made again with the new spread
+}
+
 void OnlineRRTstar::clear() {
   ob::Planner::clear();
   freeTree();
   sampler_.reset();
+  bridge_sampler_.reset();
   if (goal_state_) si_->freeState(goal_state_);
   goal_state_ = nullptr;
 }
@@ -132,15 +143,10 @@ ob::PlannerStatus OnlineRRTstar::solve(const ob::PlannerTerminationCondition& pt
     if (start == nullptr) return ob::PlannerStatus::INVALID_START;
     addRoot(start);
   }
-  if (!sampler_) sampler_ = si_->allocStateSampler();
   ob::State* random_state = si_->allocState();
   while (!ptc) {
     ++iterations_;
-    if (rng_.uniform01() < goal_bias_) {
-      si_->copyState(random_state, goal_state_);
-    } else {
-      sampler_->sampleUniform(random_state);
-    }
+    sampleRandomState(random_state);
     Node* added = extend(random_state);
     if (added == nullptr) continue;
     const bool new_solution = reachesGoal(added);
@@ -155,6 +161,25 @@ ob::PlannerStatus OnlineRRTstar::solve(const ob::PlannerTerminationCondition& pt
   if (solutions_.empty()) return ob::PlannerStatus::TIMEOUT;
   postSolution(false);
   return ob::PlannerStatus::EXACT_SOLUTION;
+}
+
+void OnlineRRTstar::sampleRandomState(ob::State* random_state) {
+  if (!sampler_) sampler_ = si_->allocStateSampler();
+  const double draw = rng_.uniform01();
+  if (draw < goal_bias_) {
+    si_->copyState(random_state, goal_state_);
+    return;
+  }
+  if (draw < goal_bias_ + narrow_passage_bias_) {
+    if (!bridge_sampler_) {
+      auto bridge = std::make_shared<ob::BridgeTestValidStateSampler>(si_.get());
+      bridge->setStdDev(narrow_passage_spread_ > 0.0 ? narrow_passage_spread_ : range_);
+      bridge_sampler_ = bridge;
+    }
+    // Where no passage is known (nothing invalid nearby) the test fails: sample uniformly.
+    if (bridge_sampler_->sample(random_state)) return;
+  }
+  sampler_->sampleUniform(random_state);
 }
 
 double OnlineRRTstar::nearRadius() const {

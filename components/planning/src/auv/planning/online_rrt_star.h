@@ -12,6 +12,7 @@
 
 #include <ompl/base/OptimizationObjective.h>
 #include <ompl/base/Planner.h>
+#include <ompl/base/ValidStateSampler.h>
 #include <ompl/datastructures/NearestNeighbors.h>
 #include <ompl/util/RandomNumbers.h>
 #include <Eigen/Geometry>
@@ -28,7 +29,10 @@ struct UpdateResult {
 };
 
 /// Parameters (declareParam): range (δ, m), goal_bias, goal_tolerance (ε_goal, m),
-/// rewire_factor. Works with OMPL's SimpleSetup and Benchmark: solve() grows the tree from
+/// rewire_factor, narrow_passage_bias (share of the random states drawn by OMPL's bridge test,
+/// which finds the midpoints of narrow passages that uniform sampling rarely hits; 0 = the
+/// paper's uniform sampling) and narrow_passage_spread (m, the bridge's standard deviation;
+/// 0 = δ). Works with OMPL's SimpleSetup and Benchmark: solve() grows the tree from
 /// the problem's start (or the current root), keeps growing across calls (anytime) until
 /// clear() or reset(), and reports the best solution so far.
 class OnlineRRTstar : public ompl::base::Planner {
@@ -88,8 +92,15 @@ class OnlineRRTstar : public ompl::base::Planner {
   double getGoalTolerance() const { return goal_tolerance_; }
   void setRewireFactor(double factor) { rewire_factor_ = factor; }
   double getRewireFactor() const { return rewire_factor_; }
+  void setNarrowPassageBias(double bias) { narrow_passage_bias_ = bias; }
+  double getNarrowPassageBias() const { return narrow_passage_bias_; }
+  void setNarrowPassageSpread(double spread);
+  double getNarrowPassageSpread() const { return narrow_passage_spread_; }
 
  private:
+  /// The random state of one iteration: the goal (goal_bias), a bridge-test state
+  /// (narrow_passage_bias, when the bridge test finds one) or a uniform state.
+  void sampleRandomState(ompl::base::State* random_state);
   /// Algorithm 2: nearest, steer by δ, check, choose parent, add, rewire. Null if trapped.
   Node* extend(const ompl::base::State* random_state);
   Node* addRoot(const ompl::base::State* state);
@@ -115,6 +126,7 @@ class OnlineRRTstar : public ompl::base::Planner {
 
   std::shared_ptr<ompl::NearestNeighbors<Node*>> nn_;
   ompl::base::StateSamplerPtr sampler_;
+  ompl::base::ValidStateSamplerPtr bridge_sampler_;
   ompl::RNG rng_;
   ompl::base::OptimizationObjectivePtr objective_;
   Node* root_ = nullptr;
@@ -125,6 +137,8 @@ class OnlineRRTstar : public ompl::base::Planner {
   double goal_bias_ = 0.05;
   double goal_tolerance_ = 1.0;
   double rewire_factor_ = 1.1;
+  double narrow_passage_bias_ = 0.0;
+  double narrow_passage_spread_ = 0.0;  ///< m; 0: range_
   /// bestCost() for the benchmark's progress thread (read without touching the tree).
   std::atomic<double> published_best_cost_{std::numeric_limits<double>::infinity()};
   double rrt_star_gamma_ = 0.0;  ///< RRT* radius constant, from the free-space measure

@@ -103,6 +103,15 @@ void PlanningComponent::configure(interfaces::Node& node) {
                               {"RRT* extension length (delta)", "m", 0.05, 100.0, {}, true});
   o.goal_bias = p.declare<double>("goal_bias", o.goal_bias,
                                   {"probability of sampling the goal", "", 0.0, 1.0, {}, true});
+  o.narrow_passage_bias = p.declare<double>(
+      "narrow_passage_bias", o.narrow_passage_bias,
+      {"share of random states drawn by OMPL's bridge test, which finds narrow passages "
+       "(gaps) that uniform sampling rarely hits; 0 = uniform only (the paper)",
+       "",
+       0.0,
+       1.0,
+       {},
+       true});
   o.rewire_factor = p.declare<double>("rewire_factor", o.rewire_factor,
                                       {"RRT* rewiring radius factor", "", 1.0, 10.0, {}, true});
   o.clearance.hull_radius =
@@ -168,6 +177,11 @@ void PlanningComponent::configure(interfaces::Node& node) {
   o.world_frame = p.declare<std::string>("world_frame", o.world_frame,
                                          {"frame of published poses (NED)", "", {}, {}, {}, true});
   o.clearance.check();
+  if (o.goal_bias + o.narrow_passage_bias > 1.0) {
+    throw PlanningConfigError("goal_bias + narrow_passage_bias must be <= 1 (got " +
+                              std::to_string(o.goal_bias) + " + " +
+                              std::to_string(o.narrow_passage_bias) + ")");
+  }
 
   replica_ = std::make_unique<mapping::MapReplica>(o.map_id, o.map_resolution);
   field_ = std::make_shared<ReplicaDistanceField>(o.map_resolution, o.max_distance);
@@ -402,6 +416,7 @@ void PlanningComponent::startQuery(const msg::PlannerQuery& query) {
     active->planner = std::make_shared<OnlineRRTstar>(active->si);
     active->planner->setRange(options_.range);
     active->planner->setGoalBias(options_.goal_bias);
+    active->planner->setNarrowPassageBias(options_.narrow_passage_bias);
     active->planner->setRewireFactor(options_.rewire_factor);
     active->planner->setGoalTolerance(query.goal_tolerance());
     active->planner->setProblemDefinition(active->pdef);

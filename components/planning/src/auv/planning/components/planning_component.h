@@ -48,8 +48,10 @@ class ReplicaDistanceField;
 class PlanningComponent : public interfaces::Component {
  public:
   struct Options {
-    double range = 2.0;              ///< m, δ: RRT* extension length, in [0.05, 100].
-    double goal_bias = 0.05;         ///< probability of sampling the goal, in [0, 1].
+    double range = 2.0;       ///< m, δ: RRT* extension length, in [0.05, 100].
+    double goal_bias = 0.05;  ///< probability of sampling the goal, in [0, 1].
+    /// share of the random states drawn by the bridge test (narrow passages), in [0, 1].
+    double narrow_passage_bias = 0.1;
     double rewire_factor = 1.1;      ///< RRT* rewiring radius factor, in [1, 10].
     ClearanceOptions clearance;      ///< hull_radius and safety_margin (m).
     double visibility_weight = 1.0;  ///< w of the Eq. (1) term, in [0, 100].
