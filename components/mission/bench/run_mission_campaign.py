@@ -13,7 +13,7 @@ to bench_results/mission_campaign_<stamp>.{md,json}.
 
   components/mission/bench/run_mission_campaign.py [--worlds canyon,breakwater,dead_end_bay]
       [--seeds 20] [--first-seed 1] [--real-time-factor 8] [--domain 45] [--keep-runs]
-      [--navigation drift|ideal]   # ideal: no drift, no noise (planner and mapping alone)
+      [--navigation drift|ideal] [--launch FILE]   # ideal: no drift or noise; FILE: vehicle.yaml
   components/mission/bench/run_mission_campaign.py --evaluate RUN_DIR...   # finished runs again
 """
 import argparse
