@@ -7,7 +7,6 @@
 
 #include <ompl/base/goals/GoalSampleableRegion.h>
 #include <ompl/base/objectives/PathLengthOptimizationObjective.h>
-#include <ompl/base/samplers/BridgeTestValidStateSampler.h>
 #include <ompl/base/spaces/RealVectorStateSpace.h>
 #include <ompl/geometric/PathGeometric.h>
 #include <ompl/tools/config/SelfConfig.h>
@@ -80,11 +79,6 @@ void OnlineRRTstar::setup() {
   rrt_star_gamma_ =
       std::pow(2.0 * (1.0 + 1.0 / d) * (measure / ompl::unitNBallMeasure(static_cast<unsigned>(d))),
                1.0 / d);
-}
-
-void OnlineRRTstar::setNarrowPassageSpread(double spread) {
-  narrow_passage_spread_ = spread;
-  bridge_sampler_.reset();  // made again with the new spread
 }
 
 void OnlineRRTstar::clear() {
@@ -172,10 +166,10 @@ void OnlineRRTstar::sampleRandomState(ob::State* random_state) {
   }
   if (draw < goal_bias_ + narrow_passage_bias_) {
     if (!bridge_sampler_) {
-      auto bridge = std::make_shared<ob::BridgeTestValidStateSampler>(si_.get());
-      bridge->setStdDev(narrow_passage_spread_ > 0.0 ? narrow_passage_spread_ : range_);
-      bridge_sampler_ = bridge;
+      bridge_sampler_ = std::make_shared<ob::BridgeTestValidStateSampler>(si_.get());
     }
+    // Set at each draw: range and spread may change after the sampler was made.
+    bridge_sampler_->setStdDev(narrow_passage_spread_ > 0.0 ? narrow_passage_spread_ : range_);
     // Where no passage is known (nothing invalid nearby) the test fails: sample uniformly.
     if (bridge_sampler_->sample(random_state)) return;
   }

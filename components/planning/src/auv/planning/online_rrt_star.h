@@ -12,7 +12,7 @@
 
 #include <ompl/base/OptimizationObjective.h>
 #include <ompl/base/Planner.h>
-#include <ompl/base/ValidStateSampler.h>
+#include <ompl/base/samplers/BridgeTestValidStateSampler.h>
 #include <ompl/datastructures/NearestNeighbors.h>
 #include <ompl/util/RandomNumbers.h>
 #include <Eigen/Geometry>
@@ -94,7 +94,7 @@ class OnlineRRTstar : public ompl::base::Planner {
   double getRewireFactor() const { return rewire_factor_; }
   void setNarrowPassageBias(double bias) { narrow_passage_bias_ = bias; }
   double getNarrowPassageBias() const { return narrow_passage_bias_; }
-  void setNarrowPassageSpread(double spread);
+  void setNarrowPassageSpread(double spread) { narrow_passage_spread_ = spread; }
   double getNarrowPassageSpread() const { return narrow_passage_spread_; }
 
  private:
@@ -126,7 +126,7 @@ class OnlineRRTstar : public ompl::base::Planner {
 
   std::shared_ptr<ompl::NearestNeighbors<Node*>> nn_;
   ompl::base::StateSamplerPtr sampler_;
-  ompl::base::ValidStateSamplerPtr bridge_sampler_;
+  std::shared_ptr<ompl::base::BridgeTestValidStateSampler> bridge_sampler_;
   ompl::RNG rng_;
   ompl::base::OptimizationObjectivePtr objective_;
   Node* root_ = nullptr;
