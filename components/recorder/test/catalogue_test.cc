@@ -246,10 +246,14 @@ TEST(Catalogue, ChangeReportedByTheChunkServerIsRecheckedByTheNextScan) {
   const std::string path = writeRecording(dir.path(), "left", 1, 1000, 2, 6);
   Catalogue catalogue({dir.path(), {".mp4"}});
   catalogue.scan();
+  EXPECT_FALSE(catalogue.changedProblem(path));
   catalogue.reportChanged(path, "changed since it was catalogued");
   EXPECT_FALSE(catalogue.servedFile(path));
+  EXPECT_EQ(catalogue.changedProblem(path), "changed since it was catalogued");
+  EXPECT_EQ(catalogue.changedProblem(path + ".frames.csv"), "changed since it was catalogued");
   catalogue.scan();  // same bytes after all: complete again
   ASSERT_TRUE(catalogue.servedFile(path));
+  EXPECT_FALSE(catalogue.changedProblem(path));
   EXPECT_TRUE(catalogue.list("", false)[0].problem.empty());
 }
 

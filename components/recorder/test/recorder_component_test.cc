@@ -198,6 +198,11 @@ TEST(RecorderComponent, TruncatedFileIsRejectedAndReportedOnTheFeed) {
   EXPECT_EQ(reply.status().code(), msg::REPLY_CODE_REJECTED);
   EXPECT_CONTAINS(reply.status().error_text(), "200000 -> 100000");
   EXPECT_TRUE(reply.data().empty());
+  // Chunks asked for after that (a puller keeps several in flight) are refused the same way,
+  // not answered "not found", which a puller would retry until its timeout.
+  const auto later = h.fetchChunk(path, 2000, 1000);
+  EXPECT_EQ(later.status().code(), msg::REPLY_CODE_REJECTED);
+  EXPECT_CONTAINS(later.status().error_text(), "changed");
   // The catalogue no longer lists it as complete, and says why.
   EXPECT_TRUE(h.listAll().recordings().empty());
   msg::RecordingInfo reported;

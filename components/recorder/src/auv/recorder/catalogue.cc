@@ -469,4 +469,14 @@ void Catalogue::reportChanged(const std::string& file_path, const std::string& w
   ++generation_;
 }
 
+std::optional<std::string> Catalogue::changedProblem(const std::string& file_path) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto it = recordings_.find(file_path);
+  if (it == recordings_.end() && endsWith(file_path, kSidecarSuffix)) {
+    it = recordings_.find(withoutSuffix(file_path, kSidecarSuffix));
+  }
+  if (it == recordings_.end() || !it->second.changed) return std::nullopt;
+  return it->second.problem;
+}
+
 }  // namespace auv::recorder

@@ -127,6 +127,9 @@ class Catalogue {
   /// The chunk server found `file_path` changed on disk: it stops being complete until a scan
   /// shows it unchanged again.
   void reportChanged(const std::string& file_path, const std::string& why);
+  /// Why `file_path` (a recording or its sidecar) is no longer served, if it changed after
+  /// being catalogued complete; nullopt otherwise.
+  std::optional<std::string> changedProblem(const std::string& file_path) const;
 
   const CatalogueOptions& options() const { return options_; }
 

@@ -206,6 +206,12 @@ void RecorderComponent::onFetch(const msg::FileChunkRequest& request, msg::FileC
     const auto served = catalogue_->servedFile(request.file_path());
     if (!served) {
       checkRelativePath(request.file_path());  // a malformed path is named as such
+      // Requests already in flight when the first one found the change get the same answer
+      // (not "not found", which a puller retries until its timeout).
+      if (auto why = catalogue_->changedProblem(request.file_path())) {
+        throw interfaces::ServiceError(msg::REPLY_CODE_REJECTED,
+                                       "file_path '" + request.file_path() + "': " + *why);
+      }
       throw ChunkError(ChunkError::Kind::NOT_FOUND,
                        "file_path '" + request.file_path() +
                            "': not a complete recording or sidecar in the catalogue");
