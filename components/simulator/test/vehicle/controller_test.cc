@@ -23,7 +23,9 @@ struct ClosedLoop {
     for (int i = 0; i < steps; ++i) {
       if (navigation) {
         const double altitude = seabed_depth > 0 ? seabed_depth - state.position.z() : -1.0;
-        controller.setNavigation(ControllerNavigation::fromState(state, altitude, t), t);
+        ControllerNavigation nav = ControllerNavigation::fromState(state, altitude, t);
+        if (filter) filter(nav);
+        controller.setNavigation(nav, t);
       }
       last = controller.update(t);
       for (double c : {last.port, last.starboard, last.vertical}) {
@@ -49,6 +51,7 @@ struct ClosedLoop {
   VehicleState state;
   ThrusterCommand last;
   double seabed_depth = -1;  // m; <= 0: altitude unknown
+  std::function<void(ControllerNavigation&)> filter;  // turns the truth into an estimate
   double t = 0;
 };
 
@@ -213,6 +216,28 @@ TEST(LowLevelControllerTest, IntegralActionRemovesAWrongBuoyancyModel) {
   ASSERT_TRUE(p_only.send(setpoint(1, 0.0, 3.0, 0.5)).accepted());
   p_only.run(60);
   EXPECT_NEAR(p_only.state.position.z(), 3.0 - 4.0 / proportional.depth_kp, 0.02);
+}
+
+TEST(LowLevelControllerTest, HeldVelocityWithoutDvlLockDoesNotDriveTheVehicleOff) {
+  // Cruising at 0.8 m/s, the DVL loses lock: the filter holds 0.8 m/s while the vehicle is
+  // asked to slow to 0.2 m/s.
+  auto slowDownWithHeldVelocity = [](bool flagged) {
+    ClosedLoop loop;
+    loop.state.position = {0, 0, 3};
+    EXPECT_TRUE(loop.send(setpoint(1, 0.0, 3.0, 0.8)).accepted());
+    loop.run(30);
+    loop.filter = [flagged](ControllerNavigation& nav) {
+      nav.surge = 0.8;
+      nav.velocity_measured = !flagged;
+    };
+    EXPECT_TRUE(loop.send(setpoint(2, 0.0, 3.0, 0.2)).accepted());
+    loop.run(20);
+    return loop.state.surge;
+  };
+  // Flagged: feed-forward alone brings it to the asked speed.
+  EXPECT_NEAR(slowDownWithHeldVelocity(true), 0.2, 0.05);
+  // Unflagged, the loop would brake against a speed that never drops: the vehicle reverses.
+  EXPECT_LT(slowDownWithHeldVelocity(false), -0.2);
 }
 
 TEST(LowLevelControllerTest, MaxDepthRaisesTheSafetyManoeuvreUntilCleared) {

@@ -222,6 +222,12 @@ void ControllerComponent::applyOdometry() {
   nav.yaw_rate = twist.angular().z();
   nav.altitude = odometry.altitude();
   nav.stamp = toSeconds(odometry.header().stamp());
+  // A source that fills no flags (0) is trusted as before; one that does says whether its
+  // velocity is measured (DVL lock) or the simulator's truth.
+  const uint32_t flags = odometry.source_flags();
+  nav.velocity_measured =
+      flags == 0 ||
+      (flags & (msg::ODOMETRY_SOURCE_DVL_VALID | msg::ODOMETRY_SOURCE_GROUND_TRUTH)) != 0;
   const double norm = orientation.coeffs().norm();
   // A zero quaternion (an unset orientation) has no yaw: treat it as a broken estimate.
   const bool orientation_ok = std::isfinite(norm) && std::abs(norm - 1.0) < 0.1;

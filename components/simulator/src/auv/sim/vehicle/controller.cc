@@ -446,8 +446,10 @@ ThrusterCommand LowLevelController::regulate(const Targets& targets, double dt) 
   const double heave_force = o.model.net_buoyancy + o.depth_kp * depth_error +
                              o.depth_ki * depth_integral_ - o.depth_kd * nav.heave;
 
-  const double speed_error = targets.surge_speed - nav.surge;
-  if (std::abs(speed_error) < kSurgeIntegralBand) {
+  // Without a measured velocity there is nothing to close the loop on: feed-forward, with the
+  // model correction learnt so far.
+  const double speed_error = nav.velocity_measured ? targets.surge_speed - nav.surge : 0.0;
+  if (nav.velocity_measured && std::abs(speed_error) < kSurgeIntegralBand) {
     surge_integral_ =
         clampIntegral(surge_integral_ + speed_error * dt, o.surge_ki, o.surge_integral_limit);
   }

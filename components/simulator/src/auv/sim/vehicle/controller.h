@@ -8,6 +8,7 @@
 //   heading  N = kp e + ki int(e) - kd r          e = wrap(target yaw - yaw), r = yaw rate
 //   depth    Z = B + kp e + ki int(e) - kd w      B = the model's net buoyancy (feed-forward)
 //   surge    X = D(u*) + kp (u* - u) + ki int(..) D = the model's surge drag at speed u*
+//            (D(u*) + ki int(..), integral frozen, while the velocity is not measured)
 // Integrals only accumulate near the setpoint and nearly at rest there (conditional
 // integration): they remove steady model errors without winding up during large manoeuvres. The yaw
 // moment has priority over surge when the horizontal pair saturates, so the vehicle turns first and
@@ -67,6 +68,11 @@ struct ControllerNavigation {
   double yaw_rate = 0.0;              ///< rad/s
   double altitude = -1.0;             ///< m above the seabed; < 0 = unknown
   double stamp = 0.0;                 ///< s, time of the estimate (informative only)
+  /// False while the filter holds the velocity instead of measuring it (DVL without bottom
+  /// lock). The surge loop then runs on its feed-forward alone: closed on a held velocity it
+  /// drives the vehicle off unseen (to slow down from a held 0.3 m/s it reverses, faster and
+  /// faster, while the estimate still says 0.3 m/s forward).
+  bool velocity_measured = true;
 
   /// A perfect estimate of `state` (ground truth).
   static ControllerNavigation fromState(const VehicleState& state, double altitude, double stamp);
