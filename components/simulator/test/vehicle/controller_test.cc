@@ -50,7 +50,7 @@ struct ClosedLoop {
   LowLevelController controller;
   VehicleState state;
   ThrusterCommand last;
-  double seabed_depth = -1;  // m; <= 0: altitude unknown
+  double seabed_depth = -1;                           // m; <= 0: altitude unknown
   std::function<void(ControllerNavigation&)> filter;  // turns the truth into an estimate
   double t = 0;
 };
