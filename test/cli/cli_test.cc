@@ -223,6 +223,29 @@ TEST(CliTest, RunHelpListsTheComponentsParametersWithTheirValues) {
   EXPECT_NE(bad.out.find("rate_hz"), std::string::npos) << bad.out;
 }
 
+// Every command answers -h/--help with its usage and exit 0, also from an environment without
+// install/setup.bash (the installed programs find their libraries by their own run path).
+TEST(CliTest, EveryCommandAnswersHelpWithoutTheWorkspaceEnvironment) {
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"--help", "usage: auv <command>"},
+      {"topic --help", "usage: auv topic"},
+      {"topic list -h", "usage: auv topic"},
+      {"node --help", "usage: auv node list"},
+      {"interface --help", "usage: auv interface"},
+      {"run --help", "demo_talker"},
+      {"launch --help", "usage: auv launch"},
+      {"sim --help", "usage: auv sim"},
+      {"mission --help", "usage: auv mission"},
+      {"recon --help", "usage: auv recon"},
+      {"recon pull --help", "usage: auv recon pull"},
+  };
+  for (const auto& [args, expected] : cases) {
+    const Result r = run("env -i PATH=/usr/bin:/bin", args);
+    EXPECT_EQ(r.exit_code, 0) << args << "\n" << r.out;
+    EXPECT_NE(r.out.find(expected), std::string::npos) << args << "\n" << r.out;
+  }
+}
+
 // `auv <command> <sub>` runs auv-<command>-<sub> where it exists (auv-recon-pull, a lean
 // program), else auv-<command> with <sub> as its first argument; options are never <sub>.
 TEST(CliTest, SubcommandProgramIsPreferredOverTheCommandProgram) {

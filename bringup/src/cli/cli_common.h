@@ -22,6 +22,7 @@ class CliError : public std::runtime_error {
 };
 
 /// Minimal argv parser: positional arguments plus `--flag`, `--option value` and `-x value`.
+/// `-h` and `--help` are accepted by every command (helpRequested()).
 class Args {
  public:
   Args(std::vector<std::string> args, std::vector<std::string> flags,
@@ -30,6 +31,7 @@ class Args {
   std::optional<std::string> option(const std::string& name) const;
   double number(const std::string& name, double fallback) const;
   const std::vector<std::string>& positional() const { return positional_; }
+  bool helpRequested() const { return help_; }
   /// The i-th positional argument; throws CliError naming `what` when missing.
   const std::string& at(size_t i, const std::string& what) const;
 
@@ -37,6 +39,7 @@ class Args {
   std::vector<std::string> positional_;
   std::vector<std::string> flags_set_;
   std::vector<std::pair<std::string, std::string>> options_set_;
+  bool help_ = false;
 };
 
 /// "/chatter" for "chatter" or "/chatter".

@@ -10,8 +10,12 @@ namespace auv::bringup {
 
 int nodeMain(const std::vector<std::string>& argv) {
   const Args args(argv, {"-a", "-v"}, {"--wait"});
-  if (args.positional().empty() || args.positional()[0] != "list")
-    throw CliError("usage: auv node list [-a] [-v] [--wait s]");
+  constexpr const char* kUsage = "usage: auv node list [-a] [-v] [--wait s]";
+  if (args.helpRequested()) {
+    std::cout << kUsage << "\n";
+    return 0;
+  }
+  if (args.positional().empty() || args.positional()[0] != "list") throw CliError(kUsage);
   interfaces::GraphInspector inspector(interfaces::vendorFromEnvironment(),
                                        interfaces::domainFromEnvironment());
   const auto snapshot = inspector.waitFor(
@@ -30,6 +34,11 @@ int nodeMain(const std::vector<std::string>& argv) {
 
 int interfaceMain(const std::vector<std::string>& argv) {
   const Args args(argv, {}, {});
+  constexpr const char* kUsage = "usage: auv interface list | auv interface show <type>";
+  if (args.helpRequested()) {
+    std::cout << kUsage << "\n";
+    return 0;
+  }
   const std::string command = args.positional().empty() ? "" : args.positional()[0];
   if (command == "list") {
     for (const auto& ts : msg::allTypes())
@@ -48,7 +57,7 @@ int interfaceMain(const std::vector<std::string>& argv) {
               << out.c_str() << "\n";
     return 0;
   }
-  throw CliError("usage: auv interface list | auv interface show <type>");
+  throw CliError(kUsage);
 }
 
 /// The component and node name of `component[:node_name]`.
@@ -84,7 +93,7 @@ int describeComponents(const std::vector<std::string>& items,
 }
 
 int runMain(const std::vector<std::string>& argv) {
-  const Args args(argv, {"--list", "--help", "-h"}, {"--params", "-p"});
+  const Args args(argv, {"--list"}, {"--params", "-p"});
   // Options may repeat: collect them in order from the raw arguments.
   interfaces::NodeOptions options;
   for (size_t i = 0; i + 1 < argv.size(); ++i) {
@@ -99,9 +108,9 @@ int runMain(const std::vector<std::string>& argv) {
     if (args.positional().empty() && !args.flag("--list"))
       std::cerr << "usage: auv run <component>[:<node_name>] ... [--params f.yaml]... "
                    "[-p name:=value]...\n       auv run <component> --help   # its parameters\n";
-    return args.flag("--list") ? 0 : 2;
+    return args.flag("--list") || args.helpRequested() ? 0 : 2;
   }
-  if (args.flag("--help") || args.flag("-h")) return describeComponents(args.positional(), options);
+  if (args.helpRequested()) return describeComponents(args.positional(), options);
   std::vector<interfaces::ComponentSpec> specs;
   for (const std::string& item : args.positional()) specs.push_back(parseSpec(item));
   return interfaces::runComponents(specs, options);

@@ -430,9 +430,9 @@ int topicMain(const std::vector<std::string>& argv) {
   const Args args(argv, {"-t", "-v", "--once", "--full"},
                   {"--wait", "--field", "--timeout", "--qos", "--window", "--duration", "--rate",
                    "--times", "--wait-matching"});
-  if (args.positional().empty()) {
+  if (args.positional().empty() || args.helpRequested()) {
     std::cout << kUsage;
-    return 2;
+    return args.helpRequested() ? 0 : 2;
   }
   const std::string& command = args.positional()[0];
   if (command == "list") return listTopics(args);
