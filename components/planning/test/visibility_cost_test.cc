@@ -88,33 +88,6 @@ TEST_F(VisibilityObjectiveTest, ZeroWeightIsPathLength) {
   EXPECT_NEAR(length_only.motionCost(from.get(), to.get()).value(), 5.0, 1e-9);
 }
 
-TEST_F(VisibilityObjectiveTest, UnknownSpaceCostsTheFactorMoreWhereTheMapHasNotSeenIt) {
-  // The map has seen the free half y in [-3, 0] of the line x = 6.25 (d = 4: density 1).
-  for (double y = -2.75; y < 0.0; y += testing::kResolution) {
-    world_.tree->updateNode(octomap::point3d(6.25, y, testing::FlatWorld::kDepth), false);
-  }
-  VisibilityObjectiveOptions options;
-  options.cost = costOptions();
-  options.unknown_cost_factor = 3.0;
-  VisibilityObjective objective(world_.si, world_.field, options);
-  const auto from = world_.state(6.25, -3.0);
-  const auto middle = world_.state(6.25, -0.5);
-  const auto to = world_.state(6.25, 3.0);
-  EXPECT_NEAR(objective.motionCost(from.get(), middle.get()).value(), 2.5, 1e-6);  // all seen
-  // 3 m seen, 3 m unknown (one 0.5 m integration step straddles the edge).
-  EXPECT_NEAR(objective.motionCost(from.get(), to.get()).value(), 3.0 + 3.0 * 3.0, 0.5);
-  EXPECT_NEAR(objective_->motionCost(from.get(), to.get()).value(), 6.0, 1e-6);  // factor 1
-  // Euclidean length stays an admissible heuristic.
-  EXPECT_NEAR(objective.motionCostHeuristic(from.get(), to.get()).value(), 6.0, 1e-9);
-  options.unknown_cost_factor = 0.5;  // would make unknown cheaper than seen, and the heuristic
-  try {
-    options.check();
-    ADD_FAILURE() << "accepted unknown_cost_factor 0.5";
-  } catch (const PlanningConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find("unknown_cost_factor"), std::string::npos) << e.what();
-  }
-}
-
 TEST(VisibilityObjectiveNarrowPassage, HighCostNeverMakesThePassageInvalid) {
   testing::FlatWorld world;
   // Wall at x = 10 with a 4 m gap at |y| < 2: the gap centre is ~2 m from the wall cells.

@@ -44,10 +44,6 @@ void OctomapDistanceField::update() {
   ++revision_;
 }
 
-bool OctomapDistanceField::known(const Eigen::Vector3d& position) const {
-  return tree_->search(position.x(), position.y(), position.z()) != nullptr;
-}
-
 double OctomapDistanceField::distance(const Eigen::Vector3d& position) const {
   for (int axis = 0; axis < 3; ++axis) {
     if (position[axis] < options_.min_corner[axis] || position[axis] > options_.max_corner[axis]) {

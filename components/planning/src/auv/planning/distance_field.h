@@ -37,9 +37,6 @@ class DistanceField {
   virtual double resolution() const = 0;
   /// Increases every time the field changes, so users can tell a stale check from a fresh one.
   virtual std::uint64_t revision() const = 0;
-  /// True where the map has observed the space (free or occupied); fields without a map of
-  /// what was seen answer true everywhere.
-  virtual bool known(const Eigen::Vector3d& /*position*/) const { return true; }
 };
 
 struct OctomapDistanceFieldOptions {
@@ -71,7 +68,6 @@ class OctomapDistanceField : public DistanceField {
   double maxDistance() const override { return options_.max_distance; }
   double resolution() const override;
   std::uint64_t revision() const override { return revision_; }
-  bool known(const Eigen::Vector3d& position) const override;
 
  private:
   octomap::OcTree* tree_;

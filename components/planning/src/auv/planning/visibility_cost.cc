@@ -42,10 +42,6 @@ void VisibilityObjectiveOptions::check() const {
   if (!std::isfinite(integration_step)) {
     throw PlanningConfigError("visibility objective: integration_step must be finite");
   }
-  if (!(unknown_cost_factor >= 1.0 && std::isfinite(unknown_cost_factor))) {
-    throw PlanningConfigError("visibility objective: unknown_cost_factor must be >= 1, got " +
-                              std::to_string(unknown_cost_factor));
-  }
 }
 
 Eigen::Vector3d statePosition(const ompl::base::State* state) {
@@ -65,11 +61,8 @@ VisibilityObjective::VisibilityObjective(const ompl::base::SpaceInformationPtr& 
 }
 
 double VisibilityObjective::costDensity(const Eigen::Vector3d& position) const {
-  const double density = 1.0 + options_.visibility_weight *
-                                   visibilityCost(field_->distance(position), options_.cost) /
-                                   kMaxVisibilityCost;
-  if (options_.unknown_cost_factor == 1.0 || field_->known(position)) return density;
-  return options_.unknown_cost_factor * density;
+  return 1.0 + options_.visibility_weight *
+                   visibilityCost(field_->distance(position), options_.cost) / kMaxVisibilityCost;
 }
 
 ompl::base::Cost VisibilityObjective::stateCost(const ompl::base::State* state) const {
@@ -82,9 +75,7 @@ ompl::base::Cost VisibilityObjective::motionCost(const ompl::base::State* from,
   const Eigen::Vector3d end = statePosition(to);
   const double length = (end - start).norm();
   if (length <= 0.0) return identityCost();
-  if (options_.visibility_weight == 0.0 && options_.unknown_cost_factor == 1.0) {
-    return ompl::base::Cost(length);
-  }
+  if (options_.visibility_weight == 0.0) return ompl::base::Cost(length);
   const int segments = std::max(1, static_cast<int>(std::ceil(length / step_)));
   double previous = costDensity(start);
   double integral = 0.0;

@@ -35,19 +35,14 @@ struct VisibilityObjectiveOptions {
   double visibility_weight = 1.0;
   /// m, integration step along a motion; <= 0 means the distance field resolution.
   double integration_step = 0.0;
-  /// Factor >= 1 on the cost of space the map has not observed. 1 (the paper): unknown space
-  /// costs what known free space costs, so a return trip may explore an unknown detour rather
-  /// than take the passage it came through. Validity is unchanged: unknown stays admissible.
-  double unknown_cost_factor = 1.0;
 
   void check() const;
 };
 
-/// Motion cost = ∫ u(s) (1 + w · Cost(d(s)) / 100) ds along the straight segment (trapezoid rule
-/// at `integration_step`), u = unknown_cost_factor where the map has not observed s, else 1. The
-/// integrand is >= 1, so Euclidean length is an admissible heuristic (used for motionCostHeuristic
-/// and the cost-to-go of goal regions). stateCost() returns the integrand at a state. Position =
-/// the first three coordinates of a RealVectorStateSpace.
+/// Motion cost = ∫ (1 + w · Cost(d(s)) / 100) ds along the straight segment (trapezoid rule at
+/// `integration_step`). The integrand is >= 1, so Euclidean length is an admissible heuristic
+/// (used for motionCostHeuristic and the cost-to-go of goal regions). stateCost() returns the
+/// integrand at a state. Position = the first three coordinates of a RealVectorStateSpace.
 class VisibilityObjective : public ompl::base::OptimizationObjective {
  public:
   VisibilityObjective(const ompl::base::SpaceInformationPtr& si,
@@ -60,7 +55,7 @@ class VisibilityObjective : public ompl::base::OptimizationObjective {
   ompl::base::Cost motionCostHeuristic(const ompl::base::State* from,
                                        const ompl::base::State* to) const override;
 
-  /// u·(1 + w·Cost(d)/100) at `position`.
+  /// 1 + w·Cost(d)/100 at `position`.
   double costDensity(const Eigen::Vector3d& position) const;
   const VisibilityObjectiveOptions& options() const { return options_; }
 

@@ -123,15 +123,6 @@ void PlanningComponent::configure(interfaces::Node& node) {
   o.visibility_weight = p.declare<double>(
       "visibility_weight", o.visibility_weight,
       {"weight w of the Eq. (1) visibility term (0: path length)", "", 0.0, 100.0, {}, true});
-  o.unknown_cost_factor = p.declare<double>(
-      "unknown_cost_factor", o.unknown_cost_factor,
-      {"cost factor of space the map has not observed, visibility objective (1: the paper, "
-       "unknown costs what known free space costs)",
-       "",
-       1.0,
-       100.0,
-       {},
-       true});
   o.fixed_depth =
       p.declare<bool>("fixed_depth", o.fixed_depth,
                       {"plan in the horizontal plane at the start depth even for 3-D queries",
@@ -409,7 +400,6 @@ void PlanningComponent::startQuery(const msg::PlannerQuery& query) {
       visibility.cost.expected_distance = query.expected_distance();
       visibility.cost.admissible_range = query.admissible_range();
       visibility.visibility_weight = options_.visibility_weight;
-      visibility.unknown_cost_factor = options_.unknown_cost_factor;
       visibility.check();
       objective = std::make_shared<VisibilityObjective>(active->si, field_, visibility);
     }

@@ -52,10 +52,9 @@ class PlanningComponent : public interfaces::Component {
     double goal_bias = 0.05;  ///< probability of sampling the goal, in [0, 1].
     /// share of the random states drawn by the bridge test (narrow passages), in [0, 1].
     double narrow_passage_bias = 0.1;
-    double rewire_factor = 1.1;        ///< RRT* rewiring radius factor, in [1, 10].
-    ClearanceOptions clearance;        ///< hull_radius and safety_margin (m).
-    double visibility_weight = 1.0;    ///< w of the Eq. (1) term, in [0, 100].
-    double unknown_cost_factor = 1.0;  ///< on unobserved space, in [1, 100] (1: the paper).
+    double rewire_factor = 1.1;      ///< RRT* rewiring radius factor, in [1, 10].
+    ClearanceOptions clearance;      ///< hull_radius and safety_margin (m).
+    double visibility_weight = 1.0;  ///< w of the Eq. (1) term, in [0, 100].
     /// true: plan in the horizontal plane even when a query asks for 3-D, at the query's
     /// start depth (the paper's 2-D profiler setup).
     bool fixed_depth = false;
