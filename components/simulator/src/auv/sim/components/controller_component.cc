@@ -207,30 +207,9 @@ void ControllerComponent::applyOdometry() {
     latest_odometry_.reset();
     arrival = latest_odometry_arrival_;
   }
-  const auto& pose = odometry.pose().pose();
-  const auto& q = pose.orientation();
-  const auto& twist = odometry.twist().twist();
-  const Eigen::Quaterniond orientation(q.w(), q.x(), q.y(), q.z());
-  ControllerNavigation nav;
-  nav.position = {pose.position().x(), pose.position().y(), pose.position().z()};
-  // Yaw of the body -> world rotation (ZYX Euler), whatever the small roll and pitch.
-  nav.yaw = std::atan2(2.0 * (q.w() * q.z() + q.x() * q.y()),
-                       1.0 - 2.0 * (q.y() * q.y() + q.z() * q.z()));
-  nav.surge = twist.linear().x();
-  nav.sway = twist.linear().y();
-  nav.heave = twist.linear().z();
-  nav.yaw_rate = twist.angular().z();
-  nav.altitude = odometry.altitude();
-  nav.stamp = toSeconds(odometry.header().stamp());
-  // A source that fills no flags (0) is trusted as before; one that does says whether its
-  // velocity is measured (DVL lock) or the simulator's truth.
-  const uint32_t flags = odometry.source_flags();
-  nav.velocity_measured =
-      flags == 0 ||
-      (flags & (msg::ODOMETRY_SOURCE_DVL_VALID | msg::ODOMETRY_SOURCE_GROUND_TRUTH)) != 0;
-  const double norm = orientation.coeffs().norm();
+  bool orientation_ok = false;
+  const ControllerNavigation nav = toControllerNavigation(odometry, orientation_ok);
   // A zero quaternion (an unset orientation) has no yaw: treat it as a broken estimate.
-  const bool orientation_ok = std::isfinite(norm) && std::abs(norm - 1.0) < 0.1;
   if (!orientation_ok || !controller_->setNavigation(nav, arrival)) {
     // Throttled: at 10-50 Hz a broken source would flood the log.
     if (bad_odometry_count_++ % 100 == 0) {
