@@ -11,11 +11,10 @@ Args::Args(std::vector<std::string> args, std::vector<std::string> flags,
   };
   for (size_t i = 0; i < args.size(); ++i) {
     const std::string& a = args[i];
-    if (is(flags, a)) {
-      flags_set_.push_back(a);
-      help_ = help_ || a == "-h" || a == "--help";
-    } else if (a == "-h" || a == "--help") {
+    if (a == "-h" || a == "--help") {
       help_ = true;
+    } else if (is(flags, a)) {
+      flags_set_.push_back(a);
     } else if (is(options, a)) {
       if (i + 1 >= args.size()) throw CliError("option " + a + " needs a value");
       options_set_.emplace_back(a, args[++i]);

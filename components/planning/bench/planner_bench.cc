@@ -11,6 +11,7 @@
 #include <functional>
 #include <iomanip>
 #include <iostream>
+#include <optional>
 #include <sstream>
 
 #include <ompl/base/PlannerTerminationCondition.h>
@@ -57,7 +58,7 @@ struct Args {
   bool fixed_depth = true;
   double expected_distance = 1.0;
   double admissible_range = 1.0;
-  double narrow_passage_bias = -1.0;  // < 0: the component's default
+  std::optional<double> narrow_passage_bias;  // unset: the component's default
   std::uint32_t seed = 1;
   std::string out;
 };
@@ -121,7 +122,7 @@ Args parseArgs(int argc, char** argv) {
       args.admissible_range = parseNumber(arg, value());
     } else if (arg == "--narrow-passage-bias") {
       args.narrow_passage_bias = parseNumber(arg, value());
-      if (!(args.narrow_passage_bias >= 0.0 && args.narrow_passage_bias <= 1.0)) {
+      if (!(*args.narrow_passage_bias >= 0.0 && *args.narrow_passage_bias <= 1.0)) {
         throw std::invalid_argument("--narrow-passage-bias: expected a number in [0, 1]");
       }
     } else if (arg == "--seed") {
@@ -276,7 +277,7 @@ int main(int argc, char** argv) {
   settings.fixed_depth = args.fixed_depth;
   settings.cost.expected_distance = args.expected_distance;
   settings.cost.admissible_range = args.admissible_range;
-  if (args.narrow_passage_bias >= 0.0) settings.narrow_passage_bias = args.narrow_passage_bias;
+  if (args.narrow_passage_bias) settings.narrow_passage_bias = *args.narrow_passage_bias;
   std::vector<double> checkpoints;
   for (double c : {0.1, 0.5}) {
     if (c < args.budget) checkpoints.push_back(c);

@@ -38,6 +38,16 @@ auto visibleFields(const Recording& r) {
 
 std::string shortDigest(const std::string& sha) { return sha.substr(0, 12); }
 
+// The recording `file_path` names: itself, or the recording of a sidecar's name.
+template <class Recordings>
+auto findRecordingOf(Recordings& recordings, const std::string& file_path) {
+  auto it = recordings.find(file_path);
+  if (it == recordings.end() && endsWith(file_path, kSidecarSuffix)) {
+    it = recordings.find(withoutSuffix(file_path, kSidecarSuffix));
+  }
+  return it;
+}
+
 }  // namespace
 
 std::optional<FileStamp> stampOf(const fs::path& path) {
@@ -453,10 +463,7 @@ std::optional<std::string> Catalogue::chunkDigest(const std::string& file_path,
 
 void Catalogue::reportChanged(const std::string& file_path, const std::string& why) {
   std::lock_guard<std::mutex> lock(mutex_);
-  auto it = recordings_.find(file_path);
-  if (it == recordings_.end() && endsWith(file_path, kSidecarSuffix)) {
-    it = recordings_.find(withoutSuffix(file_path, kSidecarSuffix));
-  }
+  auto it = findRecordingOf(recordings_, file_path);
   if (it == recordings_.end() || !it->second.complete) return;
   Recording& r = it->second;
   r.complete = false;
@@ -471,10 +478,7 @@ void Catalogue::reportChanged(const std::string& file_path, const std::string& w
 
 std::optional<std::string> Catalogue::changedProblem(const std::string& file_path) const {
   std::lock_guard<std::mutex> lock(mutex_);
-  auto it = recordings_.find(file_path);
-  if (it == recordings_.end() && endsWith(file_path, kSidecarSuffix)) {
-    it = recordings_.find(withoutSuffix(file_path, kSidecarSuffix));
-  }
+  const auto it = findRecordingOf(recordings_, file_path);
   if (it == recordings_.end() || !it->second.changed) return std::nullopt;
   return it->second.problem;
 }

@@ -130,7 +130,7 @@ ControllerNavigation toControllerNavigation(const msg::Odometry& odometry, bool&
   nav.velocity_measured =
       flags == 0 ||
       (flags & (msg::ODOMETRY_SOURCE_DVL_VALID | msg::ODOMETRY_SOURCE_GROUND_TRUTH)) != 0;
-  const double norm = std::sqrt(q.w() * q.w() + q.x() * q.x() + q.y() * q.y() + q.z() * q.z());
+  const double norm = Eigen::Quaterniond(q.w(), q.x(), q.y(), q.z()).coeffs().norm();
   orientation_ok = std::isfinite(norm) && std::abs(norm - 1.0) < 0.1;
   return nav;
 }
