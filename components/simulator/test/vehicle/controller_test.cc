@@ -240,6 +240,29 @@ TEST(LowLevelControllerTest, HeldVelocityWithoutDvlLockDoesNotDriveTheVehicleOff
   EXPECT_LT(slowDownWithHeldVelocity(false), -0.2);
 }
 
+TEST(LowLevelControllerTest, HeldHeaveWithoutDvlLockDoesNotPushTheVehicleOffItsDepth) {
+  // Holding 3 m, the DVL loses lock while the filter holds 0.2 m/s of heave (down): the depth
+  // itself is still measured.
+  auto worstDepthErrorWithHeldHeave = [](bool flagged) {
+    ClosedLoop loop;
+    loop.state.position = {0, 0, 3};
+    EXPECT_TRUE(loop.send(setpoint(1, 0.0, 3.0, 0.5)).accepted());
+    loop.run(30);
+    loop.filter = [flagged](ControllerNavigation& nav) {
+      nav.heave = 0.2;
+      nav.velocity_measured = !flagged;
+    };
+    double worst = 0;
+    loop.run(20, [&] { worst = std::max(worst, std::abs(loop.state.position.z() - 3.0)); });
+    return worst;
+  };
+  // Flagged: damped by the depth's own rate, it stays within centimetres.
+  EXPECT_LT(worstDepthErrorWithHeldHeave(true), 0.05);
+  // Unflagged, the damping pushes up against a descent that is not happening: kd / kp * 0.2 m/s
+  // = 0.4 m above the asked depth (the integral is frozen while the heave looks large).
+  EXPECT_GT(worstDepthErrorWithHeldHeave(false), 0.3);
+}
+
 TEST(LowLevelControllerTest, MaxDepthRaisesTheSafetyManoeuvreUntilCleared) {
   ControllerOptions options;
   options.max_depth = 10.0;

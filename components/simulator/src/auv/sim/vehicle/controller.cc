@@ -11,11 +11,12 @@ namespace {
 // Integrals only accumulate close to the setpoint and nearly at rest there (conditional
 // integration): they are for steady model errors, and integrating during the approach would
 // only add overshoot.
-constexpr double kHeadingIntegralBand = 0.1;   // rad
-constexpr double kYawRateIntegralBand = 0.03;  // rad/s
-constexpr double kDepthIntegralBand = 0.25;    // m
-constexpr double kHeaveIntegralBand = 0.03;    // m/s
-constexpr double kSurgeIntegralBand = 0.05;    // m/s
+constexpr double kHeadingIntegralBand = 0.1;    // rad
+constexpr double kYawRateIntegralBand = 0.03;   // rad/s
+constexpr double kDepthIntegralBand = 0.25;     // m
+constexpr double kHeaveIntegralBand = 0.03;     // m/s
+constexpr double kDepthRateTimeConstant = 0.3;  // s, low-pass of the depth's own rate
+constexpr double kSurgeIntegralBand = 0.05;     // m/s
 // Longest step the integrals take, so a stalled caller does not jolt them.
 constexpr double kMaxControlStep = 0.2;  // s
 
@@ -153,6 +154,13 @@ LowLevelController::LowLevelController(const ControllerOptions& options) : optio
 
 bool LowLevelController::setNavigation(const ControllerNavigation& navigation, double now) {
   if (!navigation.valid()) return false;
+  // The depth rate measured by the depth (pressure) itself, low-pass filtered: the depth loop's
+  // damping while the DVL has no lock, when the estimate's heave is a held value.
+  const double dt = navigation_ ? navigation.stamp - navigation_->stamp : 0.0;
+  if (dt > 0.0) {  // by the estimates' stamps: samples may arrive in bursts
+    const double rate = (navigation.position.z() - navigation_->position.z()) / dt;
+    depth_rate_ += dt / (kDepthRateTimeConstant + dt) * (rate - depth_rate_);
+  }
   navigation_ = navigation;
   navigation_time_ = now;
   status_.depth = navigation.position.z();
@@ -438,13 +446,15 @@ ThrusterCommand LowLevelController::regulate(const Targets& targets, double dt) 
       o.heading_kp * yaw_error + o.heading_ki * heading_integral_ - o.heading_kd * nav.yaw_rate;
 
   const double depth_error = targets.depth - nav.position.z();
-  if (std::abs(depth_error) < kDepthIntegralBand && std::abs(nav.heave) < kHeaveIntegralBand) {
+  // A held heave would be a constant push against the depth loop (an offset of kd/kp times it).
+  const double depth_rate = nav.velocity_measured ? nav.heave : depth_rate_;
+  if (std::abs(depth_error) < kDepthIntegralBand && std::abs(depth_rate) < kHeaveIntegralBand) {
     depth_integral_ =
         clampIntegral(depth_integral_ + depth_error * dt, o.depth_ki, o.depth_integral_limit);
   }
   // Buoyancy pushes up (-z): the vertical thruster holds it with as much force down.
   const double heave_force = o.model.net_buoyancy + o.depth_kp * depth_error +
-                             o.depth_ki * depth_integral_ - o.depth_kd * nav.heave;
+                             o.depth_ki * depth_integral_ - o.depth_kd * depth_rate;
 
   // Without a measured velocity there is nothing to close the loop on: feed-forward, with the
   // model correction learnt so far.

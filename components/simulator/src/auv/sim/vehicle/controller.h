@@ -239,6 +239,7 @@ class LowLevelController {
   double heading_integral_ = 0.0;  // rad s
   double depth_integral_ = 0.0;    // m s
   double surge_integral_ = 0.0;    // m
+  double depth_rate_ = 0.0;        // m/s, from successive depths (setNavigation)
 };
 
 }  // namespace auv::sim
