@@ -14,6 +14,7 @@ to bench_results/mission_campaign_<stamp>.{md,json}.
   components/mission/bench/run_mission_campaign.py [--worlds canyon,breakwater,dead_end_bay]
       [--seeds 20] [--first-seed 1] [--real-time-factor 8] [--domain 45] [--keep-runs]
       [--navigation drift|ideal] [--launch FILE]   # ideal: no drift or noise; FILE: vehicle.yaml
+      [--launch-arg NAME:=VALUE]...   # e.g. map_resolution:=0.25
   components/mission/bench/run_mission_campaign.py --evaluate RUN_DIR...   # finished runs again
 """
 import argparse
@@ -187,6 +188,7 @@ def run_mission(world, seed, args, runs_dir):
     command = [find_program("auv"), "launch", args.launch, f"world:={scenario}", f"seed:={seed}",
                "auto_mission:=true", f"real_time_factor:={args.real_time_factor}",
                f"domain:={args.domain}", f"run_dir:={run_dir}", f"objective:={args.objective}"]
+    command += args.launch_arg
     started = time.monotonic()
     with open(os.path.join(runs_dir, f"{world}-{seed}.log"), "w") as log:
         try:
@@ -278,6 +280,9 @@ def main():
                         help="drift: the simulator's defaults; ideal: no drift or noise")
     parser.add_argument("--launch", default=LAUNCH,
                         help="the vehicle's launch file (default: bringup/launch/vehicle.yaml)")
+    parser.add_argument("--launch-arg", action="append", default=[], metavar="NAME:=VALUE",
+                        help="another argument of the launch file, e.g. map_resolution:=0.25 "
+                             "(repeatable)")
     parser.add_argument("--keep-runs", action="store_true", help="keep the run folders")
     parser.add_argument("--seed-major", action="store_true",
                         help="run seed by seed across the worlds (default: world by world)")
@@ -304,7 +309,8 @@ def main():
     setup = (f"{os.path.relpath(args.launch, ROOT)}, auto_mission, objective {args.objective}, "
              f"real_time_factor {args.real_time_factor}, navigation "
              + ("drift on (simulator defaults)" if args.navigation == "drift" else
-                "ideal (no drift, no noise)"))
+                "ideal (no drift, no noise)")
+             + "".join(f", {a}" for a in args.launch_arg))
     for world, seed in order:
         run_dir, code, wall, summary = run_mission(world, seed, args, runs_dir)
         row = {"world": world, "seed": seed, "exit": code, "wall_s": round(wall, 1)}
