@@ -1,7 +1,8 @@
 // Where callbacks run and how the executor is woken: subscriptions with
 // CallbackThread::MIDDLEWARE deliver in the vendor's thread without any executor, executor-mode
 // subscriptions still run on the executor's thread, and a node's waker wakes its executor on
-// every notification (not only the first). Real DDS on loopback, both vendors; domains 70..79.
+// every notification (not only the first), and a backlog is taken in bounded batches. Real DDS
+// on loopback, both vendors; domains 70..79 and 124..125.
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -302,6 +303,59 @@ TEST_P(NodeWakerTest, EverySampleWakesTheForwardTarget) {
   }
   reader_node.waker()->forwardTo(nullptr);
 }
+
+// A backlog on one topic is taken a bounded batch per executor round: the node's other
+// subscriptions (and timers, and other nodes of the executor) run in between, and the backlog
+// still arrives whole and in order.
+class ExecutorFairnessTest : public testing::TestWithParam<Vendor> {};
+
+TEST_P(ExecutorFairnessTest, ABacklogDoesNotHoldUpOtherSubscriptions) {
+  const int domain = 124 + (GetParam() == Vendor::FASTDDS ? 1 : 0);
+  constexpr int kBacklog = 200;  // < bulk_transfer's 256: no write blocks while nobody takes
+  Node writer_node("flooder", optionsFor(GetParam(), domain));
+  Node reader_node("busy", optionsFor(GetParam(), domain));
+  std::vector<std::string> flood;
+  std::vector<std::string> other;
+  auto flood_sub = reader_node.createSubscription<msg::String>(
+      "/dispatch/flood", bulkTransferQos(),
+      std::function<void(const msg::String&)>(
+          [&](const msg::String& m) { flood.push_back(m.data()); }));
+  auto other_sub = reader_node.createSubscription<msg::String>(
+      "/dispatch/other", commandQos(),
+      std::function<void(const msg::String&)>(
+          [&](const msg::String& m) { other.push_back(m.data()); }));
+  auto flood_pub = writer_node.createPublisher<msg::String>("/dispatch/flood", bulkTransferQos());
+  auto other_pub = writer_node.createPublisher<msg::String>("/dispatch/other", commandQos());
+  const auto deadline = Clock::now() + 10s;
+  while (flood_pub->matchedSubscriptions() == 0 || other_pub->matchedSubscriptions() == 0 ||
+         flood_sub->matchedPublishers() == 0 || other_sub->matchedPublishers() == 0) {
+    ASSERT_LT(Clock::now(), deadline) << "no match";
+    std::this_thread::sleep_for(10ms);
+  }
+  for (int i = 0; i < kBacklog; ++i) flood_pub->publish(text(std::to_string(i)));
+  other_pub->publish(text("meanwhile"));
+  // Acknowledged: every sample is in the reader's history before the executor's first round.
+  ASSERT_TRUE(flood_pub->waitForAcknowledgments(10.0));
+  ASSERT_TRUE(other_pub->waitForAcknowledgments(10.0));
+
+  reader_node.executeReady();
+  EXPECT_EQ(other, std::vector<std::string>{"meanwhile"});
+  EXPECT_GT(flood.size(), 0u);
+  EXPECT_LT(flood.size(), static_cast<size_t>(kBacklog)) << "one round took the whole backlog";
+
+  const auto until = Clock::now() + 10s;
+  while (flood.size() < static_cast<size_t>(kBacklog) && Clock::now() < until) {
+    reader_node.executeReady();
+  }
+  ASSERT_EQ(flood.size(), static_cast<size_t>(kBacklog));
+  for (int i = 0; i < kBacklog; ++i) EXPECT_EQ(flood[i], std::to_string(i));
+}
+
+INSTANTIATE_TEST_SUITE_P(Vendors, ExecutorFairnessTest,
+                         testing::Values(Vendor::CYCLONEDDS, Vendor::FASTDDS),
+                         [](const testing::TestParamInfo<Vendor>& info) {
+                           return toString(info.param);
+                         });
 
 INSTANTIATE_TEST_SUITE_P(Vendors, NodeWakerTest,
                          testing::Values(Vendor::CYCLONEDDS, Vendor::FASTDDS),

@@ -44,20 +44,26 @@ class Subscription : public Waitable {
         ready_(callback_thread == CallbackThread::EXECUTOR) {}
   /// Called by the node once the reader exists.
   void attach(std::unique_ptr<DataReader> reader) { reader_ = std::move(reader); }
+  /// Samples one execute() takes at most. A flooded topic must not hold up the rest of the
+  /// executor's work (timers, services, the other components composed in the process) for a
+  /// whole backlog; what is left is taken on the executor's next round, without waiting.
+  static constexpr int kMaxSamplesPerExecute = 32;
+
   /// Set from a middleware thread when data arrives (executor mode). Returns true if it was
   /// not ready yet: only then does the executor need a wake-up (a ready subscription is
-  /// already due to be executed, and execute() takes everything available).
+  /// already due to be executed, and stays ready until a take finds nothing).
   bool markReady() { return !ready_.exchange(true); }
 
-  /// Executor mode: takes everything available and calls back, on the executor's thread.
+  /// Executor mode: takes up to kMaxSamplesPerExecute samples and calls back, on the
+  /// executor's thread.
   bool execute() override {
     if (!ready_.exchange(false)) return false;
-    takeAll(*reader_);
+    if (take(*reader_, kMaxSamplesPerExecute)) ready_ = true;  // there may be more
     return true;
   }
   /// Middleware mode: called by the vendor's listener (never concurrently for one reader:
   /// both vendors serialize listener calls per reader); takes and calls back right there.
-  void onData(DataReader& reader) { takeAll(reader); }
+  void onData(DataReader& reader) { take(reader, -1); }
 
   /// Publishers currently matched, of both vendors.
   int matchedPublishers() const { return reader_->matchedWriters(); }
@@ -66,18 +72,24 @@ class Subscription : public Waitable {
   CallbackThread callbackThread() const { return callback_thread_; }
 
  private:
-  void takeAll(DataReader& reader) {
+  /// Takes and calls back until nothing is left or `limit` samples were taken (< 0: no
+  /// limit); returns true if it stopped at the limit.
+  bool take(DataReader& reader, int limit) {
     SampleInfo info;
     // One message reused: deserialization overwrites every field, and keeping its buffers
     // saves an allocation per sample (measured in docs/performance.md).
-    while (reader.take(&message_, &info)) callback_(message_, info);
+    for (int taken = 0; taken != limit; ++taken) {
+      if (!reader.take(&message_, &info)) return false;
+      callback_(message_, info);
+    }
+    return true;
   }
 
   std::string topic_;
   QosProfile qos_;
   Callback callback_;
   CallbackThread callback_thread_;
-  T message_;  // reused by takeAll(), which only ever runs on one thread at a time
+  T message_;  // reused by take(), which only ever runs on one thread at a time
   // Executor mode starts ready: a transient-local history may be waiting at creation.
   std::atomic<bool> ready_;
   std::unique_ptr<DataReader> reader_;  // last: destroyed first, before what its callback uses
