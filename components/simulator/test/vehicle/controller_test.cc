@@ -218,18 +218,25 @@ TEST(LowLevelControllerTest, IntegralActionRemovesAWrongBuoyancyModel) {
   EXPECT_NEAR(p_only.state.position.z(), 3.0 - 4.0 / proportional.depth_kp, 0.02);
 }
 
+// Cruises 30 s at 3 m depth and `speed`, then the DVL loses lock: from then on `hold` writes
+// the filter's held velocity into the estimate, flagged as held (not measured) if `flagged`.
+void cruiseThenLoseDvlLock(ClosedLoop& loop, double speed, bool flagged,
+                           std::function<void(ControllerNavigation&)> hold) {
+  loop.state.position = {0, 0, 3};
+  EXPECT_TRUE(loop.send(setpoint(1, 0.0, 3.0, speed)).accepted());
+  loop.run(30);
+  loop.filter = [flagged, hold](ControllerNavigation& nav) {
+    hold(nav);
+    nav.velocity_measured = !flagged;
+  };
+}
+
 TEST(LowLevelControllerTest, HeldVelocityWithoutDvlLockDoesNotDriveTheVehicleOff) {
   // Cruising at 0.8 m/s, the DVL loses lock: the filter holds 0.8 m/s while the vehicle is
   // asked to slow to 0.2 m/s.
   auto slowDownWithHeldVelocity = [](bool flagged) {
     ClosedLoop loop;
-    loop.state.position = {0, 0, 3};
-    EXPECT_TRUE(loop.send(setpoint(1, 0.0, 3.0, 0.8)).accepted());
-    loop.run(30);
-    loop.filter = [flagged](ControllerNavigation& nav) {
-      nav.surge = 0.8;
-      nav.velocity_measured = !flagged;
-    };
+    cruiseThenLoseDvlLock(loop, 0.8, flagged, [](ControllerNavigation& nav) { nav.surge = 0.8; });
     EXPECT_TRUE(loop.send(setpoint(2, 0.0, 3.0, 0.2)).accepted());
     loop.run(20);
     return loop.state.surge;
@@ -245,13 +252,7 @@ TEST(LowLevelControllerTest, HeldHeaveWithoutDvlLockDoesNotPushTheVehicleOffItsD
   // itself is still measured.
   auto worstDepthErrorWithHeldHeave = [](bool flagged) {
     ClosedLoop loop;
-    loop.state.position = {0, 0, 3};
-    EXPECT_TRUE(loop.send(setpoint(1, 0.0, 3.0, 0.5)).accepted());
-    loop.run(30);
-    loop.filter = [flagged](ControllerNavigation& nav) {
-      nav.heave = 0.2;
-      nav.velocity_measured = !flagged;
-    };
+    cruiseThenLoseDvlLock(loop, 0.5, flagged, [](ControllerNavigation& nav) { nav.heave = 0.2; });
     double worst = 0;
     loop.run(20, [&] { worst = std::max(worst, std::abs(loop.state.position.z() - 3.0)); });
     return worst;
