@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -1003,6 +1004,31 @@ TEST(LaunchMainTest, BadInputGivesOneErrorLine) {
     const std::string usage = ::testing::internal::GetCapturedStderr();
     EXPECT_EQ(lines(usage).size(), 1u) << usage;
     EXPECT_THAT(usage, AllOf(StartsWith("auv launch: "), HasSubstr("usage: auv launch")));
+  }
+}
+
+// The mapping's resolution and the one planning and mission accept must agree, or both reject
+// every map update: vehicle.yaml sets all three from one argument.
+TEST(ShippedLaunchTest, VehicleGivesEveryMapReaderTheMappingsResolution) {
+  const std::string file = std::string(AUV_SHIPPED_LAUNCH_DIR) + "/vehicle.yaml";
+  for (const char* resolution : {"", "0.25"}) {
+    SCOPED_TRACE(resolution);
+    std::map<std::string, std::string> arguments;
+    if (*resolution) arguments["map_resolution"] = resolution;
+    const LaunchDescription launch = parseLaunchFile(file, arguments);
+    std::map<std::string, double> seen;  // node -> the resolution it builds or expects
+    for (const ProcessDescription& process : launch.processes) {
+      for (const ComponentDescription& c : process.components) {
+        const char* key = c.component == "mapping" ? "resolution" : "map_resolution";
+        if (c.component == "mapping" || c.component == "planning" || c.component == "mission") {
+          ASSERT_TRUE(c.parameters[key]) << c.node_name << " has no " << key;
+          seen[c.node_name] = c.parameters[key].as<double>();
+        }
+      }
+    }
+    const double expected = *resolution ? 0.25 : 0.5;
+    EXPECT_EQ(seen, (std::map<std::string, double>{
+                        {"mapping", expected}, {"planning", expected}, {"mission", expected}}));
   }
 }
 
