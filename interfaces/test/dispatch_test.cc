@@ -51,6 +51,17 @@ msg::String text(const std::string& data) {
   return m;
 }
 
+// True once the writer and the reader see each other (within 10 s).
+template <class T>
+bool matchedBothWays(const Publisher<T>& pub, const Subscription<T>& sub) {
+  const auto deadline = Clock::now() + 10s;
+  while (pub.matchedSubscriptions() == 0 || sub.matchedPublishers() == 0) {
+    if (Clock::now() >= deadline) return false;
+    std::this_thread::sleep_for(10ms);
+  }
+  return true;
+}
+
 // What a middleware callback saw; filled from vendor threads, read by the test thread.
 class Received {
  public:
@@ -113,11 +124,7 @@ TEST_P(MiddlewareDispatchTest, DeliversWithoutAnyExecutor) {
       std::function<void(const msg::String&)>([&](const msg::String& m) { got.add(m.data()); }),
       middleware());
   auto pub = writer_node.createPublisher<msg::String>("/dispatch/chatter", commandQos());
-  const auto deadline = Clock::now() + 10s;
-  while (pub->matchedSubscriptions() == 0 || sub->matchedPublishers() == 0) {
-    ASSERT_LT(Clock::now(), deadline) << "no match";
-    std::this_thread::sleep_for(10ms);
-  }
+  ASSERT_TRUE(matchedBothWays(*pub, *sub));
   // Reliable and matched both ways: each sample arrives; repeat a few so the callback runs
   // more than once.
   for (int i = 0; i < 5; ++i) pub->publish(text("sample " + std::to_string(i)));
@@ -279,11 +286,7 @@ TEST_P(NodeWakerTest, EverySampleWakesTheForwardTarget) {
   auto target = std::make_shared<Waker>();
   reader_node.waker()->forwardTo(target);
   auto pub = writer_node.createPublisher<msg::String>("/dispatch/wake", commandQos());
-  const auto deadline = Clock::now() + 10s;
-  while (pub->matchedSubscriptions() == 0 || sub->matchedPublishers() == 0) {
-    ASSERT_LT(Clock::now(), deadline) << "no match";
-    std::this_thread::sleep_for(10ms);
-  }
+  ASSERT_TRUE(matchedBothWays(*pub, *sub));
   reader_node.executeReady();  // the subscription starts ready (transient-local history)
   pendingNow(*target);
   for (int i = 0; i < 3; ++i) {
@@ -326,12 +329,8 @@ TEST_P(ExecutorFairnessTest, ABacklogDoesNotHoldUpOtherSubscriptions) {
           [&](const msg::String& m) { other.push_back(m.data()); }));
   auto flood_pub = writer_node.createPublisher<msg::String>("/dispatch/flood", bulkTransferQos());
   auto other_pub = writer_node.createPublisher<msg::String>("/dispatch/other", commandQos());
-  const auto deadline = Clock::now() + 10s;
-  while (flood_pub->matchedSubscriptions() == 0 || other_pub->matchedSubscriptions() == 0 ||
-         flood_sub->matchedPublishers() == 0 || other_sub->matchedPublishers() == 0) {
-    ASSERT_LT(Clock::now(), deadline) << "no match";
-    std::this_thread::sleep_for(10ms);
-  }
+  ASSERT_TRUE(matchedBothWays(*flood_pub, *flood_sub));
+  ASSERT_TRUE(matchedBothWays(*other_pub, *other_sub));
   for (int i = 0; i < kBacklog; ++i) flood_pub->publish(text(std::to_string(i)));
   other_pub->publish(text("meanwhile"));
   // Acknowledged: every sample is in the reader's history before the executor's first round.
