@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cstdio>
 #include <cstdlib>
@@ -11,6 +12,17 @@
 #include <stdexcept>
 
 namespace auv::interfaces {
+
+int DataReader::takeBatch(void* scratch, int max, const SampleVisitor& visit) {
+  // One sample at a time: a visit that throws leaves the rest untaken in the reader.
+  SampleInfo info;
+  int taken = 0;
+  while (taken < std::min(max, kMaxBatch) && take(scratch, &info)) {
+    ++taken;
+    visit(scratch, info);
+  }
+  return taken;
+}
 
 std::string toString(Vendor vendor) {
   return vendor == Vendor::CYCLONEDDS ? "cyclonedds" : "fastdds";

@@ -58,6 +58,19 @@ class DataReader {
   virtual ~DataReader() = default;
   /// Takes the next valid sample into `sample`; false when none is left.
   virtual bool take(void* sample, SampleInfo* info) = 0;
+  /// Called by takeBatch() for each sample with data, in order. `sample` is only valid
+  /// during the call.
+  using SampleVisitor = std::function<void(const void* sample, const SampleInfo& info)>;
+  /// Takes up to `max` samples (at most kMaxBatch) and visits those with data; returns how
+  /// many it took, 0 when none was left. `scratch` is a sample of the reader's type a vendor
+  /// may deserialize into. Vendors whose reader lock is contended by their own delivery
+  /// thread take the whole batch under one lock (docs/performance.md,
+  /// "Keep-all streams", item 5).
+  /// If a visit throws, the batch's remaining samples are still visited, then the first
+  /// exception is rethrown: samples already taken are never lost.
+  virtual int takeBatch(void* scratch, int max, const SampleVisitor& visit);
+  /// Largest batch: Fast DDS's default max_samples_per_read.
+  static constexpr int kMaxBatch = 32;
   /// Number of currently matched writers (both vendors).
   virtual int matchedWriters() const = 0;
   virtual Guid guid() const = 0;
