@@ -56,7 +56,9 @@ QosProfile mapQos() {
   QosProfile q;
   q.name = "map";
   q.durability = Durability::TRANSIENT_LOCAL;
-  q.depth = 1;
+  // 2: a FULL map goes out right behind the increment of the same version, and a reader that
+  // had only the FULL left (keep last 1) would have to read and rebuild what it already holds.
+  q.depth = 2;
   return q;
 }
 

@@ -1,7 +1,8 @@
 // MapBuilder against analytic expectations: a beam at a wall at known range, a no-return beam,
 // exact replication through incremental diffs, .bt round trip and snapshots; the .ot writer
-// against OctoMap's.
+// against OctoMap's; a MapReplica's choice of which FULL maps to read.
 #include "auv/mapping/map_builder.h"
+#include "auv/mapping/map_replica.h"
 #include "auv/mapping/ot_stream.h"
 
 #include <gtest/gtest.h>
@@ -250,6 +251,43 @@ TEST(MapBuilderTest, IncrementalDiffsReproduceTheMapExactly) {
   builder.tree().writeBinaryConst(ours);
   replica.writeBinaryConst(theirs);
   EXPECT_EQ(ours.str(), theirs.str());
+}
+
+msg::OctomapUpdate fullUpdate(const MapBuilder& builder, uint64_t sequence, int32_t stamp_s) {
+  msg::OctomapUpdate update;
+  update.map_id("octomap");
+  update.resolution(kResolution);
+  update.kind(msg::OCTOMAP_UPDATE_FULL);
+  update.encoding(msg::OCTOMAP_ENCODING_FULL);
+  update.sequence_number(sequence);
+  update.header().stamp().sec(stamp_s);
+  const std::string data = builder.fullWithProbabilities();
+  update.data(std::vector<uint8_t>(data.begin(), data.end()));
+  return update;
+}
+
+TEST(MapReplicaTest, SkipsOnlyTheFullMapOfTheVersionItHolds) {
+  MapBuilder builder;
+  BeamGeometry beam;
+  beam.direction = beamDirection(0.0);
+  beam.max_range = 20.0;
+  beam.return_range = 8.2;
+  builder.insertBeam(beam, sensorAt({0.1, 0.2, 0.3}, 0.0));
+  MapReplica replica("octomap", kResolution);
+  EXPECT_EQ(replica.apply(fullUpdate(builder, 1, 5)), MapReplica::Outcome::APPLIED);
+  const octomap::OcTree* held = &replica.tree();
+  EXPECT_EQ(replica.apply(fullUpdate(builder, 1, 5)), MapReplica::Outcome::UNCHANGED);
+  EXPECT_EQ(&replica.tree(), held) << "the tree held must stay, not be read again";
+  // Same number, other stamp: a restarted mapper's version 1, not ours.
+  EXPECT_EQ(replica.apply(fullUpdate(builder, 1, 6)), MapReplica::Outcome::APPLIED);
+  // After a lost increment even the version held is read again: the copy may be off.
+  msg::OctomapUpdate increment = fullUpdate(builder, 3, 7);
+  increment.kind(msg::OCTOMAP_UPDATE_INCREMENTAL);
+  increment.base_sequence(2);
+  EXPECT_EQ(replica.apply(increment), MapReplica::Outcome::GAP);
+  EXPECT_EQ(replica.apply(fullUpdate(builder, 1, 6)), MapReplica::Outcome::APPLIED);
+  EXPECT_FALSE(replica.needsFullMap());
+  EXPECT_TRUE(isOccupied(replica.tree(), 8.25, 0.25, 0.25));
 }
 
 TEST(MapBuilderTest, ApplyDiffExpandsCoarseLeaves) {

@@ -4,6 +4,7 @@
 // Each test on its own domain id (80..89).
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 #include <filesystem>
 #include <memory>
@@ -12,6 +13,7 @@
 
 #include "auv/interfaces/executor.h"
 #include "auv/mapping/components/mapping_component.h"
+#include "auv/mapping/map_replica.h"
 
 namespace auv::mapping {
 namespace {
@@ -225,6 +227,74 @@ TEST(MappingComponentTest, SaveWritesLoadableBtAndClearEmptiesTheMap) {
   EXPECT_EQ(mapping.builder().tree().size(), 0u);
   mapping.deactivate();
   std::filesystem::remove_all(directory);
+}
+
+// The periodic FULL map repeats the version of the update before it, so a reader that followed
+// every increment skips it (no parse, no rebuild of what depends on the map) and still holds
+// the mapper's exact map; a clear makes a new version, which the reader does take.
+TEST(MappingComponentTest, AReplicaInStepSkipsThePeriodicFullMapButNotAClear) {
+  constexpr int kDomain = 84;
+  Node mapping_node("mapping", nodeOptions(Vendor::FASTDDS, kDomain,
+                                           {"update_rate:=20.0", "full_map_period:=0.3"}));
+  Node feeder_node("feeder", nodeOptions(Vendor::FASTDDS, kDomain));
+  Node reader_node("planner", nodeOptions(Vendor::CYCLONEDDS, kDomain));
+  MappingComponent mapping;
+  mapping.configure(mapping_node);
+  MapReplica replica("octomap", 0.5);
+  int full_applied = 0;
+  int full_skipped = 0;
+  auto subscription = reader_node.createSubscription<msg::OctomapUpdate>(
+      "map/update", interfaces::mapQos(),
+      std::function<void(const msg::OctomapUpdate&)>([&](const msg::OctomapUpdate& u) {
+        const MapReplica::Outcome outcome = replica.apply(u);
+        if (u.kind() != msg::OCTOMAP_UPDATE_FULL) return;
+        full_applied += outcome == MapReplica::Outcome::APPLIED;
+        full_skipped += outcome == MapReplica::Outcome::UNCHANGED;
+      }));
+  Feeder feeder(feeder_node);
+  interfaces::Executor executor;
+  executor.add(mapping_node);
+  executor.add(feeder_node);
+  executor.add(reader_node);
+  mapping.activate();
+  // Beams keep changing the map meanwhile: each FULL follows an increment of its changes.
+  ASSERT_TRUE(executor.spinUntil([&] { return full_skipped >= 3; }, 20s))
+      << "FULL maps applied " << full_applied << ", skipped " << full_skipped;
+  feeder.stop();
+  ASSERT_TRUE(executor.spinUntil(
+      [&] {
+        return mapping.builder().pendingChangeCount() == 0 &&
+               replica.sequence() == mapping.sequenceNumber();
+      },
+      20s));
+  EXPECT_LE(full_applied, 2) << "the first FULL, and one more if it crossed the first increments";
+  const octomap::OcTree& built = mapping.builder().tree();
+  ASSERT_GT(built.getNumLeafNodes(), 10u);
+  EXPECT_EQ(replica.tree().getNumLeafNodes(), built.getNumLeafNodes());
+  for (auto it = built.begin_leafs(); it != built.end_leafs(); ++it) {
+    const octomap::OcTreeNode* copy = replica.tree().search(it.getKey());
+    ASSERT_NE(copy, nullptr) << it.getCoordinate();
+    EXPECT_EQ(copy->getLogOdds(), it->getLogOdds()) << it.getCoordinate();
+  }
+
+  auto clear = reader_node.createClient<msg::TriggerRequest, msg::TriggerReply>("map/clear");
+  const int applied_before_clear = full_applied;
+  std::atomic<bool> called{false};
+  interfaces::CallStatus clear_status = interfaces::CallStatus::TIMEOUT;
+  std::thread caller([&] {  // the call blocks; this thread keeps spinning the components
+    msg::TriggerReply cleared;
+    clear_status = clear->call(msg::TriggerRequest(), &cleared, 10s);
+    called = true;
+  });
+  const bool cleared = executor.spinUntil(
+      [&] { return called && full_applied > applied_before_clear && replica.tree().size() == 0; },
+      15s);
+  caller.join();
+  ASSERT_EQ(clear_status, interfaces::CallStatus::OK);
+  EXPECT_TRUE(cleared) << "the cleared map was skipped: the replica still holds "
+                       << replica.tree().getNumLeafNodes() << " leaves";
+  EXPECT_EQ(replica.sequence(), mapping.sequenceNumber());
+  mapping.deactivate();
 }
 
 TEST(MappingComponentTest, InconsistentProbabilitiesAreRefused) {

@@ -41,7 +41,8 @@ struct QosProfile {
 QosProfile sensorDataQos();
 /// Vehicle state (odometry, status): reliable, volatile, keep last 1, 0.5 s deadline.
 QosProfile stateQos();
-/// Map updates: reliable, transient local, keep last 1 per instance (late joiners get the map).
+/// Map updates: reliable, transient local, keep last 2 per instance (late joiners get the map;
+/// a FULL map and the increment of the same version both reach a reader).
 QosProfile mapQos();
 /// Commands and queries: reliable, volatile, keep last 10, never dropped silently.
 QosProfile commandQos();

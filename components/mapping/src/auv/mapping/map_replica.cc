@@ -4,6 +4,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "auv/interfaces/msg_time.h"
 #include "auv/mapping/map_builder.h"
 
 namespace auv::mapping {
@@ -35,9 +36,16 @@ MapReplica::Outcome MapReplica::apply(const msg::OctomapUpdate& update) {
     return Outcome::REJECTED;
   }
   try {
+    const int64_t stamp_ns = interfaces::toNanoseconds(update.header().stamp());
     if (update.kind() == msg::OCTOMAP_UPDATE_FULL) {
+      // The stamp tells a restarted mapper's version of the same number from ours.
+      if (!needs_full_ && sequence_ != 0 && update.sequence_number() == sequence_ &&
+          stamp_ns == stamp_ns_) {
+        return Outcome::UNCHANGED;
+      }
       tree_ = readFullMap(update);
       sequence_ = update.sequence_number();
+      stamp_ns_ = stamp_ns;
       needs_full_ = false;
       return Outcome::APPLIED;
     }
@@ -51,6 +59,7 @@ MapReplica::Outcome MapReplica::apply(const msg::OctomapUpdate& update) {
     }
     MapBuilder::applyDiff(std::string(update.data().begin(), update.data().end()), *tree_);
     sequence_ = update.sequence_number();
+    stamp_ns_ = stamp_ns;
     return Outcome::APPLIED;
   } catch (const std::exception& error) {
     needs_full_ = true;

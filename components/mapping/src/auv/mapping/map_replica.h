@@ -1,6 +1,8 @@
 #pragma once
 // A reader's copy of the mapping component's map, kept from `map/update`: FULL replaces it,
-// INCREMENTAL applies a diff when it continues the copy's version. A diff that does not
+// unless it is the version the copy holds (same sequence number and stamp: the mapper sends a
+// FULL as the version of the update before it); INCREMENTAL applies a diff when it continues
+// the copy's version. A diff that does not
 // continue it (a lost update) leaves the copy as it was and marks it stale until the next FULL
 // arrives (the reader may ask for one with `map/request_full`).
 
@@ -17,10 +19,11 @@ namespace auv::mapping {
 class MapReplica {
  public:
   enum class Outcome {
-    APPLIED,   ///< the copy is now at update.sequence_number
-    IGNORED,   ///< another map_id, or a kind/encoding this reader does not use
-    GAP,       ///< an increment that does not continue the copy: needs a FULL map
-    REJECTED,  ///< unreadable data or another resolution (see error()); the copy is unchanged
+    APPLIED,    ///< the copy is now at update.sequence_number
+    UNCHANGED,  ///< a FULL map of the version the copy holds already: not read
+    IGNORED,    ///< another map_id, or a kind/encoding this reader does not use
+    GAP,        ///< an increment that does not continue the copy: needs a FULL map
+    REJECTED,   ///< unreadable data or another resolution (see error()); the copy is unchanged
   };
 
   /// Follows the map `map_id` with leaves of `resolution` m.
@@ -45,6 +48,7 @@ class MapReplica {
   double resolution_;
   std::unique_ptr<octomap::OcTree> tree_;
   uint64_t sequence_ = 0;
+  int64_t stamp_ns_ = 0;  // of the update that made the version held
   bool needs_full_ = false;
   std::string error_;
 };

@@ -134,6 +134,7 @@ void MappingComponent::configure(interfaces::Node& node) {
         builder_->clear();
         builder_->takeSnapshot();
         full_due_ = true;  // an increment cannot express deletions
+        map_replaced_ = true;
         reply.message("cleared " + std::to_string(leaves) + " leaves");
       });
   full_srv_ = node.createService<msg::TriggerRequest, msg::TriggerReply>(
@@ -232,8 +233,8 @@ void MappingComponent::tick() {
   const int64_t now_ns = node_->clock().nowNs();
   if (readers > matched_readers_) {
     // A late joiner needs the whole map. The writer may see the reader before the reader sees
-    // the writer; the reader then gets only the newest sample of the transient-local history,
-    // so keep the FULL the newest sample for late_joiner_hold.
+    // the writer; the reader then gets only the newest samples of the transient-local
+    // history, so keep the FULL the newest sample for late_joiner_hold.
     full_due_ = true;
     hold_increments_until_ns_ = now_ns + static_cast<int64_t>(options_.late_joiner_hold * 1e9);
   }
@@ -253,7 +254,7 @@ void MappingComponent::tick() {
 }
 
 void MappingComponent::fillCommon(msg::OctomapUpdate& update) const {
-  update.header().stamp(interfaces::toMsgTime(newest_stamp_ns_));
+  update.header().stamp(interfaces::toMsgTime(version_stamp_ns_));
   update.header().frame_id(options_.world_frame);
   update.map_id(options_.map_id);
   update.tree_type(builder_->tree().getTreeType());
@@ -263,10 +264,21 @@ void MappingComponent::fillCommon(msg::OctomapUpdate& update) const {
 }
 
 void MappingComponent::publishFull() {
-  builder_->takeDiff();  // the full map includes every pending change
+  // A FULL map is the version of the update before it: readers that followed every increment
+  // hold it already and skip it (map_replica.h) instead of parsing it and rebuilding what
+  // depends on the map. So pending changes go out as an increment first. A cleared map is a
+  // new map, and a new version.
+  if (map_replaced_) {
+    builder_->takeDiff();
+    ++sequence_number_;
+    version_stamp_ns_ = newest_stamp_ns_;
+    map_replaced_ = false;
+  } else if (builder_->pendingChangeCount() > 0) {
+    publishIncrement();
+  }
   msg::OctomapUpdate update;
   fillCommon(update);
-  update.sequence_number(++sequence_number_);
+  update.sequence_number(sequence_number_);
   update.base_sequence(0);
   update.kind(msg::OCTOMAP_UPDATE_FULL);
   double x0, y0, z0, x1, y1, z1;
@@ -286,6 +298,7 @@ void MappingComponent::publishFull() {
 
 void MappingComponent::publishIncrement() {
   const MapBuilder::Diff diff = builder_->takeDiff();
+  version_stamp_ns_ = newest_stamp_ns_;
   msg::OctomapUpdate update;
   fillCommon(update);
   update.base_sequence(sequence_number_);

@@ -18,10 +18,13 @@ namespace auv::mapping {
 /// `map/update` (map profile: reliable, transient local); serves `map/save` (SaveMapRequest),
 /// `map/clear` and `map/request_full` (Trigger).
 ///
-/// Late joiners: the transient-local history (keep last 1) holds only the latest update, which
-/// may be an increment they cannot apply; so a FULL also goes out on the first tick after the
-/// number of matched readers grows, and stays the latest sample for late_joiner_hold. FULLs
-/// also go out at start, every full_map_period, after map/clear and on map/request_full.
+/// Late joiners: the transient-local history (keep last 2) holds only the latest updates,
+/// which may be increments they cannot apply; so a FULL also goes out on the first tick after
+/// the number of matched readers grows, and stays the latest sample for late_joiner_hold. FULLs
+/// also go out at start, every full_map_period, after map/clear and on map/request_full. A
+/// FULL is the version (sequence number and stamp) of the update before it, pending changes
+/// going out first as an increment, so readers that hold that version skip it (MapReplica);
+/// only a clear makes a FULL a new version.
 class MappingComponent : public interfaces::Component {
  public:
   struct Options {
@@ -87,7 +90,9 @@ class MappingComponent : public interfaces::Component {
   int64_t newest_stamp_ns_ = 0;           // newest measurement in the map
   int64_t last_full_ns_ = 0;              // node clock at the last FULL
   int64_t hold_increments_until_ns_ = 0;  // node clock; see Options::late_joiner_hold
-  bool full_due_ = true;  // FULL on the next tick (start, clear, request, new reader)
+  bool full_due_ = true;          // FULL on the next tick (start, clear, request, new reader)
+  int64_t version_stamp_ns_ = 0;  // newest data in the version published last (its stamp)
+  bool map_replaced_ = true;      // no version published yet of the map as it is (start, clear)
   int matched_readers_ = 0;
   uint64_t beams_inserted_ = 0;
   uint64_t beams_dropped_ = 0;
