@@ -1,15 +1,13 @@
 #include "supervisor.h"
 
+#include "child_process.h"
 #include "process_command.h"
+#include "process_state_guard.h"
 
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
-#include <spawn.h>
 #include <sys/wait.h>
-#ifdef __linux__
-#include <sys/prctl.h>
-#endif
 
 #include <algorithm>
 #include <cerrno>
@@ -30,37 +28,8 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
-constexpr size_t kReadChunk = 64 * 1024;      // bytes read from a child pipe per poll round
-constexpr size_t kMaxLineLength = 64 * 1024;  // longer partial lines are flushed as they are
-constexpr int kStartFailedExitCode = 127;     // like a shell's "command not found"
-constexpr unsigned char kRequestByte = 0;     // wake byte of requestShutdown()
-constexpr int kLostStatusExitCode = 255;      // a child reaped by someone else
-
-// Signal handlers only see globals: the write end of the running Supervisor's self-pipe.
-std::atomic<int> g_wake_fd{-1};
-std::atomic<bool> g_supervisor_running{false};
-
-void onSignal(int signal_number) {
-  const int saved_errno = errno;
-  const int fd = g_wake_fd.load();
-  if (fd >= 0) {
-    const auto byte = static_cast<unsigned char>(signal_number);
-    [[maybe_unused]] const ssize_t written = write(fd, &byte, 1);
-  }
-  errno = saved_errno;
-}
-
-std::string signalName(int signal_number) {
-  static constexpr std::pair<int, const char*> kNames[] = {
-      {SIGHUP, "SIGHUP"},   {SIGINT, "SIGINT"},   {SIGQUIT, "SIGQUIT"}, {SIGILL, "SIGILL"},
-      {SIGTRAP, "SIGTRAP"}, {SIGABRT, "SIGABRT"}, {SIGBUS, "SIGBUS"},   {SIGFPE, "SIGFPE"},
-      {SIGKILL, "SIGKILL"}, {SIGUSR1, "SIGUSR1"}, {SIGSEGV, "SIGSEGV"}, {SIGUSR2, "SIGUSR2"},
-      {SIGPIPE, "SIGPIPE"}, {SIGALRM, "SIGALRM"}, {SIGTERM, "SIGTERM"}, {SIGCHLD, "SIGCHLD"}};
-  for (const auto& [number, name] : kNames) {
-    if (number == signal_number) return name;
-  }
-  return "signal " + std::to_string(signal_number);
-}
+constexpr int kStartFailedExitCode = 127;  // like a shell's "command not found"
+constexpr int kLostStatusExitCode = 255;   // a child reaped by someone else
 
 Clock::duration toDuration(double seconds) {
   return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
@@ -72,95 +41,6 @@ std::string formatSeconds(double seconds) {
   out << seconds << " s";
   return out.str();
 }
-
-// Writes everything, retrying on EINTR and waiting out EAGAIN; drops data on other errors
-// (e.g. EPIPE when the reader of our output went away: supervision must go on).
-void writeAll(int fd, const std::string& data) {
-  size_t done = 0;
-  while (done < data.size()) {
-    const ssize_t n = write(fd, data.data() + done, data.size() - done);
-    if (n > 0) {
-      done += static_cast<size_t>(n);
-    } else if (n < 0 && errno == EINTR) {
-      continue;
-    } else if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) {
-      pollfd pfd{fd, POLLOUT, 0};
-      if (poll(&pfd, 1, 1000) <= 0) return;
-    } else {
-      return;
-    }
-  }
-}
-
-void closeFd(int& fd) {
-  if (fd >= 0) close(fd);
-  fd = -1;
-}
-
-// Restores signal dispositions and the subreaper flag when run() ends, however it ends.
-class ProcessStateGuard {
- public:
-  ProcessStateGuard(int wake_fd, bool handle_signals, bool subreaper) {
-    if (g_supervisor_running.exchange(true)) {
-      throw std::runtime_error("Supervisor: another Supervisor is already running");
-    }
-    g_wake_fd.store(wake_fd);
-    install(SIGCHLD, SA_RESTART | SA_NOCLDSTOP);
-    if (handle_signals) {
-      for (int signal_number : {SIGINT, SIGTERM, SIGHUP}) install(signal_number, SA_RESTART);
-    }
-    struct sigaction ignore {};
-    ignore.sa_handler = SIG_IGN;
-    sigemptyset(&ignore.sa_mask);
-    saved_.emplace_back(SIGPIPE, sigaction_t{});
-    sigaction(SIGPIPE, &ignore, &saved_.back().second);
-    // Unblock what we handle, in case the caller blocked it.
-    sigset_t handled;
-    sigemptyset(&handled);
-    for (const auto& entry : saved_) sigaddset(&handled, entry.first);
-    pthread_sigmask(SIG_UNBLOCK, &handled, &saved_mask_);
-#ifdef __linux__
-    if (subreaper && prctl(PR_GET_CHILD_SUBREAPER, &saved_subreaper_) == 0 &&
-        prctl(PR_SET_CHILD_SUBREAPER, 1) == 0) {
-      subreaper_set_ = true;
-    }
-#else
-    (void)subreaper;
-#endif
-  }
-
-  ~ProcessStateGuard() {
-#ifdef __linux__
-    if (subreaper_set_) prctl(PR_SET_CHILD_SUBREAPER, saved_subreaper_);
-#endif
-    pthread_sigmask(SIG_SETMASK, &saved_mask_, nullptr);
-    for (auto it = saved_.rbegin(); it != saved_.rend(); ++it) {
-      sigaction(it->first, &it->second, nullptr);
-    }
-    g_wake_fd.store(-1);
-    g_supervisor_running.store(false);
-  }
-
-  ProcessStateGuard(const ProcessStateGuard&) = delete;
-  ProcessStateGuard& operator=(const ProcessStateGuard&) = delete;
-
- private:
-  using sigaction_t = struct sigaction;
-
-  void install(int signal_number, int flags) {
-    struct sigaction action {};
-    action.sa_handler = onSignal;
-    action.sa_flags = flags;
-    sigemptyset(&action.sa_mask);
-    saved_.emplace_back(signal_number, sigaction_t{});
-    sigaction(signal_number, &action, &saved_.back().second);
-  }
-
-  std::vector<std::pair<int, sigaction_t>> saved_;
-  sigset_t saved_mask_{};
-  int saved_subreaper_ = 0;
-  bool subreaper_set_ = false;
-};
 
 // Folder for generated params files, removed with everything in it on destruction.
 class TempDir {
@@ -191,13 +71,6 @@ class TempDir {
 
 enum class State { RUNNING, WAITING_RESTART, FINISHED };
 
-// One child pipe and its not yet complete last line.
-struct Stream {
-  int fd = -1;
-  int target_fd = -1;
-  std::string partial;
-};
-
 // Run-time state of one launch process.
 struct Child {
   const ProcessDescription* process = nullptr;
@@ -206,8 +79,8 @@ struct Child {
   std::string program;                   // argv[0] resolved in the child's PATH
   State state = State::FINISHED;
   pid_t pid = -1;
-  Stream out;
-  Stream err;
+  OutputStream out;
+  OutputStream err;
   bool stop_sent = false;  // the current run got a shutdown signal
   Clock::time_point restart_at;
   long finish_order = -1;  // order in which processes finished for good
@@ -314,62 +187,18 @@ class Run {
       startFailed(child, "program '" + child.command.argv[0] + "' not found in PATH");
       return;
     }
-    int out_pipe[2];
-    int err_pipe[2];
-    if (pipe2(out_pipe, O_CLOEXEC) != 0) throw std::runtime_error("Supervisor: pipe failed");
-    if (pipe2(err_pipe, O_CLOEXEC) != 0) {
-      close(out_pipe[0]);
-      close(out_pipe[1]);
-      throw std::runtime_error("Supervisor: pipe failed");
-    }
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
-    posix_spawn_file_actions_adddup2(&actions, out_pipe[1], STDOUT_FILENO);
-    posix_spawn_file_actions_adddup2(&actions, err_pipe[1], STDERR_FILENO);
-#if defined(__GLIBC__) && (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 34))
-    posix_spawn_file_actions_addclosefrom_np(&actions, STDERR_FILENO + 1);
-#endif
-    posix_spawnattr_t attributes;
-    posix_spawnattr_init(&attributes);
-    posix_spawnattr_setflags(
-        &attributes, POSIX_SPAWN_SETPGROUP | POSIX_SPAWN_SETSIGDEF | POSIX_SPAWN_SETSIGMASK);
-    posix_spawnattr_setpgroup(&attributes, 0);
-    sigset_t all_signals;
-    sigset_t no_signals;
-    sigfillset(&all_signals);
-    sigemptyset(&no_signals);
-    posix_spawnattr_setsigdefault(&attributes, &all_signals);  // undo inherited SIG_IGN
-    posix_spawnattr_setsigmask(&attributes, &no_signals);
-
-    std::vector<char*> argv;
-    for (std::string& arg : child.command.argv) argv.push_back(arg.data());
-    argv.push_back(nullptr);
-    std::vector<char*> envp;
-    for (std::string& entry : child.environment) envp.push_back(entry.data());
-    envp.push_back(nullptr);
-
-    pid_t pid = -1;
-    const int error =
-        posix_spawn(&pid, child.program.c_str(), &actions, &attributes, argv.data(), envp.data());
-    posix_spawn_file_actions_destroy(&actions);
-    posix_spawnattr_destroy(&attributes);
-    close(out_pipe[1]);
-    close(err_pipe[1]);
-    if (error != 0) {
-      close(out_pipe[0]);
-      close(err_pipe[0]);
-      startFailed(child, child.program + ": " + std::strerror(error));
+    const SpawnedChild spawned =
+        spawnInOwnGroup(child.program, child.command.argv, child.environment);
+    if (spawned.error != 0) {
+      startFailed(child, child.program + ": " + std::strerror(spawned.error));
       return;
     }
-    fcntl(out_pipe[0], F_SETFL, fcntl(out_pipe[0], F_GETFL) | O_NONBLOCK);
-    fcntl(err_pipe[0], F_SETFL, fcntl(err_pipe[0], F_GETFL) | O_NONBLOCK);
-    child.out = Stream{out_pipe[0], options_.stdout_fd, ""};
-    child.err = Stream{err_pipe[0], options_.stderr_fd, ""};
-    child.pid = pid;
+    child.out = OutputStream{spawned.stdout_fd, options_.stdout_fd, ""};
+    child.err = OutputStream{spawned.stderr_fd, options_.stderr_fd, ""};
+    child.pid = spawned.pid;
     child.state = State::RUNNING;
-    child.report.pids.push_back(pid);
-    log("started " + child.process->name + " (pid " + std::to_string(pid) + ")");
+    child.report.pids.push_back(spawned.pid);
+    log("started " + child.process->name + " (pid " + std::to_string(spawned.pid) + ")");
   }
 
   void startFailed(Child& child, const std::string& why) {
@@ -439,11 +268,11 @@ class Run {
         remaining.count() <= 0 ? 0 : static_cast<int>((remaining.count() + 999) / 1000);
 
     std::vector<pollfd> fds;
-    std::vector<Stream*> streams;
+    std::vector<OutputStream*> streams;
     fds.push_back({wake_fd_, POLLIN, 0});
     streams.push_back(nullptr);
     for (Child& child : children_) {
-      for (Stream* stream : {&child.out, &child.err}) {
+      for (OutputStream* stream : {&child.out, &child.err}) {
         if (stream->fd < 0) continue;
         fds.push_back({stream->fd, POLLIN, 0});
         streams.push_back(stream);
@@ -454,12 +283,12 @@ class Run {
     if (fds[0].revents & POLLIN) handleWakeBytes();
     for (size_t i = 1; i < fds.size(); ++i) {
       if (fds[i].revents & (POLLIN | POLLHUP | POLLERR)) {
-        readStream(*streams[i], prefixOf(*streams[i]));
+        readAvailable(*streams[i], prefixOf(*streams[i]));
       }
     }
   }
 
-  std::string prefixOf(const Stream& stream) const {
+  std::string prefixOf(const OutputStream& stream) const {
     for (const Child& child : children_) {
       if (&child.out == &stream || &child.err == &stream) return "[" + child.process->name + "] ";
     }
@@ -483,8 +312,8 @@ class Run {
     while ((n = read(wake_fd_, bytes, sizeof(bytes))) > 0) {
       for (ssize_t i = 0; i < n; ++i) {
         if (bytes[i] == SIGCHLD) continue;  // exits are collected by reapChildren()
-        const std::string what =
-            bytes[i] == kRequestByte ? std::string("shutdown request") : signalName(bytes[i]);
+        const std::string what = bytes[i] == kShutdownRequestByte ? std::string("shutdown request")
+                                                                  : signalName(bytes[i]);
         if (!shutting_down_) {
           log("received " + what + "; stopping " + std::to_string(runningCount()) +
               " process(es): SIGINT, SIGTERM after " + formatSeconds(launch_.shutdown_timeout) +
@@ -495,52 +324,6 @@ class Run {
           escalate();
         }
       }
-    }
-  }
-
-  void readStream(Stream& stream, const std::string& prefix) {
-    char buffer[kReadChunk];
-    const ssize_t n = read(stream.fd, buffer, sizeof(buffer));
-    if (n > 0) {
-      stream.partial.append(buffer, static_cast<size_t>(n));
-      emitLines(stream, prefix, /*flush=*/false);
-    } else if (n == 0 || (errno != EINTR && errno != EAGAIN && errno != EWOULDBLOCK)) {
-      emitLines(stream, prefix, /*flush=*/true);
-      closeFd(stream.fd);
-    }
-  }
-
-  // Reads whatever is buffered in the pipe without waiting, then flushes and closes it.
-  void drainAndClose(Stream& stream, const std::string& prefix) {
-    char buffer[kReadChunk];
-    while (stream.fd >= 0) {
-      const ssize_t n = read(stream.fd, buffer, sizeof(buffer));
-      if (n > 0) {
-        stream.partial.append(buffer, static_cast<size_t>(n));
-        emitLines(stream, prefix, /*flush=*/false);
-      } else if (n < 0 && errno == EINTR) {
-        continue;
-      } else {
-        break;
-      }
-    }
-    emitLines(stream, prefix, /*flush=*/true);
-    closeFd(stream.fd);
-  }
-
-  // Writes complete lines as "<prefix><line>\n", one write per line.
-  static void emitLines(Stream& stream, const std::string& prefix, bool flush) {
-    size_t begin = 0;
-    while (true) {
-      const size_t newline = stream.partial.find('\n', begin);
-      if (newline == std::string::npos) break;
-      writeAll(stream.target_fd, prefix + stream.partial.substr(begin, newline - begin + 1));
-      begin = newline + 1;
-    }
-    stream.partial.erase(0, begin);
-    if (!stream.partial.empty() && (flush || stream.partial.size() >= kMaxLineLength)) {
-      writeAll(stream.target_fd, prefix + stream.partial + "\n");
-      stream.partial.clear();
     }
   }
 
@@ -803,7 +586,7 @@ Supervisor::~Supervisor() {
 }
 
 void Supervisor::requestShutdown() {
-  const unsigned char byte = kRequestByte;
+  const unsigned char byte = kShutdownRequestByte;
   [[maybe_unused]] const ssize_t written = write(wake_pipe_[1], &byte, 1);
 }
 
