@@ -1032,6 +1032,23 @@ TEST(ShippedLaunchTest, VehicleGivesEveryMapReaderTheMappingsResolution) {
   }
 }
 
+TEST(ShippedLaunchTest, VehicleGivesTheMappingItsInitialMap) {
+  const std::string file = std::string(AUV_SHIPPED_LAUNCH_DIR) + "/vehicle.yaml";
+  for (const char* initial_map : {"", "maps/site.bt"}) {
+    SCOPED_TRACE(initial_map);
+    std::map<std::string, std::string> arguments;
+    if (*initial_map) arguments["initial_map"] = initial_map;
+    const LaunchDescription launch = parseLaunchFile(file, arguments);
+    std::string given = "(no mapping)";
+    for (const ProcessDescription& process : launch.processes) {
+      for (const ComponentDescription& c : process.components) {
+        if (c.component == "mapping") given = c.parameters["initial_map"].as<std::string>();
+      }
+    }
+    EXPECT_EQ(given, initial_map);
+  }
+}
+
 TEST(LaunchMainTest, RunsTheLaunchAndReturnsItsExitCode) {
   ScratchDir dir;
   const std::string file =

@@ -8,6 +8,8 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <fstream>
+#include <iterator>
 #include <map>
 #include <random>
 #include <sstream>
@@ -345,6 +347,56 @@ TEST(MapBuilderTest, SavedBtLoadsBackWithTheSameOccupancy) {
   EXPECT_EQ(copy.str(), builder.fullBinary());
   EXPECT_FALSE(builder.save("/nonexistent-dir/x.bt"));
   std::remove(path.c_str());
+}
+
+// An earlier mission's map as the start of the next: load() gives the saved map exactly, with
+// nothing pending and a snapshot of it; a file it cannot take leaves the map as it was.
+TEST(MapBuilderTest, LoadStartsFromASavedMapAndRefusesFilesItCannotTake) {
+  MapBuilder earlier;
+  BeamGeometry beam;
+  for (int i = 0; i < 36; ++i) {
+    beam.direction = beamDirection(i * M_PI / 18);
+    beam.return_range = 7.0 + 0.1 * i;
+    earlier.insertBeam(beam, sensorAt({0.1, 0.1, 0.1}, 0));
+  }
+  const std::string path = testing::TempDir() + "map_builder_load_test.bt";
+  ASSERT_TRUE(earlier.save(path));
+
+  MapBuilder next;
+  next.enableChangeTracking(true);
+  next.load(path);
+  EXPECT_EQ(next.fullBinary(), earlier.fullBinary());
+  EXPECT_TRUE(isOccupied(next.tree(), 7.25, 0.25, 0.25));
+  EXPECT_EQ(next.pendingChangeCount(), 0u);
+  EXPECT_EQ(next.snapshot()->getNumLeafNodes(), next.tree().getNumLeafNodes());
+
+  const auto refused = [](MapBuilder& builder, const std::string& file, const std::string& why) {
+    const std::string before = builder.fullBinary();
+    try {
+      builder.load(file);
+      ADD_FAILURE() << file << " was loaded";
+    } catch (const std::runtime_error& error) {
+      EXPECT_NE(std::string(error.what()).find(file), std::string::npos) << error.what();
+      EXPECT_NE(std::string(error.what()).find(why), std::string::npos) << error.what();
+    }
+    EXPECT_EQ(builder.fullBinary(), before);
+  };
+  MapBuilder::Options finer;
+  finer.resolution = 0.25;
+  MapBuilder other_resolution(finer);
+  refused(other_resolution, path, "resolution 0.5");
+
+  std::string bytes;
+  {
+    std::ifstream file(path, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(file), {});
+  }
+  const std::string truncated = testing::TempDir() + "map_builder_load_truncated.bt";
+  std::ofstream(truncated, std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+  refused(next, truncated, "not an OctoMap binary");
+  refused(next, testing::TempDir() + "no_such_map.bt", "cannot open");
+  std::remove(path.c_str());
+  std::remove(truncated.c_str());
 }
 
 TEST(MapBuilderTest, SnapshotsAreImmutableCopies) {

@@ -1,15 +1,18 @@
 // The mapping component on real DDS: the component on Fast DDS fed with odometry and beams at a
 // wall; a late-joining map reader on Cyclone DDS gets a FULL map with the wall cell occupied and
-// keeps an exact replica from the increments; map/save and map/clear answer across vendors.
+// keeps an exact replica from the increments; map/save and map/clear answer across vendors; a
+// saved map given as initial_map is the map from the start.
 // Each test on its own domain id (80..89).
 #include <gtest/gtest.h>
 
 #include <atomic>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <memory>
 #include <sstream>
 #include <thread>
+#include <vector>
 
 #include "auv/interfaces/executor.h"
 #include "auv/mapping/components/mapping_component.h"
@@ -295,6 +298,49 @@ TEST(MappingComponentTest, AReplicaInStepSkipsThePeriodicFullMapButNotAClear) {
                        << replica.tree().getNumLeafNodes() << " leaves";
   EXPECT_EQ(replica.sequence(), mapping.sequenceNumber());
   mapping.deactivate();
+}
+
+// initial_map: a map saved by an earlier mission is the map from the start, and the first FULL
+// gives it to a reader of the other vendor before any sonar data; a file it cannot take is
+// refused naming the parameter and the file.
+TEST(MappingComponentTest, StartsFromAnInitialMapAndNamesOneItCannotTake) {
+  constexpr int kDomain = 85;
+  const std::string path = testing::TempDir() + "mapping_component_initial.bt";
+  MapBuilder earlier;
+  const std::vector<Eigen::Vector3d> wall = {{8.25, 0.25, 0.25}, {8.25, 0.75, 0.25}};
+  earlier.insertCloud(wall, Eigen::Vector3d(0.25, 0.25, 0.25), 0.0);
+  ASSERT_TRUE(earlier.save(path));
+
+  Node mapping_node("mapping", nodeOptions(Vendor::FASTDDS, kDomain, {"initial_map:=" + path}));
+  MappingComponent mapping;
+  mapping.configure(mapping_node);
+  EXPECT_EQ(mapping.builder().fullBinary(), earlier.fullBinary());
+  Node reader_node("planner", nodeOptions(Vendor::CYCLONEDDS, kDomain));
+  MapReader reader;
+  auto subscription = reader_node.createSubscription<msg::OctomapUpdate>(
+      "map/update", interfaces::mapQos(),
+      std::function<void(const msg::OctomapUpdate&)>(
+          [&](const msg::OctomapUpdate& u) { reader.onUpdate(u); }));
+  interfaces::Executor executor;
+  executor.add(mapping_node);
+  executor.add(reader_node);
+  mapping.activate();
+  ASSERT_TRUE(executor.spinUntil([&] { return reader.fulls >= 1; }, 20s));
+  EXPECT_TRUE(reader.wall_occupied_in_first_full);
+  EXPECT_EQ(mapping.beamsInserted(), 0u);
+  mapping.deactivate();
+  std::remove(path.c_str());
+
+  const std::string missing = testing::TempDir() + "no_such_initial_map.bt";
+  Node refused_node("mapping", nodeOptions(Vendor::FASTDDS, kDomain, {"initial_map:=" + missing}));
+  MappingComponent refused;
+  try {
+    refused.configure(refused_node);
+    ADD_FAILURE() << "a missing initial_map was accepted";
+  } catch (const interfaces::ParameterError& error) {
+    EXPECT_NE(std::string(error.what()).find("initial_map"), std::string::npos) << error.what();
+    EXPECT_NE(std::string(error.what()).find(missing), std::string::npos) << error.what();
+  }
 }
 
 TEST(MappingComponentTest, InconsistentProbabilitiesAreRefused) {

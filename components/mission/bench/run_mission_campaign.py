@@ -15,6 +15,7 @@ to bench_results/mission_campaign_<stamp>.{md,json}.
       [--seeds 20] [--first-seed 1] [--real-time-factor 8] [--domain 45] [--keep-runs]
       [--navigation drift|ideal] [--launch FILE]   # ideal: no drift or noise; FILE: vehicle.yaml
       [--launch-arg NAME:=VALUE]...   # e.g. map_resolution:=0.25
+      [--prior-map]   # the mapping starts from the true map: no exploration left
   components/mission/bench/run_mission_campaign.py --evaluate RUN_DIR...   # finished runs again
 """
 import argparse
@@ -180,6 +181,15 @@ def ideal_navigation_scenario(world, seed, runs_dir):
     return scenario
 
 
+def map_resolution(args):
+    """The map resolution the launch runs at: its map_resolution argument, else the default."""
+    for argument in args.launch_arg:
+        name, _, value = argument.partition(":=")
+        if name == "map_resolution":
+            return float(value)
+    return MAP_RESOLUTION
+
+
 def run_mission(world, seed, args, runs_dir):
     run_dir = os.path.join(runs_dir, f"{world}-{seed}")
     shutil.rmtree(run_dir, ignore_errors=True)
@@ -189,6 +199,8 @@ def run_mission(world, seed, args, runs_dir):
                "auto_mission:=true", f"real_time_factor:={args.real_time_factor}",
                f"domain:={args.domain}", f"run_dir:={run_dir}", f"objective:={args.objective}"]
     command += args.launch_arg
+    if args.prior_map:
+        command.append(f"initial_map:={true_map_for(world, seed, runs_dir, map_resolution(args))}")
     started = time.monotonic()
     with open(os.path.join(runs_dir, f"{world}-{seed}.log"), "w") as log:
         try:
@@ -283,6 +295,11 @@ def main():
     parser.add_argument("--launch-arg", action="append", default=[], metavar="NAME:=VALUE",
                         help="another argument of the launch file, e.g. map_resolution:=0.25 "
                              "(repeatable)")
+    parser.add_argument("--prior-map", action="store_true",
+                        help="the mapping starts from the world's true map at the map resolution "
+                             "(initial_map): nothing is left to explore, so what remains of path "
+                             "/ oracle is the objective's and the planner's own (use with "
+                             "--navigation ideal: the prior map is in the true frame)")
     parser.add_argument("--keep-runs", action="store_true", help="keep the run folders")
     parser.add_argument("--seed-major", action="store_true",
                         help="run seed by seed across the worlds (default: world by world)")
@@ -310,6 +327,7 @@ def main():
              f"real_time_factor {args.real_time_factor}, navigation "
              + ("drift on (simulator defaults)" if args.navigation == "drift" else
                 "ideal (no drift, no noise)")
+             + (", prior map: the true map (initial_map)" if args.prior_map else "")
              + "".join(f", {a}" for a in args.launch_arg))
     for world, seed in order:
         run_dir, code, wall, summary = run_mission(world, seed, args, runs_dir)

@@ -276,6 +276,26 @@ void MapBuilder::clear() {
   ++version_;
 }
 
+void MapBuilder::load(const std::string& path) {
+  // Read into a tree of our own settings first: a bad file leaves the map as it was.
+  octomap::OcTree loaded(options_.resolution);
+  configureTree(loaded);
+  std::ifstream file(path, std::ios::binary);
+  if (!file) throw std::runtime_error("cannot open map file " + path);
+  if (!loaded.readBinary(file)) {
+    throw std::runtime_error(path + " is not an OctoMap binary (.bt) file");
+  }
+  if (std::abs(loaded.getResolution() - options_.resolution) > 1e-9) {
+    throw std::runtime_error(path + " has resolution " + std::to_string(loaded.getResolution()) +
+                             " m, the map " + std::to_string(options_.resolution) + " m");
+  }
+  tree_.clear();
+  tree_.swapContent(loaded);
+  changed_.clear();
+  ++version_;
+  takeSnapshot();
+}
+
 std::shared_ptr<const octomap::OcTree> MapBuilder::takeSnapshot() {
   auto copy = std::make_shared<const octomap::OcTree>(tree_);
   std::atomic_store(&snapshot_, copy);

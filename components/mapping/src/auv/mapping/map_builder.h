@@ -123,6 +123,11 @@ class MapBuilder {
   bool save(const std::string& path) const;
   /// Empties the map and the pending changes.
   void clear();
+  /// Replaces the map with a .bt file (save()'s format: occupied and free cells at the clamping
+  /// bounds), e.g. the map of an earlier mission at the same site; drops the pending changes.
+  /// Throws std::runtime_error naming the file when it cannot be read or holds another
+  /// resolution; the map is then unchanged.
+  void load(const std::string& path);
 
   /// Copies the live tree into a new immutable snapshot and publishes it (writer thread only).
   std::shared_ptr<const octomap::OcTree> takeSnapshot();

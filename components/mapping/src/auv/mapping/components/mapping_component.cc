@@ -82,8 +82,26 @@ void MappingComponent::configure(interfaces::Node& node) {
   options_.beam_queue_length =
       p.declare<int64_t>("beam_queue_length", options_.beam_queue_length,
                          {"beams kept waiting for newer odometry", "", 0.0, 100000.0, {}, true});
+  options_.initial_map = p.declare<std::string>(
+      "initial_map", options_.initial_map,
+      {"a .bt map to start from (map/save's format, same resolution), e.g. an earlier "
+       "mission's at the site; empty: start empty",
+       "",
+       {},
+       {},
+       {},
+       true});
 
   builder_ = std::make_unique<MapBuilder>(options_.map);  // checks cross-field constraints
+  if (!options_.initial_map.empty()) {
+    try {
+      builder_->load(options_.initial_map);
+    } catch (const std::runtime_error& error) {
+      throw interfaces::ParameterError("parameter 'initial_map': " + std::string(error.what()));
+    }
+    AUV_INFO(node.logger(), "started from " << options_.initial_map << " ("
+                                            << builder_->tree().getNumLeafNodes() << " leaves)");
+  }
   builder_->enableChangeTracking(true);
   poses_ = std::make_unique<PoseBuffer>(options_.poses);
 

@@ -39,6 +39,9 @@ class MappingComponent : public interfaces::Component {
     std::string map_id = "octomap";     ///< OctomapUpdate.map_id (DDS key).
     std::string world_frame = "world";  ///< frame of odometry and of the map (NED).
     std::string map_directory = ".";    ///< where map/save writes (relative names only).
+    /// A .bt map to start from (map/save's format, same resolution), e.g. the map of an
+    /// earlier mission at the site; empty: start with an empty map. map/clear empties it too.
+    std::string initial_map;
     /// Beams newer than the latest odometry wait for it; at most this many, in [0, 100000].
     int64_t beam_queue_length = 500;
   };
