@@ -320,14 +320,19 @@ TEST(MapBuilderTest, ApplyDiffRejectsOtherResolutionAndGarbage) {
   EXPECT_THROW(MapBuilder::applyDiff("not a tree", fine), std::runtime_error);
 }
 
-TEST(MapBuilderTest, SavedBtLoadsBackWithTheSameOccupancy) {
-  MapBuilder builder;
+// A ring of returns 7-10.5 m around the origin, one beam every 10 degrees.
+void insertRingOfReturns(MapBuilder& builder) {
   BeamGeometry beam;
   for (int i = 0; i < 36; ++i) {
     beam.direction = beamDirection(i * M_PI / 18);
     beam.return_range = 7.0 + 0.1 * i;
     builder.insertBeam(beam, sensorAt({0.1, 0.1, 0.1}, 0));
   }
+}
+
+TEST(MapBuilderTest, SavedBtLoadsBackWithTheSameOccupancy) {
+  MapBuilder builder;
+  insertRingOfReturns(builder);
   const std::string path = testing::TempDir() + "map_builder_test.bt";
   ASSERT_TRUE(builder.save(path));
   octomap::OcTree loaded(0.1);
@@ -353,12 +358,7 @@ TEST(MapBuilderTest, SavedBtLoadsBackWithTheSameOccupancy) {
 // nothing pending and a snapshot of it; a file it cannot take leaves the map as it was.
 TEST(MapBuilderTest, LoadStartsFromASavedMapAndRefusesFilesItCannotTake) {
   MapBuilder earlier;
-  BeamGeometry beam;
-  for (int i = 0; i < 36; ++i) {
-    beam.direction = beamDirection(i * M_PI / 18);
-    beam.return_range = 7.0 + 0.1 * i;
-    earlier.insertBeam(beam, sensorAt({0.1, 0.1, 0.1}, 0));
-  }
+  insertRingOfReturns(earlier);
   const std::string path = testing::TempDir() + "map_builder_load_test.bt";
   ASSERT_TRUE(earlier.save(path));
 

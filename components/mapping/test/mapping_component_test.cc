@@ -92,6 +92,14 @@ struct MapReader {
   int dropped = 0;  // increments that did not continue the chain
   bool wall_occupied_in_first_full = false;
 
+  /// The planner's subscription to map/update, feeding onUpdate().
+  std::shared_ptr<interfaces::Subscription<msg::OctomapUpdate>> subscribe(Node& node) {
+    return node.createSubscription<msg::OctomapUpdate>(
+        "map/update", interfaces::mapQos(),
+        std::function<void(const msg::OctomapUpdate&)>(
+            [this](const msg::OctomapUpdate& u) { onUpdate(u); }));
+  }
+
   void onUpdate(const msg::OctomapUpdate& update) {
     const std::string data(update.data().begin(), update.data().end());
     if (update.kind() == msg::OCTOMAP_UPDATE_FULL) {
@@ -135,10 +143,7 @@ TEST(MappingComponentTest, LateJoinerOnOtherVendorGetsFullMapAndExactIncrements)
 
   Node reader_node("planner", nodeOptions(Vendor::CYCLONEDDS, kDomain));
   MapReader reader;
-  auto subscription = reader_node.createSubscription<msg::OctomapUpdate>(
-      "map/update", interfaces::mapQos(),
-      std::function<void(const msg::OctomapUpdate&)>(
-          [&](const msg::OctomapUpdate& u) { reader.onUpdate(u); }));
+  auto subscription = reader.subscribe(reader_node);
   executor.add(reader_node);
   ASSERT_TRUE(executor.spinUntil([&] { return reader.fulls >= 1 && reader.increments >= 2; }, 20s))
       << "fulls " << reader.fulls << ", increments " << reader.increments << ", dropped "
@@ -317,10 +322,7 @@ TEST(MappingComponentTest, StartsFromAnInitialMapAndNamesOneItCannotTake) {
   EXPECT_EQ(mapping.builder().fullBinary(), earlier.fullBinary());
   Node reader_node("planner", nodeOptions(Vendor::CYCLONEDDS, kDomain));
   MapReader reader;
-  auto subscription = reader_node.createSubscription<msg::OctomapUpdate>(
-      "map/update", interfaces::mapQos(),
-      std::function<void(const msg::OctomapUpdate&)>(
-          [&](const msg::OctomapUpdate& u) { reader.onUpdate(u); }));
+  auto subscription = reader.subscribe(reader_node);
   interfaces::Executor executor;
   executor.add(mapping_node);
   executor.add(reader_node);
