@@ -460,6 +460,36 @@ TEST(OtStreamTest, WriteTreeIsByteForByteOctomapsWrite) {
   }
 }
 
+// readTree gives the tree AbstractOcTree::read gives, without its debug lines on stderr, and
+// refuses what is not a whole OcTree .ot stream.
+TEST(OtStreamTest, ReadTreeReadsWhatOctomapWritesAndPrintsNothing) {
+  for (int beams : {0, 1, 500}) {
+    MapBuilder builder;
+    addBeams(builder, beams);
+    std::ostringstream theirs;
+    builder.tree().write(theirs);
+    std::istringstream input(theirs.str());
+    testing::internal::CaptureStderr();
+    testing::internal::CaptureStdout();
+    const std::unique_ptr<octomap::OcTree> tree = ot_stream::readTree(input);
+    EXPECT_EQ(testing::internal::GetCapturedStdout() + testing::internal::GetCapturedStderr(), "");
+    ASSERT_NE(tree, nullptr);
+    EXPECT_DOUBLE_EQ(tree->getResolution(), kResolution);
+    std::ostringstream again;
+    tree->write(again);
+    EXPECT_EQ(again.str(), theirs.str()) << beams << " beams";
+  }
+  MapBuilder builder;
+  addBeams(builder, 10);
+  const std::string whole = builder.fullWithProbabilities();
+  for (const std::string& bad :
+       {std::string("not a tree"), whole.substr(0, whole.size() / 2),
+        std::string("# Octomap OcTree file\nid ColorOcTree\nsize 0\nres 0.1\ndata\n")}) {
+    std::istringstream input(bad);
+    EXPECT_THROW(ot_stream::readTree(input), std::runtime_error) << bad.substr(0, 40);
+  }
+}
+
 TEST(OtStreamTest, WriteCellsIsWhatAnOcTreeOfTheCellsWrites) {
   // The diff as it was built before: an OcTree set lazily, inner nodes updated, then written.
   MapBuilder builder;

@@ -221,9 +221,7 @@ MapBuilder::Diff MapBuilder::takeDiff() {
 
 void MapBuilder::applyDiff(const std::string& data, octomap::OcTree& replica) {
   std::istringstream stream(data);
-  std::unique_ptr<octomap::AbstractOcTree> read(octomap::AbstractOcTree::read(stream));
-  auto* changes = dynamic_cast<octomap::OcTree*>(read.get());
-  if (changes == nullptr) throw std::runtime_error("map diff is not an OcTree .ot stream");
+  const std::unique_ptr<octomap::OcTree> changes = ot_stream::readTree(stream);
   if (std::abs(changes->getResolution() - replica.getResolution()) > 1e-9) {
     throw std::runtime_error("map diff resolution " + std::to_string(changes->getResolution()) +
                              " differs from the replica's " +

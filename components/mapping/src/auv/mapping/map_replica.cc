@@ -6,6 +6,7 @@
 
 #include "auv/interfaces/msg_time.h"
 #include "auv/mapping/map_builder.h"
+#include "auv/mapping/ot_stream.h"
 
 namespace auv::mapping {
 
@@ -16,11 +17,7 @@ std::unique_ptr<octomap::OcTree> readFullMap(const msg::OctomapUpdate& update) {
     if (!tree->readBinary(stream)) throw std::runtime_error("unreadable .bt map");
     return tree;
   }
-  std::unique_ptr<octomap::AbstractOcTree> read(octomap::AbstractOcTree::read(stream));
-  auto* tree = dynamic_cast<octomap::OcTree*>(read.get());
-  if (tree == nullptr) throw std::runtime_error("map is not an OcTree .ot stream");
-  read.release();
-  return std::unique_ptr<octomap::OcTree>(tree);
+  return ot_stream::readTree(stream);
 }
 
 MapReplica::MapReplica(std::string map_id, double resolution)

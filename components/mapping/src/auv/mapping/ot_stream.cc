@@ -4,6 +4,7 @@
 #include <cstring>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 #include <utility>
 
 namespace auv::mapping::ot_stream {
@@ -122,6 +123,53 @@ std::string writeCells(std::vector<Cell>& cells, double resolution, unsigned tre
   out.reserve(out.size() + 5 * nodes);
   if (!cells.empty()) appendCells(cells.data(), cells.data() + cells.size(), 0, tree_depth, out);
   return out;
+}
+
+std::unique_ptr<octomap::OcTree> readTree(std::istream& stream) {
+  // The header as AbstractOcTree::readHeader reads it: keywords up to "data", '#' comments.
+  std::string line;
+  if (!std::getline(stream, line) || line.rfind("# Octomap OcTree file", 0) != 0) {
+    throw std::runtime_error("not an OctoMap .ot stream");
+  }
+  std::string id;
+  std::size_t size = 0;
+  double resolution = 0.0;
+  std::string token;
+  while (stream >> token && token != "data") {
+    if (token == "id") {
+      stream >> id;
+    } else if (token == "size") {
+      stream >> size;
+    } else if (token == "res") {
+      stream >> resolution;
+    } else {
+      std::getline(stream, line);  // a comment or a keyword OctoMap would skip
+    }
+  }
+  std::getline(stream, line);  // the rest of the "data" line
+  if (!stream || id != "OcTree" || !(resolution > 0.0)) {
+    throw std::runtime_error("not an OcTree .ot stream (id '" + id + "', resolution " +
+                             std::to_string(resolution) + ")");
+  }
+  // Each node is its float log-odds and a byte of child bits. OctoMap reads past the end of a
+  // short stream with child bits it never read, so a stream that cannot hold `size` nodes is
+  // refused before reading (streams that cannot seek are read as they come).
+  const std::streampos data_start = stream.tellg();
+  if (data_start != std::streampos(-1) && stream.seekg(0, std::ios::end)) {
+    const std::streamoff available = stream.tellg() - data_start;
+    stream.seekg(data_start);
+    if (available < static_cast<std::streamoff>(size * (sizeof(float) + 1))) {
+      throw std::runtime_error("OcTree .ot stream ends early (" + std::to_string(available) +
+                               " bytes for " + std::to_string(size) + " nodes)");
+    }
+  }
+  auto tree = std::make_unique<octomap::OcTree>(resolution);
+  if (size > 0) tree->readData(stream);
+  if (!stream || tree->size() != size) {
+    throw std::runtime_error("OcTree .ot stream ends early (" + std::to_string(tree->size()) +
+                             " of " + std::to_string(size) + " nodes)");
+  }
+  return tree;
 }
 
 }  // namespace auv::mapping::ot_stream

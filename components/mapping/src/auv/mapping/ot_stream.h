@@ -4,8 +4,12 @@
 // std::ostream per node, and without building a tree for a set of cells. The output is byte
 // for byte what AbstractOcTree::write produces (map_builder_test checks it); it only exists
 // because the component writes one per map update and OctoMap's writer costs ~5x more.
+// Reads them back without AbstractOcTree::read, which Debian's liboctomap builds with debug
+// output: two lines on stderr per map update read, thousands in a mission's log.
 
 #include <cstdint>
+#include <istream>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -31,5 +35,9 @@ std::string writeTree(const octomap::OcTree& tree);
 /// below it (updateInnerOccupancy), nothing pruned. Sorts `cells` by code; codes must be
 /// unique.
 std::string writeCells(std::vector<Cell>& cells, double resolution, unsigned tree_depth = 16);
+
+/// The OcTree of an `.ot` stream (what AbstractOcTree::read returns for one), read silently.
+/// Throws std::runtime_error when the stream is not an OcTree `.ot` stream or ends early.
+std::unique_ptr<octomap::OcTree> readTree(std::istream& stream);
 
 }  // namespace auv::mapping::ot_stream
