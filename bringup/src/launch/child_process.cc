@@ -31,6 +31,24 @@ void emitLines(OutputStream& stream, const std::string& prefix, bool flush) {
   }
 }
 
+// One read() of the pipe into the partial line, complete lines written out; read()'s result
+// (errno is read()'s when it is < 0: nothing was written then).
+ssize_t readChunk(OutputStream& stream, const std::string& prefix) {
+  char buffer[kReadChunk];
+  const ssize_t n = read(stream.fd, buffer, sizeof(buffer));
+  if (n > 0) {
+    stream.partial.append(buffer, static_cast<size_t>(n));
+    emitLines(stream, prefix, /*flush=*/false);
+  }
+  return n;
+}
+
+// Writes the last, unterminated line and closes the pipe.
+void flushAndClose(OutputStream& stream, const std::string& prefix) {
+  emitLines(stream, prefix, /*flush=*/true);
+  closeFd(stream.fd);
+}
+
 std::vector<char*> nullTerminated(const std::vector<std::string>& strings) {
   std::vector<char*> pointers;
   // posix_spawn takes char* const[] but does not modify the strings.
@@ -64,32 +82,18 @@ void closeFd(int& fd) {
 }
 
 void readAvailable(OutputStream& stream, const std::string& prefix) {
-  char buffer[kReadChunk];
-  const ssize_t n = read(stream.fd, buffer, sizeof(buffer));
-  if (n > 0) {
-    stream.partial.append(buffer, static_cast<size_t>(n));
-    emitLines(stream, prefix, /*flush=*/false);
-  } else if (n == 0 || (errno != EINTR && errno != EAGAIN && errno != EWOULDBLOCK)) {
-    emitLines(stream, prefix, /*flush=*/true);
-    closeFd(stream.fd);
+  const ssize_t n = readChunk(stream, prefix);
+  if (n == 0 || (n < 0 && errno != EINTR && errno != EAGAIN && errno != EWOULDBLOCK)) {
+    flushAndClose(stream, prefix);
   }
 }
 
 void drainAndClose(OutputStream& stream, const std::string& prefix) {
-  char buffer[kReadChunk];
   while (stream.fd >= 0) {
-    const ssize_t n = read(stream.fd, buffer, sizeof(buffer));
-    if (n > 0) {
-      stream.partial.append(buffer, static_cast<size_t>(n));
-      emitLines(stream, prefix, /*flush=*/false);
-    } else if (n < 0 && errno == EINTR) {
-      continue;
-    } else {
-      break;
-    }
+    const ssize_t n = readChunk(stream, prefix);
+    if (n <= 0 && !(n < 0 && errno == EINTR)) break;
   }
-  emitLines(stream, prefix, /*flush=*/true);
-  closeFd(stream.fd);
+  flushAndClose(stream, prefix);
 }
 
 SpawnedChild spawnInOwnGroup(const std::string& program, const std::vector<std::string>& argv,

@@ -287,7 +287,7 @@ void MapBuilder::load(const std::string& path) {
     throw std::runtime_error(path + " has resolution " + std::to_string(loaded.getResolution()) +
                              " m, the map " + std::to_string(options_.resolution) + " m");
   }
-  tree_.clear();
+  tree_.clear();  // also marks the metric bounds stale, which swapContent does not
   tree_.swapContent(loaded);
   changed_.clear();
   ++version_;
