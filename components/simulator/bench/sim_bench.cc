@@ -17,10 +17,10 @@
 #include <sstream>
 #include <thread>
 
+#include "auv/control/components/controller_component.h"
 #include "auv/interfaces/executor.h"
 #include "auv/sim/camera/camera_rig.h"
 #include "auv/sim/camera/renderer.h"
-#include "auv/sim/components/controller_component.h"
 #include "auv/sim/components/simulator_component.h"
 #include "auv/sim/worldgen/world_generator.h"
 
@@ -229,7 +229,7 @@ int main(int argc, char** argv) {
   auv::interfaces::Node ctrl_node("controller", ctrl_options);
   auv::interfaces::Node pilot("pilot", ctrl_options);
   SimulatorComponent sim;
-  ControllerComponent controller;
+  auv::control::ControllerComponent controller;
   sim.configure(sim_node);
   controller.configure(ctrl_node);
   auto command = pilot.createPublisher<auv::msg::ControllerCommand>("control/waypoint",

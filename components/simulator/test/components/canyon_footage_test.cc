@@ -9,7 +9,7 @@
 
 #include "auv/sim/camera/camera_rig.h"
 #include "auv/sim/camera/renderer.h"
-#include "auv/sim/common/vehicle_state.h"
+#include "auv/sim/vehicle/vehicle.h"
 #include "auv/sim/world/scenario.h"
 #include "auv/sim/worldgen/world_generator.h"
 

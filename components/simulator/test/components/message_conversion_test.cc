@@ -1,10 +1,16 @@
-// Messages to and from the simulator's own values: what the controller reads from nav/odometry.
+// The simulator's nav/odometry and ground truth read back by the controller's own reader
+// (auv_control): the round trip the vehicle stack depends on.
 #include "auv/sim/components/message_conversion.h"
 
 #include <gtest/gtest.h>
 
+#include "auv/control/components/odometry_conversion.h"
+
 namespace auv::sim {
 namespace {
+
+using control::ControllerNavigation;
+using control::toControllerNavigation;
 
 NavigationEstimate cruising(uint32_t flags) {
   NavigationEstimate estimate;

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "auv/msg/sensors.h"
-#include "auv/sim/common/vehicle_state.h"
+#include "auv/sim/vehicle/vehicle.h"
 
 namespace auv::sim {
 namespace {

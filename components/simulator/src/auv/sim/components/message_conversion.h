@@ -4,10 +4,9 @@
 #include <Eigen/Geometry>
 
 #include "auv/msg/all.h"
-#include "auv/sim/common/vehicle_state.h"
 #include "auv/sim/sensors/navigation.h"
 #include "auv/sim/sensors/profiling_sonar.h"
-#include "auv/sim/vehicle/controller.h"
+#include "auv/sim/vehicle/vehicle.h"
 #include "auv/sim/world/hull_contact.h"
 
 namespace auv::sim {
@@ -21,11 +20,6 @@ msg::Pose toPose(const Eigen::Isometry3d& pose);
 msg::Odometry toOdometry(const NavigationEstimate& estimate);
 /// `sim/ground_truth`: the true state, flagged GROUND_TRUTH, zero covariance.
 msg::Odometry groundTruthOdometry(const VehicleState& state, double t, double altitude);
-/// What the controller acts on, from `nav/odometry`. The velocity counts as measured with
-/// DVL_VALID or GROUND_TRUTH among the source flags, or no flags at all (a source that does not
-/// fill them is trusted). The yaw is that of the orientation whatever the small roll and pitch;
-/// `orientation_ok` is false for a quaternion far from unit norm (an unset orientation).
-ControllerNavigation toControllerNavigation(const msg::Odometry& odometry, bool& orientation_ok);
 /// `sonar/beam` from one ping.
 msg::SonarBeam toSonarBeam(const SonarPing& ping);
 /// `sim/collision`.

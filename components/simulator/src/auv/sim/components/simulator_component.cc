@@ -131,7 +131,7 @@ void SimulatorComponent::configure(interfaces::Node& node) {
                                                 << " degenerate triangles");
   }
 
-  const VehicleOptions vehicle = VehicleOptions::fromYaml(scenario_.root.child("vehicle"));
+  const VehicleModel vehicle = readVehicleModel(scenario_.root.child("vehicle"));
   hull_.length = vehicle.length;
   hull_.radius = vehicle.radius;
   dynamics_ = std::make_unique<VehicleDynamics>(vehicle);

@@ -12,12 +12,11 @@
 #include <thread>
 
 #include "auv/interfaces/component.h"
-#include "auv/sim/common/vehicle_state.h"
 #include "auv/sim/components/ground_truth_log.h"
 #include "auv/sim/raycast/ray_caster.h"
 #include "auv/sim/sensors/navigation.h"
 #include "auv/sim/sensors/profiling_sonar.h"
-#include "auv/sim/vehicle/dynamics.h"
+#include "auv/sim/vehicle/vehicle.h"
 #include "auv/sim/world/hull_contact.h"
 #include "auv/sim/world/scenario.h"
 

@@ -11,8 +11,8 @@
 #include <cstdint>
 #include <random>
 
-#include "auv/sim/common/vehicle_state.h"
 #include "auv/sim/common/yaml_section.h"
+#include "auv/sim/vehicle/vehicle.h"
 
 namespace auv::sim {
 

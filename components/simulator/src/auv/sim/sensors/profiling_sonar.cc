@@ -5,7 +5,7 @@
 #include <optional>
 #include <sstream>
 
-#include "auv/sim/common/vehicle_state.h"
+#include "auv/sim/vehicle/vehicle.h"
 
 namespace auv::sim {
 namespace {

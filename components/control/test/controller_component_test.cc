@@ -2,7 +2,7 @@
 // handler (and the simulator's clock). Cyclone DDS and Fast DDS, also mixed. One DDS domain per
 // test that exchanges data (230-232; with the default port mapping 232 is the highest domain id
 // either vendor accepts). The parameter test sends nothing and shares 230.
-#include "auv/sim/components/controller_component.h"
+#include "auv/control/components/controller_component.h"
 
 #include <gtest/gtest.h>
 
@@ -13,7 +13,7 @@
 
 #include "auv/interfaces/executor.h"
 
-namespace auv::sim {
+namespace auv::control {
 namespace {
 
 using namespace std::chrono_literals;
@@ -324,4 +324,4 @@ TEST(ControllerComponentTest, RegisteredAsController) {
 }
 
 }  // namespace
-}  // namespace auv::sim
+}  // namespace auv::control

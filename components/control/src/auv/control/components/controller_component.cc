@@ -1,14 +1,14 @@
-#include "auv/sim/components/controller_component.h"
-#include "auv/interfaces/msg_time.h"
+#include "auv/control/components/controller_component.h"
 
 #include <cmath>
 #include <optional>
 #include <string>
 #include <vector>
 
-#include "auv/sim/components/message_conversion.h"
+#include "auv/control/components/odometry_conversion.h"
+#include "auv/interfaces/msg_time.h"
 
-namespace auv::sim {
+namespace auv::control {
 namespace {
 
 // The mirrors in controller.h must keep the IDL's numbering: messages are cast, not mapped.
@@ -81,8 +81,8 @@ const std::vector<DoubleParameter<ControllerOptions>>& controllerParameters() {
 }
 
 // The part of the vehicle model the controller uses (feed-forward and allocation).
-const std::vector<DoubleParameter<VehicleOptions>>& modelParameters() {
-  using V = VehicleOptions;
+const std::vector<DoubleParameter<VehicleModel>>& modelParameters() {
+  using V = VehicleModel;
   static const std::vector<DoubleParameter<V>> list = {
       {"drag_linear_surge", &V::drag_linear_surge, "model: linear surge drag", "N/(m/s)", 0, kBig},
       {"drag_quadratic_surge", &V::drag_quadratic_surge, "model: quadratic surge drag", "N/(m/s)^2",
@@ -310,7 +310,7 @@ void ControllerComponent::reportChanges() {
   publishStatus();
 }
 
-}  // namespace auv::sim
+}  // namespace auv::control
 
-AUV_REGISTER_COMPONENT(auv::sim::ControllerComponent, "controller",
+AUV_REGISTER_COMPONENT(auv::control::ControllerComponent, "controller",
                        "low-level controller: control/waypoint -> control/thrusters")

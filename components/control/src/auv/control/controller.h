@@ -2,7 +2,7 @@
 // The vehicle's low-level controller as pure logic (no DDS): it turns a navigation estimate and
 // a command (a mirror of auv::msg::ControllerCommand) into thruster setpoints and a status (a
 // mirror of auv::msg::ControllerStatus), and runs the safety manoeuvres itself. The
-// `controller` component wraps it; tests close the loop with VehicleDynamics.
+// `controller` component wraps it; tests close the loop with VehicleDynamics (vehicle_model.h).
 //
 // Control laws (forces in the body frame, then allocated to the three thrusters):
 //   heading  N = kp e + ki int(e) - kd r          e = wrap(target yaw - yaw), r = yaw rate
@@ -26,11 +26,9 @@
 
 #include <Eigen/Core>
 
-#include "auv/sim/common/vehicle_state.h"
-#include "auv/sim/common/yaml_section.h"
-#include "auv/sim/vehicle/dynamics.h"
+#include "auv/control/vehicle_model.h"
 
-namespace auv::sim {
+namespace auv::control {
 
 // Same values, in the same order, as the IDL enums (the component static_asserts it).
 enum class ControlMode : uint32_t { NONE, STOP, HOLD, WAYPOINT, SETPOINT, SURFACE };
@@ -160,7 +158,7 @@ struct ControllerOptions {
   FaultAction fault_action = FaultAction::HOLD_DEPTH;  ///< after a command timeout
 
   /// Vehicle model used for feed-forward (drag, buoyancy) and thrust allocation.
-  VehicleOptions model;
+  VehicleModel model;
 
   /// Throws ConfigError naming the field ("controller.depth_kp: ...").
   void check() const;
@@ -242,4 +240,4 @@ class LowLevelController {
   double depth_rate_ = 0.0;        // m/s, from successive depths (setNavigation)
 };
 
-}  // namespace auv::sim
+}  // namespace auv::control

@@ -1,4 +1,4 @@
-#include "auv/sim/vehicle/dynamics.h"
+#include "auv/control/vehicle_model.h"
 
 #include <algorithm>
 #include <cmath>
@@ -8,23 +8,27 @@
 #include <string>
 #include <vector>
 
-namespace auv::sim {
+namespace auv::control {
 namespace {
-
-// One numeric field of VehicleOptions with its valid range, so check(), fromYaml() and the
-// list of known keys cannot drift apart.
-struct Field {
-  const char* name;
-  double VehicleOptions::*member;
-  double min;
-  bool min_exclusive;  // true: value must be > min
-  double max;
-};
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-const std::vector<Field>& fields() {
-  using V = VehicleOptions;
+double drag(double v, double linear, double quadratic) {
+  return linear * v + quadratic * std::abs(v) * v;
+}
+
+// One semi-implicit Euler step of (mass) dv/dt = force - linear v - quadratic |v| v: the drag
+// is taken at the new velocity, linearised about the old one, so the step is stable for any dt
+// and its fixed point is exactly the terminal speed of the drag model.
+double integrateVelocity(double v, double force, double mass, double linear, double quadratic,
+                         double dt) {
+  return (mass * v + dt * force) / (mass + dt * (linear + quadratic * std::abs(v)));
+}
+
+}  // namespace
+
+const std::vector<VehicleModel::Field>& VehicleModel::fields() {
+  using V = VehicleModel;
   static const std::vector<Field> list = {
       {"length", &V::length, 0.0, true, 100.0},
       {"radius", &V::radius, 0.0, true, 10.0},
@@ -55,21 +59,7 @@ const std::vector<Field>& fields() {
   return list;
 }
 
-double drag(double v, double linear, double quadratic) {
-  return linear * v + quadratic * std::abs(v) * v;
-}
-
-// One semi-implicit Euler step of (mass) dv/dt = force - linear v - quadratic |v| v: the drag
-// is taken at the new velocity, linearised about the old one, so the step is stable for any dt
-// and its fixed point is exactly the terminal speed of the drag model.
-double integrateVelocity(double v, double force, double mass, double linear, double quadratic,
-                         double dt) {
-  return (mass * v + dt * force) / (mass + dt * (linear + quadratic * std::abs(v)));
-}
-
-}  // namespace
-
-void VehicleOptions::check() const {
+void VehicleModel::check() const {
   for (const Field& f : fields()) {
     const double value = this->*f.member;
     const bool below = f.min_exclusive ? value <= f.min : value < f.min;
@@ -98,49 +88,29 @@ void VehicleOptions::check() const {
   }
 }
 
-VehicleOptions VehicleOptions::fromYaml(const YamlSection& section) {
-  VehicleOptions options;
-  std::vector<std::string> known = {"start"};  // the scenario's, read by loadScenario()
-  for (const Field& f : fields()) {
-    known.push_back(f.name);
-    std::optional<double> min;
-    if (f.min > -kInf) min = f.min;
-    std::optional<double> max;
-    if (f.max < kInf) max = f.max;
-    section.read(f.name, options.*f.member, min, max);  // exclusive bounds: check() below
-  }
-  section.rejectUnknownKeys(known);
-  try {
-    options.check();
-  } catch (const ConfigError& e) {
-    throw ConfigError(section.file() + ": " + e.what());  // check() names "vehicle.<field>"
-  }
-  return options;
-}
-
-double VehicleOptions::thrustForCommand(double command) const {
+double VehicleModel::thrustForCommand(double command) const {
   const double c = std::clamp(command, -1.0, 1.0);
   return c >= 0 ? c * max_thrust_forward : c * max_thrust_reverse;
 }
 
-double VehicleOptions::commandForThrust(double thrust) const {
+double VehicleModel::commandForThrust(double thrust) const {
   const double c = thrust >= 0 ? thrust / max_thrust_forward : thrust / max_thrust_reverse;
   return std::clamp(c, -1.0, 1.0);
 }
 
-double VehicleOptions::surgeDrag(double speed) const {
+double VehicleModel::surgeDrag(double speed) const {
   return drag(speed, drag_linear_surge, drag_quadratic_surge);
 }
 
-double VehicleOptions::heaveDrag(double speed) const {
+double VehicleModel::heaveDrag(double speed) const {
   return drag(speed, drag_linear_heave, drag_quadratic_heave);
 }
 
-double VehicleOptions::yawDrag(double rate) const {
+double VehicleModel::yawDrag(double rate) const {
   return drag(rate, drag_linear_yaw, drag_quadratic_yaw);
 }
 
-double VehicleOptions::maxYawMoment() const {
+double VehicleModel::maxYawMoment() const {
   // One thruster at full forward, the other at full reverse.
   return 0.5 * thruster_spacing * (max_thrust_forward + max_thrust_reverse);
 }
@@ -158,7 +128,7 @@ double terminalSpeed(double force, double linear, double quadratic) {
   return force >= 0 ? v : -v;
 }
 
-VehicleDynamics::VehicleDynamics(const VehicleOptions& options) : options_(options) {
+VehicleDynamics::VehicleDynamics(const VehicleModel& options) : options_(options) {
   options_.check();
 }
 
@@ -184,7 +154,7 @@ void VehicleDynamics::step(VehicleState& state, const ThrusterCommand& command, 
 
 void VehicleDynamics::substep(VehicleState& state, const std::array<double, 3>& target_thrust,
                               double dt) {
-  const VehicleOptions& o = options_;
+  const VehicleModel& o = options_;
   // First-order thruster response, exact for a command held over the step.
   const double blend =
       o.thruster_time_constant > 0 ? 1.0 - std::exp(-dt / o.thruster_time_constant) : 1.0;
@@ -225,4 +195,4 @@ void VehicleDynamics::substep(VehicleState& state, const std::array<double, 3>& 
   }
 }
 
-}  // namespace auv::sim
+}  // namespace auv::control

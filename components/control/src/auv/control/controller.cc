@@ -1,11 +1,11 @@
-#include "auv/sim/vehicle/controller.h"
+#include "auv/control/controller.h"
 
 #include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <vector>
 
-namespace auv::sim {
+namespace auv::control {
 namespace {
 
 // Integrals only accumulate close to the setpoint and nearly at rest there (conditional
@@ -471,7 +471,7 @@ ThrusterCommand LowLevelController::regulate(const Targets& targets, double dt) 
 
 ThrusterCommand LowLevelController::allocate(double surge_force, double yaw_moment,
                                              double heave_force) const {
-  const VehicleOptions& m = options_.model;
+  const VehicleModel& m = options_.model;
   // port = X/2 + N/s and starboard = X/2 - N/s give surge X and yaw moment s/2 (port -
   // starboard) = N. The moment comes first; surge gets what thrust is left.
   const double moment = std::clamp(yaw_moment, -m.maxYawMoment(), m.maxYawMoment());
@@ -491,4 +491,4 @@ ThrusterCommand LowLevelController::allocate(double surge_force, double yaw_mome
           m.commandForThrust(0.5 * surge - differential), m.commandForThrust(heave_force)};
 }
 
-}  // namespace auv::sim
+}  // namespace auv::control

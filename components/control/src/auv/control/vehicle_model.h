@@ -1,4 +1,7 @@
 #pragma once
+// The vehicle model shared by the controller (feed-forward, allocation) and the simulator
+// (integration): state, thruster setpoints, physical parameters and the dynamics.
+//
 // Sparus II-like vehicle dynamics: a torpedo actuated in surge, heave and yaw by three thrusters
 // (port and starboard horizontal, one vertical), passively stable in roll and pitch (4-DOF).
 //
@@ -10,11 +13,52 @@
 // moment is left out: on the real vehicle the tail fins cancel most of it.
 
 #include <array>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <vector>
 
-#include "auv/sim/common/vehicle_state.h"
-#include "auv/sim/common/yaml_section.h"
+#include <Eigen/Core>
+#include <Eigen/Geometry>
 
-namespace auv::sim {
+namespace auv::control {
+
+/// An option or model value is unusable; the message names the field ("vehicle.mass: ...").
+class ConfigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// The vehicle's kinematic state. Sparus II is passively stable in roll and pitch, so the state
+/// is 4-DOF: position (NED), yaw, and body velocities in surge, sway, heave, yaw.
+struct VehicleState {
+  Eigen::Vector3d position{0, 0, 0};  ///< m NED (z = depth)
+  double yaw = 0.0;                   ///< rad, 0 = north, +pi/2 = east, in (-pi, pi]
+  double surge = 0.0;                 ///< m/s, body x (forward)
+  double sway = 0.0;                  ///< m/s, body y (starboard)
+  double heave = 0.0;                 ///< m/s, body z (down)
+  double yaw_rate = 0.0;              ///< rad/s, about body z
+
+  /// Body FRD -> world NED.
+  Eigen::Isometry3d pose() const {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    T.translation() = position;
+    return T;
+  }
+  /// Velocity over ground in NED.
+  Eigen::Vector3d velocityWorld() const {
+    const double c = std::cos(yaw), s = std::sin(yaw);
+    return {c * surge - s * sway, s * surge + c * sway, heave};
+  }
+};
+
+/// Wraps an angle to (-pi, pi].
+inline double wrapAngle(double a) {
+  a = std::fmod(a + M_PI, 2.0 * M_PI);
+  if (a <= 0) a += 2.0 * M_PI;
+  return a - M_PI;
+}
 
 /// Normalised thruster setpoints, each in [-1, 1] (values outside are clamped). + pushes the
 /// vehicle forward (port, starboard) or down, i.e. deeper (vertical); as ThrusterSetpoints.
@@ -24,10 +68,11 @@ struct ThrusterCommand {
   double vertical = 0.0;
 };
 
-/// Physical parameters of the vehicle (scenario section `vehicle:`). Defaults model a
+/// Physical parameters of the vehicle: the simulator integrates them (its scenario section
+/// `vehicle:`), the controller uses them for feed-forward and thrust allocation. Defaults model a
 /// Sparus II: full forward thrust gives ~1.2 m/s, cruise 0.5-1 m/s needs 20-70 % thrust, the
 /// full differential turns at ~0.5 rad/s, and with thrusters off it rises at ~5 cm/s.
-struct VehicleOptions {
+struct VehicleModel {
   // Body.
   double length = 1.6;        ///< m, hull length (collision checks)
   double radius = 0.115;      ///< m, hull radius (collision checks)
@@ -65,11 +110,20 @@ struct VehicleOptions {
   double max_heave_speed = 0.6;  ///< m/s, |heave|
   double max_yaw_rate = 0.6;     ///< rad/s, |yaw rate|
 
-  /// Throws ConfigError naming the field when a value is non-finite or out of range.
+  /// One numeric field with its valid range: check() and the simulator's scenario reader share
+  /// this list, so the two cannot drift apart.
+  struct Field {
+    const char* name;
+    double VehicleModel::*member;
+    double min;
+    bool min_exclusive;  ///< true: the value must be > min
+    double max;
+  };
+  static const std::vector<Field>& fields();
+
+  /// Throws ConfigError naming the field ("vehicle.<name>") when a value is non-finite or out
+  /// of range.
   void check() const;
-  /// Reads the scenario's `vehicle:` section strictly (keys = field names above; `start` is
-  /// allowed and left to the scenario) and checks the result.
-  static VehicleOptions fromYaml(const YamlSection& section);
 
   double surgeMass() const { return mass + added_mass_surge; }           ///< kg
   double swayMass() const { return mass + added_mass_sway; }             ///< kg
@@ -99,7 +153,7 @@ double terminalSpeed(double force, double linear, double quadratic);
 class VehicleDynamics {
  public:
   /// Throws ConfigError if the options do not pass check().
-  explicit VehicleDynamics(const VehicleOptions& options);
+  explicit VehicleDynamics(const VehicleModel& options);
 
   /// Advances `state` by `dt` s (>= 0; any size, sub-stepped internally at <= kMaxSubstep)
   /// holding `command` constant. Throws std::invalid_argument for negative or non-finite dt.
@@ -111,7 +165,7 @@ class VehicleDynamics {
   void setThrust(const ThrusterCommand& command);
   /// Thrusters back to zero thrust.
   void reset() { thrust_ = {0.0, 0.0, 0.0}; }
-  const VehicleOptions& options() const { return options_; }
+  const VehicleModel& options() const { return options_; }
 
   /// s, longest internal integration step (semi-implicit Euler, stable for any dt).
   static constexpr double kMaxSubstep = 0.01;
@@ -119,8 +173,8 @@ class VehicleDynamics {
  private:
   void substep(VehicleState& state, const std::array<double, 3>& target_thrust, double dt);
 
-  VehicleOptions options_;
+  VehicleModel options_;
   std::array<double, 3> thrust_{0.0, 0.0, 0.0};  // N: port, starboard, vertical
 };
 
-}  // namespace auv::sim
+}  // namespace auv::control

@@ -1,12 +1,12 @@
 // The low-level controller in closed loop with the vehicle dynamics (ground-truth navigation).
-#include "auv/sim/vehicle/controller.h"
+#include "auv/control/controller.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <functional>
 
-namespace auv::sim {
+namespace auv::control {
 namespace {
 
 constexpr double kDt = 0.05;  // s, 20 Hz like the component
@@ -14,7 +14,7 @@ constexpr double kDt = 0.05;  // s, 20 Hz like the component
 // The vehicle, its controller and a flat seabed, stepped together.
 struct ClosedLoop {
   explicit ClosedLoop(const ControllerOptions& controller_options = {},
-                      const VehicleOptions& vehicle_options = {})
+                      const VehicleModel& vehicle_options = {})
       : dynamics(vehicle_options), controller(controller_options) {}
 
   // Steps `seconds`; navigation is sent unless `navigation` is false. `each` sees every step.
@@ -201,7 +201,7 @@ TEST(LowLevelControllerTest, DepthIsHeldWithinCentimetresWhileCruising) {
 }
 
 TEST(LowLevelControllerTest, IntegralActionRemovesAWrongBuoyancyModel) {
-  VehicleOptions heavy_truth;
+  VehicleModel heavy_truth;
   heavy_truth.net_buoyancy = 6.0;  // the controller's model still thinks 2 N
   ClosedLoop loop({}, heavy_truth);
   loop.state.position = {0, 0, 3};
@@ -500,4 +500,4 @@ TEST(LowLevelControllerTest, StatusChangeDetectionIgnoresMeasurements) {
 }
 
 }  // namespace
-}  // namespace auv::sim
+}  // namespace auv::control

@@ -1,12 +1,11 @@
 // Vehicle dynamics against the analytic solutions of its own drag model.
-#include "auv/sim/vehicle/dynamics.h"
+#include "auv/control/vehicle_model.h"
 
 #include <gtest/gtest.h>
-#include <yaml-cpp/yaml.h>
 
 #include <cmath>
 
-namespace auv::sim {
+namespace auv::control {
 namespace {
 
 constexpr double kDt = 0.05;  // s, the simulator's step
@@ -37,7 +36,7 @@ double analyticSpeed(double force, double mass, double a, double b, double t) {
 }
 
 TEST(VehicleDynamicsTest, FullThrustReachesTheTerminalSurgeSpeedOfTheDragModel) {
-  const VehicleOptions options;
+  const VehicleModel options;
   VehicleDynamics dynamics(options);
   VehicleState state;
   state.position.z() = 5.0;
@@ -57,7 +56,7 @@ TEST(VehicleDynamicsTest, FullThrustReachesTheTerminalSurgeSpeedOfTheDragModel) 
 }
 
 TEST(VehicleDynamicsTest, SurgeTransientFollowsTheAnalyticSolution) {
-  VehicleOptions options;
+  VehicleModel options;
   options.thruster_time_constant = 0.0;  // the analytic solution assumes a force step
   VehicleDynamics dynamics(options);
   VehicleState state;
@@ -74,7 +73,7 @@ TEST(VehicleDynamicsTest, SurgeTransientFollowsTheAnalyticSolution) {
 }
 
 TEST(VehicleDynamicsTest, LinearDragTimeConstantIsMassOverDrag) {
-  VehicleOptions options;
+  VehicleModel options;
   options.thruster_time_constant = 0.0;
   options.drag_quadratic_surge = 0.0;
   options.drag_linear_surge = 20.0;
@@ -93,7 +92,7 @@ TEST(VehicleDynamicsTest, LinearDragTimeConstantIsMassOverDrag) {
 }
 
 TEST(VehicleDynamicsTest, ThrustRespondsWithTheFirstOrderTimeConstant) {
-  const VehicleOptions options;  // 0.2 s
+  const VehicleModel options;  // 0.2 s
   VehicleDynamics dynamics(options);
   VehicleState state;
   state.position.z() = 5.0;
@@ -110,7 +109,7 @@ TEST(VehicleDynamicsTest, ThrustRespondsWithTheFirstOrderTimeConstant) {
 }
 
 TEST(VehicleDynamicsTest, DifferentialThrustTurnsAtTheTerminalYawRate) {
-  const VehicleOptions options;
+  const VehicleModel options;
   VehicleDynamics dynamics(options);
   VehicleState state;
   state.position.z() = 5.0;
@@ -131,7 +130,7 @@ TEST(VehicleDynamicsTest, DifferentialThrustTurnsAtTheTerminalYawRate) {
 }
 
 TEST(VehicleDynamicsTest, SymmetricThrustGivesNoYaw) {
-  VehicleDynamics dynamics{VehicleOptions()};
+  VehicleDynamics dynamics{VehicleModel()};
   VehicleState state;
   state.position.z() = 5.0;
   state.yaw = 0.7;
@@ -144,7 +143,7 @@ TEST(VehicleDynamicsTest, SymmetricThrustGivesNoYaw) {
 }
 
 TEST(VehicleDynamicsTest, TurningWhileMovingSlipsOutwards) {
-  VehicleDynamics dynamics{VehicleOptions()};
+  VehicleDynamics dynamics{VehicleModel()};
   VehicleState state;
   state.position.z() = 5.0;
   run(dynamics, state, {1.0, 0.4, 0.0}, 40.0);
@@ -156,7 +155,7 @@ TEST(VehicleDynamicsTest, TurningWhileMovingSlipsOutwards) {
 }
 
 TEST(VehicleDynamicsTest, VerticalThrustDivesAtTheTerminalHeaveSpeed) {
-  const VehicleOptions options;
+  const VehicleModel options;
   VehicleDynamics dynamics(options);
   VehicleState state;
   state.position.z() = 1.0;
@@ -168,7 +167,7 @@ TEST(VehicleDynamicsTest, VerticalThrustDivesAtTheTerminalHeaveSpeed) {
 }
 
 TEST(VehicleDynamicsTest, PositiveBuoyancyRisesSlowlyAndStopsAtTheSurface) {
-  const VehicleOptions options;
+  const VehicleModel options;
   VehicleDynamics dynamics(options);
   VehicleState state;
   state.position.z() = 3.0;
@@ -192,7 +191,7 @@ TEST(VehicleDynamicsTest, PositiveBuoyancyRisesSlowlyAndStopsAtTheSurface) {
 }
 
 TEST(VehicleDynamicsTest, StepSizeDoesNotChangeTheTrajectory) {
-  const VehicleOptions options;
+  const VehicleModel options;
   VehicleDynamics coarse(options), fine(options);
   VehicleState a, b;
   a.position.z() = b.position.z() = 5.0;
@@ -212,7 +211,7 @@ TEST(VehicleDynamicsTest, StepSizeDoesNotChangeTheTrajectory) {
 }
 
 TEST(VehicleDynamicsTest, SpeedLimitsAreHard) {
-  VehicleOptions options;
+  VehicleModel options;
   options.max_surge_speed = 0.5;
   options.max_yaw_rate = 0.2;
   VehicleDynamics dynamics(options);
@@ -224,8 +223,8 @@ TEST(VehicleDynamicsTest, SpeedLimitsAreHard) {
   EXPECT_DOUBLE_EQ(state.yaw_rate, 0.2);
 }
 
-TEST(VehicleOptionsTest, CheckNamesTheField) {
-  VehicleOptions options;
+TEST(VehicleModelTest, CheckNamesTheField) {
+  VehicleModel options;
   options.mass = -1;
   try {
     options.check();
@@ -233,48 +232,13 @@ TEST(VehicleOptionsTest, CheckNamesTheField) {
   } catch (const ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("vehicle.mass"), std::string::npos) << e.what();
   }
-  options = VehicleOptions();
+  options = VehicleModel();
   options.drag_linear_yaw = options.drag_quadratic_yaw = 0;
   EXPECT_THROW(options.check(), ConfigError);
-  options = VehicleOptions();
+  options = VehicleModel();
   options.thruster_time_constant = std::nan("");
   EXPECT_THROW(VehicleDynamics{options}, ConfigError);
 }
 
-TEST(VehicleOptionsTest, FromYamlReadsStrictly) {
-  const YAML::Node root = YAML::Load(
-      "vehicle:\n"
-      "  start: {position: [0, 0, 2], yaw: 0}\n"
-      "  mass: 60\n"
-      "  max_thrust_forward: 30\n"
-      "  net_buoyancy: -1.5\n");
-  const VehicleOptions options =
-      VehicleOptions::fromYaml(YamlSection(root["vehicle"], "vehicle", "test.yaml"));
-  EXPECT_EQ(options.mass, 60);
-  EXPECT_EQ(options.max_thrust_forward, 30);
-  EXPECT_EQ(options.net_buoyancy, -1.5);
-  EXPECT_EQ(options.drag_linear_surge, VehicleOptions().drag_linear_surge);
-
-  auto error = [](const std::string& text) {
-    const YAML::Node node = YAML::Load(text);
-    try {
-      VehicleOptions::fromYaml(YamlSection(node["vehicle"], "vehicle", "test.yaml"));
-    } catch (const ConfigError& e) {
-      return std::string(e.what());
-    }
-    return std::string();
-  };
-  const std::string typo = error("vehicle:\n  mas: 60\n");
-  EXPECT_NE(typo.find("test.yaml: vehicle.mas"), std::string::npos) << typo;
-  EXPECT_NE(typo.find("did you mean 'mass'"), std::string::npos) << typo;
-  const std::string zero = error("vehicle:\n  mass: 0\n");
-  EXPECT_NE(zero.find("test.yaml: vehicle.mass"), std::string::npos) << zero;
-  const std::string word = error("vehicle:\n  thruster_spacing: wide\n");
-  EXPECT_NE(word.find("vehicle.thruster_spacing"), std::string::npos) << word;
-  // An absent section gives the defaults.
-  EXPECT_EQ(VehicleOptions::fromYaml(YamlSection(YAML::Node(), "vehicle", "test.yaml")).mass,
-            VehicleOptions().mass);
-}
-
 }  // namespace
-}  // namespace auv::sim
+}  // namespace auv::control

@@ -10,10 +10,10 @@
 #include <mutex>
 #include <optional>
 
+#include "auv/control/controller.h"
 #include "auv/interfaces/component.h"
-#include "auv/sim/vehicle/controller.h"
 
-namespace auv::sim {
+namespace auv::control {
 
 class ControllerComponent : public interfaces::Component {
  public:
@@ -68,4 +68,4 @@ class ControllerComponent : public interfaces::Component {
   std::shared_ptr<interfaces::Timer> status_timer_;
 };
 
-}  // namespace auv::sim
+}  // namespace auv::control
