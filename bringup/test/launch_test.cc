@@ -247,6 +247,37 @@ TEST(LaunchDescriptionTest, ArgumentErrorsNameTheArgument) {
   EXPECT_EQ(undeclared.field(), "processes[0].command[1]");
 }
 
+TEST(LaunchDescriptionTest, EnvSubstitutionTakesTheEnvironmentOrItsDefault) {
+  constexpr const char* kYaml = R"yaml(
+arguments:
+  domain: {default: "$(env AUV_LAUNCH_TEST_DOMAIN 0)"}
+processes:
+  - {name: a, command: [echo, $(arg domain), "$(env AUV_LAUNCH_TEST_WORD fallback words)"]}
+)yaml";
+  auto command = [&](const std::map<std::string, std::string>& arguments = {}) {
+    return parseLaunchYaml(kYaml, "env.yaml", "/", arguments).processes[0].command;
+  };
+  ::unsetenv("AUV_LAUNCH_TEST_DOMAIN");
+  ::unsetenv("AUV_LAUNCH_TEST_WORD");
+  EXPECT_THAT(command(), ElementsAre("echo", "0", "fallback words"));
+  ::setenv("AUV_LAUNCH_TEST_DOMAIN", "17", 1);
+  ::setenv("AUV_LAUNCH_TEST_WORD", "set", 1);
+  EXPECT_THAT(command(), ElementsAre("echo", "17", "set"));
+  EXPECT_THAT(command({{"domain", "5"}}), ElementsAre("echo", "5", "set"));  // name:= wins
+  ::setenv("AUV_LAUNCH_TEST_DOMAIN", "", 1);  // exported but empty: as if unset
+  EXPECT_THAT(command(), ElementsAre("echo", "0", "set"));
+  ::unsetenv("AUV_LAUNCH_TEST_DOMAIN");
+  ::unsetenv("AUV_LAUNCH_TEST_WORD");
+
+  const LaunchFileError unset =
+      parseError("processes:\n  - {name: a, command: [echo, \"$(env AUV_LAUNCH_TEST_NOPE)\"]}\n");
+  EXPECT_EQ(unset.field(), "processes[0].command[1]");
+  EXPECT_THAT(std::string(unset.what()), HasSubstr("AUV_LAUNCH_TEST_NOPE"));
+  const LaunchFileError arg_default = parseError(
+      "arguments: {x: \"1\"}\nprocesses:\n  - {name: a, command: [echo, \"$(arg x 2)\"]}\n");
+  EXPECT_THAT(std::string(arg_default.what()), HasSubstr("takes no default"));
+}
+
 TEST(LaunchDescriptionTest, MinimalFileGetsDefaults) {
   const LaunchDescription launch =
       parseLaunchYaml("processes:\n  - {name: a, command: [true]}\n", "min.yaml", "/");
@@ -1046,6 +1077,37 @@ TEST(ShippedLaunchTest, VehicleGivesTheMappingItsInitialMap) {
       }
     }
     EXPECT_EQ(given, initial_map);
+  }
+}
+
+// Like ROS_DOMAIN_ID for ros2 launch: an exported AUV_DOMAIN_ID / AUV_DDS is every shipped
+// launch file's default domain and vendor, and domain:= / vendor:= still win.
+TEST(ShippedLaunchTest, ExportedDomainAndVendorAreTheDefaults) {
+  for (const char* name : {"sim.yaml", "vehicle.yaml", "shore.yaml"}) {
+    SCOPED_TRACE(name);
+    const std::string file = std::string(AUV_SHIPPED_LAUNCH_DIR) + "/" + name;
+    std::map<std::string, std::string> arguments;
+    if (std::string(name) == "shore.yaml") arguments["survey"] = "surveys/s1";
+    auto check = [&](const std::map<std::string, std::string>& extra, const char* domain,
+                     DdsVendor vendor) {
+      std::map<std::string, std::string> all = arguments;
+      all.insert(extra.begin(), extra.end());
+      const LaunchDescription launch = parseLaunchFile(file, all);
+      EXPECT_EQ(launch.environment.at("AUV_DOMAIN_ID"), domain);
+      ASSERT_FALSE(launch.processes.empty());
+      for (const ProcessDescription& process : launch.processes) {
+        EXPECT_EQ(process.vendor, vendor) << process.name;
+      }
+    };
+    ::unsetenv("AUV_DOMAIN_ID");
+    ::unsetenv("AUV_DDS");
+    check({}, "0", DdsVendor::CYCLONEDDS);
+    ::setenv("AUV_DOMAIN_ID", "17", 1);
+    ::setenv("AUV_DDS", "fastdds", 1);
+    check({}, "17", DdsVendor::FASTDDS);
+    check({{"domain", "5"}, {"vendor", "cyclonedds"}}, "5", DdsVendor::CYCLONEDDS);
+    ::unsetenv("AUV_DOMAIN_ID");
+    ::unsetenv("AUV_DDS");
   }
 }
 

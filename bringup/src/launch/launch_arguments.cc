@@ -1,5 +1,7 @@
 #include "launch_arguments.h"
 
+#include <cstdlib>
+#include <optional>
 #include <regex>
 
 #include "auv/interfaces/spelling.h"
@@ -24,33 +26,61 @@ std::string closest(const std::string& name, const std::vector<LaunchArgument>& 
   return best;
 }
 
-/// `text` with every $(arg name) replaced by its value; errors name `path`.
+/// The value of $(env name [default]): the variable when set and not empty, else the default.
+std::string environmentValue(const std::string& name, const std::optional<std::string>& fallback,
+                             const std::string& source, const std::string& path) {
+  const char* value = std::getenv(name.c_str());
+  if (value && *value) return value;
+  if (fallback) return *fallback;
+  throw LaunchFileError(source, path,
+                        "$(env " + name + ") refers to an environment variable that is not set " +
+                            "(export it, or give a default: $(env " + name + " <default>))");
+}
+
+/// `text` with every $(arg name) replaced by its value and every $(env name [default]) by the
+/// environment's; errors name `path`.
 std::string substituteText(const std::string& text,
                            const std::map<std::string, std::string>& values,
                            const std::vector<LaunchArgument>& declared, const std::string& source,
                            const std::string& path) {
-  static const std::regex pattern(R"(\$\(arg\s+([A-Za-z_][A-Za-z0-9_]*)\s*\))");
+  static const std::regex pattern(
+      R"(\$\((arg|env)\s+([A-Za-z_][A-Za-z0-9_]*)(?:\s+([^()\s][^()]*?))?\s*\))");
   if (text.find("$(") == std::string::npos) return text;
   std::string out;
   auto begin = std::sregex_iterator(text.begin(), text.end(), pattern);
   size_t last = 0;
   for (auto it = begin; it != std::sregex_iterator(); ++it) {
-    const std::string name = (*it)[1];
-    const auto value = values.find(name);
-    if (value == values.end()) {
-      const std::string hint = closest(name, declared);
-      throw LaunchFileError(source, path,
-                            "$(arg " + name + ") refers to an undeclared argument" +
-                                (hint.empty() ? "" : " (did you mean '" + hint + "'?)") +
-                                "; declared: " + declaredList(declared));
+    const std::string kind = (*it)[1];
+    const std::string name = (*it)[2];
+    std::optional<std::string> fallback;
+    if ((*it)[3].matched) fallback = (*it)[3].str();
+    std::string replacement;
+    if (kind == "env") {
+      replacement = environmentValue(name, fallback, source, path);
+    } else {
+      if (fallback) {
+        throw LaunchFileError(source, path,
+                              "$(arg " + name + " ...) takes no default here; declare it under " +
+                                  "arguments: {" + name + ": {default: ...}}");
+      }
+      const auto value = values.find(name);
+      if (value == values.end()) {
+        const std::string hint = closest(name, declared);
+        throw LaunchFileError(source, path,
+                              "$(arg " + name + ") refers to an undeclared argument" +
+                                  (hint.empty() ? "" : " (did you mean '" + hint + "'?)") +
+                                  "; declared: " + declaredList(declared));
+      }
+      replacement = value->second;
     }
-    out += text.substr(last, it->position() - last) + value->second;
+    out += text.substr(last, it->position() - last) + replacement;
     last = it->position() + it->length();
   }
   out += text.substr(last);
   if (out.find("$(") != std::string::npos) {
-    throw LaunchFileError(source, path,
-                          "malformed substitution in '" + text + "' (the only one is $(arg name))");
+    throw LaunchFileError(
+        source, path,
+        "malformed substitution in '" + text + "' (expected $(arg name) or $(env NAME [default]))");
   }
   return out;
 }

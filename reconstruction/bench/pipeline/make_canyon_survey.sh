@@ -125,7 +125,8 @@ with open(target, "w") as out:
     yaml.safe_dump(scenario, out, sort_keys=False)
 EOF
 auv sim check "$truth/scenario.yaml" | head -3
-"${guard[@]}" auv sim render "$truth" --start "$start" --end "$end" --threads "$threads" --quiet
+"${guard[@]}" auv sim render "$truth" --start "$start" --end "$end" --threads "$threads" \
+  --progress-every 30
 t2=$(date +%s)
 
 # 3. The survey folder.

@@ -107,6 +107,10 @@ void RenderRunOptions::check() const {
   }
   if (max_frames < 0) throw std::invalid_argument("max frames: expected >= 0");
   if (threads > 1024) throw std::invalid_argument("threads: expected <= 1024");
+  if (!(progress_interval > 0)) {
+    throw std::invalid_argument("progress interval: expected seconds > 0, got " +
+                                std::to_string(progress_interval));
+  }
   if (std::isnan(start_time) || std::isnan(end_time) || !(end_time >= start_time)) {
     throw std::invalid_argument("time span: expected start <= end");
   }
@@ -217,7 +221,8 @@ RenderRunReport renderRun(const std::string& run_dir, const RenderRunOptions& op
                                  camera_id, video_name + "#" + std::to_string(stamp.frame));
       const auto now = Clock::now();
       const bool last = index + 1 == static_cast<int64_t>(stamps.size());
-      if (options.log && (last || now - last_report > std::chrono::seconds(2))) {
+      if (options.log &&
+          (last || now - last_report > std::chrono::duration<double>(options.progress_interval))) {
         last_report = now;
         const double elapsed = std::chrono::duration<double>(now - started).count();
         const double fps = (index + 1) / std::max(elapsed, 1e-6);

@@ -28,7 +28,8 @@ struct RenderRunOptions {
   int64_t max_frames = 0;            ///< per camera, 0 = all
   double start_time = -std::numeric_limits<double>::infinity();  ///< s sim, clipped to the run
   double end_time = std::numeric_limits<double>::infinity();     ///< s sim, clipped to the run
-  std::ostream* log = nullptr;  ///< progress and warnings ("render: ..."), or none
+  std::ostream* log = nullptr;     ///< progress and warnings ("render: ..."), or none
+  double progress_interval = 2.0;  ///< s of wall time between progress lines, > 0
 
   /// Throws std::invalid_argument naming the option.
   void check() const;

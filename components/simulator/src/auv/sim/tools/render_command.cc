@@ -15,7 +15,8 @@ namespace {
 
 const char* kRenderUsage =
     "usage: auv sim render <run-dir> [--cameras left,right] [--threads N] [--scale F]\n"
-    "                      [--max-frames N] [--start S] [--end S] [--quiet]\n"
+    "                      [--max-frames N] [--start S] [--end S] [--progress-every S]\n"
+    "                      [--quiet]\n"
     "Renders <run-dir>/vehicle/recordings/<camera>/<camera>_0001.mp4 (+ .frames.csv) for each\n"
     "camera of the run's scenario.yaml from ground_truth/trajectory.tum, and writes the\n"
     "ground truth ground_truth/cameras.txt and images_<camera>.txt (COLMAP text format).\n"
@@ -24,6 +25,8 @@ const char* kRenderUsage =
     "  --scale F        resolution factor, e.g. 0.5 (default 1)\n"
     "  --max-frames N   at most N frames per camera (default: the whole run)\n"
     "  --start S, --end S   only this span of simulation time (s)\n"
+    "  --progress-every S   a progress line (frames, fps, time left) every S s of wall\n"
+    "                   time (default 2)\n"
     "  --quiet          no progress output\n";
 
 int64_t parseCount(const std::string& option, const std::string& text) {
@@ -78,6 +81,10 @@ int renderMain(const std::vector<std::string>& args) {
         options.start_time = parseNumber(arg, value());
       } else if (arg == "--end") {
         options.end_time = parseNumber(arg, value());
+      } else if (arg == "--progress-every") {
+        options.progress_interval = parseNumber(arg, value());
+        if (!(options.progress_interval > 0 && options.progress_interval <= 86400))
+          throw UsageError("--progress-every: expected seconds in (0, 86400]");
       } else if (arg == "--quiet") {
         quiet = true;
       } else if (!arg.empty() && arg[0] == '-') {
