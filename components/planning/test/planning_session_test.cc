@@ -401,19 +401,26 @@ TEST_F(PlanningSessionTest, WithoutAnActiveWaypointAWallByTheRootRestartsNothing
 // The vehicle still heads for the previous waypoint A when B is sent: its way to the root B
 // is checked through A (round the corner), and straight once it has reached A.
 TEST_F(PlanningSessionTest, WayToTheRootIsCheckedThroughTheWaypointTheVehicleHeadsFor) {
-  ASSERT_TRUE(start(makeQuery(1, kStart, kGoal)));
-  auto a = next(0);
-  ASSERT_TRUE(a);
+  // A pair A -> B long enough for a column beside both legs of the corner (the edges are
+  // random: a new query when a path has none).
+  std::optional<PlannedWaypoint> a;
   std::optional<PlannedWaypoint> b;
-  // A pair A -> B long enough for a column beside both legs of the corner.
-  for (int i = 0; i < 10 && !a->is_final; ++i) {
-    b = next(a->waypoint_id);
-    ASSERT_TRUE(b);
-    if ((b->position - a->position).norm() >= 2.5 && !b->is_final) break;
-    a = b;
-    b.reset();
+  for (uint64_t id = 1; id <= 20 && !b; ++id) {
+    ASSERT_TRUE(start(makeQuery(id, kStart, kGoal)));
+    a = next(0, id);
+    ASSERT_TRUE(a);
+    while (!a->is_final && !b) {
+      const auto w = next(a->waypoint_id, id);
+      ASSERT_TRUE(w);
+      if ((w->position - a->position).norm() >= 2.5 && !w->is_final) {
+        b = w;
+      } else {
+        a = w;
+      }
+    }
   }
-  ASSERT_TRUE(b) << "no edge of 2.5 m on the path";
+  ASSERT_TRUE(b) << "no edge of 2.5 m on 20 paths";
+  cancels.clear();  // of the queries replaced
   const Eigen::Vector3d A = a->position;
   const Eigen::Vector3d B = b->position;
   // The vehicle 5 m aside A (on the side nearer y = 0), the column where V -> B is farthest
