@@ -2,75 +2,14 @@
 #include "auv/interfaces/msg_time.h"
 
 #include <chrono>
-#include <cmath>
 #include <functional>
-#include <sstream>
-
-#include <ompl/base/PlannerTerminationCondition.h>
-#include <ompl/base/ScopedState.h>
-#include <ompl/base/objectives/PathLengthOptimizationObjective.h>
-#include <ompl/base/spaces/RealVectorStateSpace.h>
+#include <variant>
 
 #include "auv/mapping/map_replica.h"
 
 namespace auv::planning {
 
-/// The distance field of the replica: forwards to an OctomapDistanceField that is rebuilt when
-/// a FULL map replaces the tree or a query changes the covered box, so the space information
-/// and objective of the active query keep one field for their whole life.
-class ReplicaDistanceField : public DistanceField {
- public:
-  ReplicaDistanceField(double resolution, double max_distance)
-      : resolution_(resolution), max_distance_(max_distance) {}
-
-  void rebuild(octomap::OcTree* tree, const OctomapDistanceFieldOptions& options) {
-    options_ = options;
-    field_ = std::make_unique<OctomapDistanceField>(tree, options);
-    ++revision_;
-  }
-  void rebuild(octomap::OcTree* tree) { rebuild(tree, options_); }
-  void update() {
-    field_->update();
-    ++revision_;
-  }
-  double distance(const Eigen::Vector3d& position) const override {
-    return field_ ? field_->distance(position) : max_distance_;
-  }
-  double maxDistance() const override { return max_distance_; }
-  double resolution() const override { return resolution_; }
-  std::uint64_t revision() const override { return revision_; }
-
- private:
-  double resolution_;
-  double max_distance_;
-  OctomapDistanceFieldOptions options_;
-  std::unique_ptr<OctomapDistanceField> field_;
-  std::uint64_t revision_ = 0;
-};
-
-struct PlanningComponent::ActiveQuery {
-  msg::PlannerQuery query;
-  ompl::base::SpaceInformationPtr si;
-  ompl::base::ProblemDefinitionPtr pdef;
-  std::shared_ptr<OnlineRRTstar> planner;
-  Eigen::Vector3d goal = Eigen::Vector3d::Zero();
-  double time_budget = 0.0;
-  // Last time the tree had a solution, or the query (re)started: the budget runs from here, so
-  // an obstacle that removes the solution mid-mission gets a full budget to be planned around.
-  int64_t solved_ns = 0;
-  uint64_t active_waypoint_id = 0;  // 0: none issued since the (re)start
-  msg::Waypoint active_waypoint;    // the one sent as active_waypoint_id, for repeated requests
-  // The waypoint the vehicle is still heading for when the active one was sent (the mission
-  // handler asks early): until the vehicle reaches it, its way to the root passes through it.
-  std::optional<Eigen::Vector3d> approach_via;
-  uint64_t checked_revision = 0;  // field revision the tree was last re-checked against
-  bool no_solution_reported = false;
-  uint64_t earlier_iterations = 0;  // iterations of the trees dropped by restarts
-};
-
 namespace {
-
-namespace ob = ompl::base;
 
 Eigen::Vector3d toVector(const msg::Point& p) { return {p.x(), p.y(), p.z()}; }
 
@@ -84,9 +23,39 @@ msg::Point toPoint(const Eigen::Vector3d& v) {
 
 void setStamp(msg::Header& header, int64_t ns) { header.stamp(interfaces::toMsgTime(ns)); }
 
-void setPosition(ob::State* state, const Eigen::Vector3d& position) {
-  auto* values = state->as<ob::RealVectorStateSpace::StateType>()->values;
-  for (int i = 0; i < 3; ++i) values[i] = position[i];
+PlanningQuery toPlanningQuery(const msg::PlannerQuery& query) {
+  PlanningQuery converted;
+  converted.query_id = query.query_id();
+  converted.start = toVector(query.start().position());
+  converted.goal = toVector(query.goal().position());
+  converted.goal_tolerance = query.goal_tolerance();
+  converted.time_budget = query.time_budget();
+  // PLANNER_OBJECTIVE_DEFAULT is the planner's configured objective: the visibility cost.
+  converted.objective = query.objective() == msg::PLANNER_OBJECTIVE_PATH_LENGTH
+                            ? PlanningObjective::PATH_LENGTH
+                            : PlanningObjective::VISIBILITY_COST;
+  converted.expected_distance = query.expected_distance();
+  converted.admissible_range = query.admissible_range();
+  converted.bounds_min = toVector(query.bounds_min());
+  converted.bounds_max = toVector(query.bounds_max());
+  if (query.fixed_depth()) converted.fixed_depth = query.depth();
+  return converted;
+}
+
+msg::CancelReason toMsg(CancelReason reason) {
+  switch (reason) {
+    case CancelReason::ROOT_IN_COLLISION:
+      return msg::CANCEL_REASON_ROOT_IN_COLLISION;
+    case CancelReason::APPROACH_IN_COLLISION:
+      return msg::CANCEL_REASON_APPROACH_IN_COLLISION;
+    case CancelReason::QUERY_REPLACED:
+      return msg::CANCEL_REASON_QUERY_REPLACED;
+    case CancelReason::NO_SOLUTION:
+      return msg::CANCEL_REASON_NO_SOLUTION;
+    case CancelReason::PLANNER_ERROR:
+      return msg::CANCEL_REASON_PLANNER_ERROR;
+  }
+  return msg::CANCEL_REASON_UNKNOWN;
 }
 
 }  // namespace
@@ -176,15 +145,8 @@ void PlanningComponent::configure(interfaces::Node& node) {
                                     {"map instance followed on map/update", "", {}, {}, {}, true});
   o.world_frame = p.declare<std::string>("world_frame", o.world_frame,
                                          {"frame of published poses (NED)", "", {}, {}, {}, true});
-  o.clearance.check();
-  if (o.goal_bias + o.narrow_passage_bias > 1.0) {
-    throw PlanningConfigError("goal_bias + narrow_passage_bias must be <= 1 (got " +
-                              std::to_string(o.goal_bias) + " + " +
-                              std::to_string(o.narrow_passage_bias) + ")");
-  }
-
+  session_ = std::make_unique<PlanningSession>(o);  // checks the options
   replica_ = std::make_unique<mapping::MapReplica>(o.map_id, o.map_resolution);
-  field_ = std::make_shared<ReplicaDistanceField>(o.map_resolution, o.max_distance);
 
   waypoint_pub_ = node.createPublisher<msg::Waypoint>("planner/waypoint", interfaces::commandQos());
   cancel_pub_ =
@@ -233,7 +195,7 @@ void PlanningComponent::cleanup() {
   query_sub_.reset();
   request_sub_.reset();
   std::lock_guard<std::mutex> lock(mutex_);
-  query_.reset();
+  session_.reset();  // with the query's tree
   waypoint_pub_.reset();
   cancel_pub_.reset();
   path_pub_.reset();
@@ -272,29 +234,6 @@ void PlanningComponent::onWaypointRequest(const msg::WaypointRequest& request) {
   inbox_changed_.notify_one();
 }
 
-void PlanningComponent::handleWaypointRequest(const msg::WaypointRequest& request) {
-  if (!query_ || query_->query.query_id() != request.query_id()) {
-    // Queries and requests travel on different topics: a mission handler's first request can
-    // overtake its query. Kept for the next query to start, used if it is that one.
-    early_request_ = request;
-    if (query_ && request.query_id() < query_->query.query_id()) {
-      AUV_WARN(node_->logger(), "waypoint request for query " << request.query_id()
-                                                              << ", older than the one planned ("
-                                                              << query_->query.query_id() << ")");
-    }
-    return;
-  }
-  if (query_->active_waypoint_id != 0 &&
-      request.reached_waypoint_id() != query_->active_waypoint_id) {
-    // The vehicle has not reached the active waypoint: a repeated request whose answer was
-    // lost or crossed it. Popping again would skip a waypoint; send the active one again.
-    waypoint_pub_->publish(query_->active_waypoint);
-    return;
-  }
-  pending_request_ = request;
-  answerWaypointRequest();  // otherwise the planning thread answers once a solution exists
-}
-
 void PlanningComponent::planningLoop() {
   bool planning = false;
   while (running_) {
@@ -308,14 +247,18 @@ void PlanningComponent::planningLoop() {
     }
     if (!running_) break;
     std::lock_guard<std::mutex> lock(mutex_);
-    applyMapUpdates();
-    planSlice();
+    applyInbox();
+    publishOutbox();
+    if (session_->planSlice(vehiclePosition(), now())) ++slices_;
+    publishOutbox();
+    session_->finishSlice(now());  // the time after the slice: the budget counts its length
+    publishOutbox();
     publishViews();
-    planning = query_ != nullptr && query_->planner->treeSize() < options_.max_tree_size;
+    planning = session_->growing();
   }
 }
 
-void PlanningComponent::applyMapUpdates() {
+void PlanningComponent::applyInbox() {
   std::deque<msg::OctomapUpdate> updates;
   std::optional<msg::PlannerQuery> query;
   std::deque<msg::WaypointRequest> requests;
@@ -326,8 +269,18 @@ void PlanningComponent::applyMapUpdates() {
     requests.swap(request_inbox_);
   }
   for (const auto& update : updates) applyMapUpdate(update);
-  if (query) startQuery(*query);
-  for (const auto& request : requests) handleWaypointRequest(request);
+  if (query) {
+    const PlanningQuery converted = toPlanningQuery(*query);
+    if (session_->startQuery(converted, replica_->tree(), vehiclePosition(), now())) {
+      AUV_INFO(node_->logger(), "planning query " << converted.query_id);
+    }
+  }
+  for (const auto& request : requests) {
+    WaypointRequest converted;
+    converted.query_id = request.query_id();
+    converted.reached_waypoint_id = request.reached_waypoint_id();
+    session_->onWaypointRequest(converted);
+  }
 }
 
 void PlanningComponent::applyMapUpdate(const msg::OctomapUpdate& update) {
@@ -340,317 +293,83 @@ void PlanningComponent::applyMapUpdate(const msg::OctomapUpdate& update) {
   }
   if (outcome != mapping::MapReplica::Outcome::APPLIED) return;
   if (update.kind() == msg::OCTOMAP_UPDATE_FULL) {
-    if (query_) field_->rebuild(&replica_->tree());  // a FULL map is a new tree
-    recheck_everything_ = true;
-    return;
+    session_->onFullMap(replica_->tree(), replica_->sequence());
+  } else {
+    session_->onMapIncrement(toVector(update.changed_min()), toVector(update.changed_max()),
+                             replica_->sequence());
   }
-  if (query_) field_->update();
-  const Eigen::Vector3d changed_min = toVector(update.changed_min());
-  const Eigen::Vector3d changed_max = toVector(update.changed_max());
-  if ((changed_min.array() < changed_max.array()).all()) {
-    changed_region_.extend(Eigen::AlignedBox3d(changed_min, changed_max));
-  } else if (!(changed_min.array() > changed_max.array()).any()) {
-    recheck_everything_ = true;  // a flat box: not filled in by the sender, so unknown
-  }                              // else an empty update: nothing changed
 }
 
-void PlanningComponent::startQuery(const msg::PlannerQuery& query) {
-  if (query_ && query_->active_waypoint_id != 0) {
-    cancel(query_->active_waypoint_id, msg::CANCEL_REASON_QUERY_REPLACED,
-           "query " + std::to_string(query.query_id()) + " replaces it");
-  }
-  query_.reset();
-  pending_request_.reset();  // for the replaced query
-  if (early_request_ && early_request_->query_id() == query.query_id()) {
-    pending_request_ = early_request_;  // it overtook this query
-  }
-  early_request_.reset();
-  auto active = std::make_unique<ActiveQuery>();
-  active->query = query;
-  try {
-    if (query.query_id() == 0) throw PlanningConfigError("query_id 0 is invalid");
-    if (!(query.goal_tolerance() > 0.0)) throw PlanningConfigError("goal_tolerance must be > 0");
-    std::optional<Eigen::Vector3d> vehicle;
-    {
-      std::lock_guard<std::mutex> lock(inbox_mutex_);
-      vehicle = vehicle_position_;
+void PlanningComponent::publishOutbox() {
+  PlanningSession::Outbox outbox = session_->takeOutbox();
+  for (const std::string& warning : outbox.warnings) AUV_WARN(node_->logger(), warning);
+  for (const auto& message : outbox.messages) {
+    if (const auto* waypoint = std::get_if<PlannedWaypoint>(&message)) {
+      // A repeat is the message sent before (its stamp included): the active waypoint is
+      // always the last one sent, as a new query or a restart clears it.
+      if (!waypoint->repeat || last_waypoint_.waypoint_id() != waypoint->waypoint_id) {
+        msg::Waypoint& w = last_waypoint_;
+        w = msg::Waypoint();
+        setStamp(w.header(), node_->clock().nowNs());
+        w.header().frame_id(options_.world_frame);
+        w.waypoint_id(waypoint->waypoint_id);
+        w.query_id(waypoint->query_id);
+        w.position(toPoint(waypoint->position));
+        w.heading(waypoint->heading);
+        w.speed(waypoint->speed);
+        w.tolerance(waypoint->tolerance);
+        w.is_final(waypoint->is_final);
+      }
+      waypoint_pub_->publish(last_waypoint_);
+      continue;
     }
-    const Eigen::Vector3d start = vehicle ? *vehicle : toVector(query.start().position());
-    PlanningSpaceOptions space;
-    space.min_corner = toVector(query.bounds_min());
-    space.max_corner = toVector(query.bounds_max());
-    if (query.fixed_depth()) {
-      space.fixed_depth = query.depth();
-    } else if (options_.fixed_depth) {
-      space.fixed_depth = start.z();
-    }
-    space.check();
-    OctomapDistanceFieldOptions field_options;
-    field_options.max_distance = options_.max_distance;
-    field_options.min_corner = space.min_corner - Eigen::Vector3d::Constant(options_.field_margin);
-    field_options.max_corner = space.max_corner + Eigen::Vector3d::Constant(options_.field_margin);
-    field_->rebuild(&replica_->tree(), field_options);
-    active->si = makeSpaceInformation(space, field_, options_.clearance);
-
-    ob::OptimizationObjectivePtr objective;
-    if (query.objective() == msg::PLANNER_OBJECTIVE_PATH_LENGTH) {
-      objective = std::make_shared<ob::PathLengthOptimizationObjective>(active->si);
-    } else {
-      VisibilityObjectiveOptions visibility;
-      visibility.cost.expected_distance = query.expected_distance();
-      visibility.cost.admissible_range = query.admissible_range();
-      visibility.visibility_weight = options_.visibility_weight;
-      visibility.check();
-      objective = std::make_shared<VisibilityObjective>(active->si, field_, visibility);
-    }
-    active->goal = toVector(query.goal().position());
-    if (space.fixed_depth) active->goal.z() = *space.fixed_depth;
-    ob::ScopedState<> start_state(active->si);
-    ob::ScopedState<> goal_state(active->si);
-    setPosition(start_state.get(), start);
-    active->si->enforceBounds(start_state.get());
-    setPosition(goal_state.get(), active->goal);
-    active->pdef = std::make_shared<ob::ProblemDefinition>(active->si);
-    active->pdef->setStartAndGoalStates(start_state, goal_state, query.goal_tolerance());
-    active->pdef->setOptimizationObjective(objective);
-    active->planner = std::make_shared<OnlineRRTstar>(active->si);
-    active->planner->setRange(options_.range);
-    active->planner->setGoalBias(options_.goal_bias);
-    active->planner->setNarrowPassageBias(options_.narrow_passage_bias);
-    active->planner->setRewireFactor(options_.rewire_factor);
-    active->planner->setGoalTolerance(query.goal_tolerance());
-    active->planner->setProblemDefinition(active->pdef);
-    active->planner->setup();
-    // Root the tree at the start even when it is inside the clearance (a vehicle that drifted
-    // close to a wall): OMPL's start-state input skips invalid starts and would leave no tree,
-    // while the motion validator lets the tree leave such a root by moving away from the wall.
-    active->planner->reset(start_state.get());
-  } catch (const std::exception& error) {
-    query_ = std::move(active);  // for the query id of the cancel
-    cancel(0, msg::CANCEL_REASON_PLANNER_ERROR, std::string("query rejected: ") + error.what());
-    query_.reset();
-    pending_request_.reset();
-    return;
-  }
-  active->time_budget =
-      query.time_budget() > 0.0 ? query.time_budget() : options_.default_time_budget;
-  active->solved_ns = node_->clock().nowNs();
-  active->checked_revision = field_->revision();
-  changed_region_.setEmpty();  // the new tree is grown on the map as it is now
-  recheck_everything_ = false;
-  query_ = std::move(active);
-  AUV_INFO(node_->logger(), "planning query " << query.query_id());
-}
-
-void PlanningComponent::vehicleState(ob::State* state) const {
-  std::optional<Eigen::Vector3d> vehicle;
-  {
-    std::lock_guard<std::mutex> lock(inbox_mutex_);
-    vehicle = vehicle_position_;
-  }
-  setPosition(state, vehicle ? *vehicle : toVector(query_->query.start().position()));
-  query_->si->enforceBounds(state);  // also puts it on the fixed depth
-}
-
-bool PlanningComponent::hullPassesAlong(const Eigen::Vector3d& from,
-                                        const Eigen::Vector3d& to) const {
-  const double step = 0.5 * options_.map_resolution;
-  const int steps = std::max(1, static_cast<int>(std::ceil((to - from).norm() / step)));
-  // A vehicle already closer than the hull radius (drift, a wall just mapped) may move away:
-  // the distance must not shrink until it is clear, as in MapMotionValidator's escapes.
-  double previous = field_->distance(from);
-  bool escaping = previous < options_.clearance.hull_radius;
-  for (int i = 1; i <= steps; ++i) {
-    const double distance = field_->distance(from + (to - from) * (static_cast<double>(i) / steps));
-    if (distance >= options_.clearance.hull_radius) {
-      escaping = false;
-    } else if (!escaping || distance < previous) {
-      return false;
-    }
-    previous = distance;
-  }
-  return true;
-}
-
-bool PlanningComponent::vehicleReachesRoot(ActiveQuery& q, const Eigen::Vector3d& vehicle,
-                                           const Eigen::Vector3d& root) const {
-  // The controller drives to the waypoint it has before the one just sent: checking the
-  // straight line to the root instead would cancel good waypoints round corners.
-  if (q.approach_via && (vehicle - *q.approach_via).norm() <= options_.waypoint_tolerance) {
-    q.approach_via.reset();
-  }
-  if (!q.approach_via) return hullPassesAlong(vehicle, root);
-  return hullPassesAlong(vehicle, *q.approach_via) && hullPassesAlong(*q.approach_via, root);
-}
-
-void PlanningComponent::planSlice() {
-  if (!query_) return;
-  ActiveQuery& q = *query_;
-  // Re-check the tree only when the map changed: between changes the tree stays valid, and the
-  // vehicle moves along the root edge the tree already holds.
-  if (field_->revision() != q.checked_revision && q.planner->root() != nullptr) {
-    q.checked_revision = field_->revision();
-    ob::ScopedState<> vehicle(q.si);
-    vehicleState(vehicle.get());
-    // Only edges near what changed can change (the mapping component reports the box of every
-    // increment): within the clearance for validity, within the band of Eq. (1) for costs.
-    const double influence =
-        std::max(options_.clearance.clearance(),
-                 q.query.expected_distance() + 0.5 * q.query.admissible_range()) +
-        options_.map_resolution;
-    UpdateResult result = recheck_everything_
-                              ? q.planner->updateTree(nullptr)
-                              : q.planner->updateTree(nullptr, changed_region_, influence);
-    recheck_everything_ = false;
-    changed_region_.setEmpty();
-    // The vehicle drifts off the planned edges by its tracking error, which the safety margin
-    // is there to absorb: the way to the root is blocked only when the hull itself would touch.
-    result.vehicle_to_root_blocked = !vehicleReachesRoot(q, statePosition(vehicle.get()),
-                                                         statePosition(q.planner->root()->state));
-    // Without an active waypoint the root is where the vehicle holds (the query's start or the
-    // waypoint just reached): too close to a newly seen wall is no reason to restart there, and
-    // the motion validator lets the tree leave it by moving away from the wall.
-    if (result.needsRestart() && q.active_waypoint_id != 0) {
-      const Eigen::Vector3d root = statePosition(q.planner->root()->state);
-      std::ostringstream text;
-      text << (result.root_in_collision ? "root" : "segment vehicle -> root") << " at (" << root.x()
-           << ", " << root.y() << ", " << root.z() << ") closer than "
-           << (result.root_in_collision ? options_.clearance.clearance()
-                                        : options_.clearance.hull_radius)
-           << " m to the map (version " << map_sequence_ << ")";
-      cancel(q.active_waypoint_id,
-             result.root_in_collision ? msg::CANCEL_REASON_ROOT_IN_COLLISION
-                                      : msg::CANCEL_REASON_APPROACH_IN_COLLISION,
-             text.str());
-      q.earlier_iterations += q.planner->iterations();  // reset() zeroes the core's count
-      q.planner->reset(vehicle.get());
-      q.active_waypoint_id = 0;
-      q.approach_via.reset();
-      q.solved_ns = node_->clock().nowNs();
-    }
-  }
-  if (q.planner->treeSize() >= options_.max_tree_size && !q.planner->bestSolution() &&
-      q.planner->root() != nullptr) {
-    // Full without a solution: only popWaypoint() (which needs a solution) or a restart would
-    // prune it, so growing would never resume, even once the map opens a way. Grow a fresh
-    // tree from the same root: the active waypoint stays valid.
-    ob::ScopedState<> root(q.si);
-    q.si->copyState(root.get(), q.planner->root()->state);
-    q.earlier_iterations += q.planner->iterations();
-    q.planner->reset(root.get());
-  }
-  if (q.planner->treeSize() < options_.max_tree_size) {
-    // Stops at max_tree_size too: one slice may add thousands of nodes.
-    const OnlineRRTstar& planner = *q.planner;
-    const std::size_t max_size = options_.max_tree_size;
-    q.planner->solve(ob::plannerOrTerminationCondition(
-        ob::timedPlannerTerminationCondition(options_.iteration_budget),
-        ob::PlannerTerminationCondition(
-            [&planner, max_size] { return planner.treeSize() >= max_size; })));
-    ++slices_;
-  }
-  answerWaypointRequest();
-  const int64_t now = node_->clock().nowNs();
-  if (q.planner->bestSolution()) {
-    q.solved_ns = now;
-    q.no_solution_reported = false;  // a later loss of every solution is reported again
-    return;
-  }
-  const double unsolved = 1e-9 * static_cast<double>(now - q.solved_ns);
-  if (!q.no_solution_reported && unsolved > q.time_budget) {
-    q.no_solution_reported = true;
-    std::ostringstream text;
-    text << "no solution for " << unsolved << " s (budget " << q.time_budget << " s), "
-         << q.planner->treeSize() << " nodes";
-    cancel(q.active_waypoint_id, msg::CANCEL_REASON_NO_SOLUTION, text.str());
+    const auto& cancel = std::get<WaypointCancel>(message);
+    msg::WaypointCancel c;
+    setStamp(c.header(), node_->clock().nowNs());
+    c.waypoint_id(cancel.waypoint_id);
+    c.query_id(cancel.query_id);
+    c.reason(toMsg(cancel.reason));
+    c.reason_text(cancel.text);
+    cancel_pub_->publish(c);
+    AUV_WARN(node_->logger(), "cancelled waypoint " << cancel.waypoint_id << ": " << cancel.text);
   }
 }
 
-void PlanningComponent::answerWaypointRequest() {
-  if (!pending_request_ || !query_ || !query_->planner->bestSolution() ||
-      pending_request_->query_id() != query_->query.query_id()) {
-    return;
-  }
-  ActiveQuery& q = *query_;
-  const Eigen::Vector3d from = statePosition(q.planner->root()->state);
-  ob::ScopedState<> waypoint_state(q.si);
-  if (!q.planner->popWaypoint(waypoint_state.get())) return;  // the root is the goal already
-  const Eigen::Vector3d position = statePosition(waypoint_state.get());
-  msg::Waypoint waypoint;
-  setStamp(waypoint.header(), node_->clock().nowNs());
-  waypoint.header().frame_id(options_.world_frame);
-  waypoint.waypoint_id(next_waypoint_id_++);
-  waypoint.query_id(q.query.query_id());
-  waypoint.position(toPoint(position));
-  waypoint.heading(std::atan2(position.y() - from.y(), position.x() - from.x()));
-  waypoint.speed(options_.waypoint_speed);
-  waypoint.tolerance(options_.waypoint_tolerance);
-  waypoint.is_final((position - q.goal).norm() <= q.query.goal_tolerance());
-  q.active_waypoint_id = waypoint.waypoint_id();
-  q.active_waypoint = waypoint;
-  q.approach_via = from;
-  pending_request_.reset();
-  waypoint_pub_->publish(waypoint);
-}
-
-void PlanningComponent::cancel(uint64_t waypoint_id, int reason, const std::string& text) {
-  msg::WaypointCancel message;
-  setStamp(message.header(), node_->clock().nowNs());
-  message.waypoint_id(waypoint_id);
-  message.query_id(query_ ? query_->query.query_id() : 0);
-  message.reason(static_cast<msg::CancelReason>(reason));
-  message.reason_text(text);
-  cancel_pub_->publish(message);
-  AUV_WARN(node_->logger(), "cancelled waypoint " << waypoint_id << ": " << text);
-}
+double PlanningComponent::now() const { return node_->clock().nowSeconds(); }
 
 void PlanningComponent::publishViews() {
-  if (!query_) return;
-  const ActiveQuery& q = *query_;
-  const int64_t now = node_->clock().nowNs();
-  if (1e-9 * static_cast<double>(now - last_path_ns_) >= 1.0 / options_.path_rate) {
-    last_path_ns_ = now;
+  if (!session_->hasQuery()) return;
+  const int64_t now_ns = node_->clock().nowNs();
+  if (1e-9 * static_cast<double>(now_ns - last_path_ns_) >= 1.0 / options_.path_rate) {
+    last_path_ns_ = now_ns;
+    const PathSnapshot snapshot = session_->path();
     msg::Path path;
-    setStamp(path.header(), now);
+    setStamp(path.header(), now_ns);
     path.header().frame_id(options_.world_frame);
-    path.query_id(q.query.query_id());
-    for (const ob::State* state : q.planner->bestPath()) {
+    path.query_id(session_->queryId());
+    for (const Eigen::Vector3d& position : snapshot.positions) {
       msg::Pose pose;
-      pose.position(toPoint(statePosition(state)));
+      pose.position(toPoint(position));
       pose.orientation().w(1.0);
       path.poses().push_back(pose);
     }
-    path.cost(q.planner->bestCost().value());
+    path.cost(snapshot.cost);
     path_pub_->publish(path);
   }
-  if (1e-9 * static_cast<double>(now - last_tree_ns_) >= 1.0 / options_.tree_rate) {
-    last_tree_ns_ = now;
+  if (1e-9 * static_cast<double>(now_ns - last_tree_ns_) >= 1.0 / options_.tree_rate) {
+    last_tree_ns_ = now_ns;
+    const TreeSnapshot snapshot = session_->tree();
     msg::PlannerTree tree;
-    setStamp(tree.header(), now);
+    setStamp(tree.header(), now_ns);
     tree.header().frame_id(options_.world_frame);
-    tree.query_id(q.query.query_id());
-    tree.root_index(-1);
-    tree.best_solution_index(-1);
-    const OnlineRRTstar::Node* best = q.planner->bestSolution();
-    // Depth-first from the root: a parent always gets its index before its children.
-    std::vector<std::pair<const OnlineRRTstar::Node*, int32_t>> stack;
-    if (q.planner->root()) stack.emplace_back(q.planner->root(), -1);
-    while (!stack.empty()) {
-      const auto [node, parent] = stack.back();
-      stack.pop_back();
-      const auto index = static_cast<int32_t>(tree.nodes().size());
-      const Eigen::Vector3d position = statePosition(node->state);
-      tree.nodes().push_back(toPoint(position));
-      tree.parents().push_back(parent);
-      tree.costs().push_back(node->cost.value());
-      if (parent < 0) tree.root_index(index);
-      if ((position - q.goal).norm() <= q.query.goal_tolerance()) {
-        tree.solution_indices().push_back(index);
-      }
-      if (node == best) tree.best_solution_index(index);
-      for (const OnlineRRTstar::Node* child : node->children) stack.emplace_back(child, index);
-    }
-    tree.iterations(q.earlier_iterations + q.planner->iterations());
+    tree.query_id(session_->queryId());
+    for (const Eigen::Vector3d& node : snapshot.nodes) tree.nodes().push_back(toPoint(node));
+    tree.parents(snapshot.parents);
+    tree.costs(snapshot.costs);
+    tree.root_index(snapshot.root_index);
+    tree.best_solution_index(snapshot.best_solution_index);
+    tree.solution_indices(snapshot.solution_indices);
+    tree.iterations(snapshot.iterations);
     tree_pub_->publish(tree);
   }
 }

@@ -1,0 +1,441 @@
+#include "auv/planning/planning_session.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <utility>
+
+#include <octomap/OcTree.h>
+#include <ompl/base/PlannerTerminationCondition.h>
+#include <ompl/base/ProblemDefinition.h>
+#include <ompl/base/ScopedState.h>
+#include <ompl/base/SpaceInformation.h>
+#include <ompl/base/objectives/PathLengthOptimizationObjective.h>
+#include <ompl/base/spaces/RealVectorStateSpace.h>
+
+#include "auv/planning/visibility_cost.h"
+
+namespace auv::planning {
+
+namespace ob = ompl::base;
+
+/// The distance field of the caller's map: forwards to an OctomapDistanceField that is rebuilt
+/// when a full map replaces the tree or a query changes the covered box, so the space
+/// information and objective of the active query keep one field for their whole life.
+class ReplicaDistanceField : public DistanceField {
+ public:
+  ReplicaDistanceField(double resolution, double max_distance)
+      : resolution_(resolution), max_distance_(max_distance) {}
+
+  void rebuild(octomap::OcTree* tree, const OctomapDistanceFieldOptions& options) {
+    options_ = options;
+    field_ = std::make_unique<OctomapDistanceField>(tree, options);
+    ++revision_;
+  }
+  void rebuild(octomap::OcTree* tree) { rebuild(tree, options_); }
+  void update() {
+    field_->update();
+    ++revision_;
+  }
+  double distance(const Eigen::Vector3d& position) const override {
+    return field_ ? field_->distance(position) : max_distance_;
+  }
+  double maxDistance() const override { return max_distance_; }
+  double resolution() const override { return resolution_; }
+  std::uint64_t revision() const override { return revision_; }
+
+ private:
+  double resolution_;
+  double max_distance_;
+  OctomapDistanceFieldOptions options_;
+  std::unique_ptr<OctomapDistanceField> field_;
+  std::uint64_t revision_ = 0;
+};
+
+struct PlanningSession::ActiveQuery {
+  PlanningQuery query;
+  ob::SpaceInformationPtr si;
+  ob::ProblemDefinitionPtr pdef;
+  std::shared_ptr<OnlineRRTstar> planner;
+  Eigen::Vector3d goal = Eigen::Vector3d::Zero();
+  double time_budget = 0.0;
+  // Last time the tree had a solution, or the query (re)started: the budget runs from here, so
+  // an obstacle that removes the solution mid-mission gets a full budget to be planned around.
+  double solved_at = 0.0;
+  uint64_t active_waypoint_id = 0;  // 0: none issued since the (re)start
+  PlannedWaypoint active_waypoint;  // the one sent as active_waypoint_id, for repeated requests
+  // The waypoint the vehicle is still heading for when the active one was sent (the mission
+  // handler asks early): until the vehicle reaches it, its way to the root passes through it.
+  std::optional<Eigen::Vector3d> approach_via;
+  uint64_t checked_revision = 0;  // field revision the tree was last re-checked against
+  bool no_solution_reported = false;
+  uint64_t earlier_iterations = 0;  // iterations of the trees dropped by restarts
+};
+
+namespace {
+
+void setPosition(ob::State* state, const Eigen::Vector3d& position) {
+  auto* values = state->as<ob::RealVectorStateSpace::StateType>()->values;
+  for (int i = 0; i < 3; ++i) values[i] = position[i];
+}
+
+}  // namespace
+
+void SessionOptions::check() const {
+  clearance.check();
+  if (goal_bias + narrow_passage_bias > 1.0) {
+    throw PlanningConfigError("goal_bias + narrow_passage_bias must be <= 1 (got " +
+                              std::to_string(goal_bias) + " + " +
+                              std::to_string(narrow_passage_bias) + ")");
+  }
+}
+
+bool hullPassesAlong(const DistanceField& field, const Eigen::Vector3d& from,
+                     const Eigen::Vector3d& to, double hull_radius, double step) {
+  const int steps = std::max(1, static_cast<int>(std::ceil((to - from).norm() / step)));
+  double previous = field.distance(from);
+  bool escaping = previous < hull_radius;
+  for (int i = 1; i <= steps; ++i) {
+    const double distance = field.distance(from + (to - from) * (static_cast<double>(i) / steps));
+    if (distance >= hull_radius) {
+      escaping = false;
+    } else if (!escaping || distance < previous) {
+      return false;
+    }
+    previous = distance;
+  }
+  return true;
+}
+
+PlanningSession::PlanningSession(const SessionOptions& options) : options_(options) {
+  options_.check();
+  field_ = std::make_shared<ReplicaDistanceField>(options_.map_resolution, options_.max_distance);
+}
+
+PlanningSession::~PlanningSession() = default;
+
+void PlanningSession::onFullMap(octomap::OcTree& map, uint64_t version) {
+  map_version_ = version;
+  if (query_) field_->rebuild(&map);  // a full map is a new tree
+  recheck_everything_ = true;
+}
+
+void PlanningSession::onMapIncrement(const Eigen::Vector3d& changed_min,
+                                     const Eigen::Vector3d& changed_max, uint64_t version) {
+  map_version_ = version;
+  if (query_) field_->update();
+  if ((changed_min.array() < changed_max.array()).all()) {
+    changed_region_.extend(Eigen::AlignedBox3d(changed_min, changed_max));
+  } else if (!(changed_min.array() > changed_max.array()).any()) {
+    recheck_everything_ = true;  // a flat box: not filled in by the sender, so unknown
+  }                              // else an empty update: nothing changed
+}
+
+bool PlanningSession::startQuery(const PlanningQuery& query, octomap::OcTree& map,
+                                 const std::optional<Eigen::Vector3d>& vehicle, double now) {
+  if (query_ && query_->active_waypoint_id != 0) {
+    cancel(query_->active_waypoint_id, CancelReason::QUERY_REPLACED,
+           "query " + std::to_string(query.query_id) + " replaces it");
+  }
+  query_.reset();
+  pending_request_.reset();  // for the replaced query
+  if (early_request_ && early_request_->query_id == query.query_id) {
+    pending_request_ = early_request_;  // it overtook this query
+  }
+  early_request_.reset();
+  std::unique_ptr<ActiveQuery> active;
+  try {
+    active = buildQuery(query, map, vehicle ? *vehicle : query.start);
+  } catch (const std::exception& error) {
+    // The cancel names the refused query.
+    outbox_.messages.emplace_back(WaypointCancel{0, query.query_id, CancelReason::PLANNER_ERROR,
+                                                 std::string("query rejected: ") + error.what()});
+    pending_request_.reset();
+    return false;
+  }
+  active->time_budget = query.time_budget > 0.0 ? query.time_budget : options_.default_time_budget;
+  active->solved_at = now;
+  active->checked_revision = field_->revision();
+  changed_region_.setEmpty();  // the new tree is grown on the map as it is now
+  recheck_everything_ = false;
+  query_ = std::move(active);
+  return true;
+}
+
+std::unique_ptr<PlanningSession::ActiveQuery> PlanningSession::buildQuery(
+    const PlanningQuery& query, octomap::OcTree& map, const Eigen::Vector3d& start) {
+  auto active = std::make_unique<ActiveQuery>();
+  active->query = query;
+  if (query.query_id == 0) throw PlanningConfigError("query_id 0 is invalid");
+  if (!(query.goal_tolerance > 0.0)) throw PlanningConfigError("goal_tolerance must be > 0");
+  PlanningSpaceOptions space;
+  space.min_corner = query.bounds_min;
+  space.max_corner = query.bounds_max;
+  if (query.fixed_depth) {
+    space.fixed_depth = *query.fixed_depth;
+  } else if (options_.fixed_depth) {
+    space.fixed_depth = start.z();
+  }
+  space.check();
+  OctomapDistanceFieldOptions field_options;
+  field_options.max_distance = options_.max_distance;
+  field_options.min_corner = space.min_corner - Eigen::Vector3d::Constant(options_.field_margin);
+  field_options.max_corner = space.max_corner + Eigen::Vector3d::Constant(options_.field_margin);
+  field_->rebuild(&map, field_options);
+  active->si = makeSpaceInformation(space, field_, options_.clearance);
+
+  ob::OptimizationObjectivePtr objective;
+  if (query.objective == PlanningObjective::PATH_LENGTH) {
+    objective = std::make_shared<ob::PathLengthOptimizationObjective>(active->si);
+  } else {
+    VisibilityObjectiveOptions visibility;
+    visibility.cost.expected_distance = query.expected_distance;
+    visibility.cost.admissible_range = query.admissible_range;
+    visibility.visibility_weight = options_.visibility_weight;
+    visibility.check();
+    objective = std::make_shared<VisibilityObjective>(active->si, field_, visibility);
+  }
+  active->goal = query.goal;
+  if (space.fixed_depth) active->goal.z() = *space.fixed_depth;
+  ob::ScopedState<> start_state(active->si);
+  ob::ScopedState<> goal_state(active->si);
+  setPosition(start_state.get(), start);
+  active->si->enforceBounds(start_state.get());
+  setPosition(goal_state.get(), active->goal);
+  active->pdef = std::make_shared<ob::ProblemDefinition>(active->si);
+  active->pdef->setStartAndGoalStates(start_state, goal_state, query.goal_tolerance);
+  active->pdef->setOptimizationObjective(objective);
+  active->planner = std::make_shared<OnlineRRTstar>(active->si);
+  active->planner->setRange(options_.range);
+  active->planner->setGoalBias(options_.goal_bias);
+  active->planner->setNarrowPassageBias(options_.narrow_passage_bias);
+  active->planner->setRewireFactor(options_.rewire_factor);
+  active->planner->setGoalTolerance(query.goal_tolerance);
+  active->planner->setProblemDefinition(active->pdef);
+  active->planner->setup();
+  // Root the tree at the start even when it is inside the clearance (a vehicle that drifted
+  // close to a wall): OMPL's start-state input skips invalid starts and would leave no tree,
+  // while the motion validator lets the tree leave such a root by moving away from the wall.
+  active->planner->reset(start_state.get());
+  return active;
+}
+
+void PlanningSession::onWaypointRequest(const WaypointRequest& request) {
+  if (!query_ || query_->query.query_id != request.query_id) {
+    // Queries and requests travel on different topics: a mission handler's first request can
+    // overtake its query. Kept for the next query to start, used if it is that one.
+    early_request_ = request;
+    if (query_ && request.query_id < query_->query.query_id) {
+      outbox_.warnings.push_back("waypoint request for query " + std::to_string(request.query_id) +
+                                 ", older than the one planned (" +
+                                 std::to_string(query_->query.query_id) + ")");
+    }
+    return;
+  }
+  if (query_->active_waypoint_id != 0 &&
+      request.reached_waypoint_id != query_->active_waypoint_id) {
+    // The vehicle has not reached the active waypoint: a repeated request whose answer was
+    // lost or crossed it. Popping again would skip a waypoint; send the active one again.
+    PlannedWaypoint again = query_->active_waypoint;
+    again.repeat = true;
+    outbox_.messages.emplace_back(again);
+    return;
+  }
+  pending_request_ = request;
+  answerWaypointRequest();  // otherwise a later slice answers once a solution exists
+}
+
+bool PlanningSession::vehicleReachesRoot(const Eigen::Vector3d& vehicle,
+                                         const Eigen::Vector3d& root) {
+  ActiveQuery& q = *query_;
+  // The controller drives to the waypoint it has before the one just sent: checking the
+  // straight line to the root instead would cancel good waypoints round corners.
+  if (q.approach_via && (vehicle - *q.approach_via).norm() <= options_.waypoint_tolerance) {
+    q.approach_via.reset();
+  }
+  const double hull = options_.clearance.hull_radius;
+  const double step = 0.5 * options_.map_resolution;
+  if (!q.approach_via) return hullPassesAlong(*field_, vehicle, root, hull, step);
+  return hullPassesAlong(*field_, vehicle, *q.approach_via, hull, step) &&
+         hullPassesAlong(*field_, *q.approach_via, root, hull, step);
+}
+
+bool PlanningSession::planSlice(const std::optional<Eigen::Vector3d>& vehicle, double now) {
+  if (!query_) return false;
+  ActiveQuery& q = *query_;
+  // Re-check the tree only when the map changed: between changes the tree stays valid, and the
+  // vehicle moves along the root edge the tree already holds.
+  if (field_->revision() != q.checked_revision && q.planner->root() != nullptr) {
+    recheckTree(vehicle, now);
+  }
+  regrowIfFullWithoutSolution();
+  if (q.planner->treeSize() >= options_.max_tree_size) return false;
+  // Stops at max_tree_size too: one slice may add thousands of nodes.
+  const OnlineRRTstar& planner = *q.planner;
+  const std::size_t max_size = options_.max_tree_size;
+  q.planner->solve(ob::plannerOrTerminationCondition(
+      ob::timedPlannerTerminationCondition(options_.iteration_budget),
+      ob::PlannerTerminationCondition(
+          [&planner, max_size] { return planner.treeSize() >= max_size; })));
+  return true;
+}
+
+void PlanningSession::recheckTree(const std::optional<Eigen::Vector3d>& vehicle, double now) {
+  ActiveQuery& q = *query_;
+  q.checked_revision = field_->revision();
+  ob::ScopedState<> vehicle_state(q.si);
+  setPosition(vehicle_state.get(), vehicle ? *vehicle : q.query.start);
+  q.si->enforceBounds(vehicle_state.get());  // also puts it on the fixed depth
+  // Only edges near what changed can change (the mapping component reports the box of every
+  // increment): within the clearance for validity, within the band of Eq. (1) for costs.
+  const double influence = std::max(options_.clearance.clearance(),
+                                    q.query.expected_distance + 0.5 * q.query.admissible_range) +
+                           options_.map_resolution;
+  UpdateResult result = recheck_everything_
+                            ? q.planner->updateTree(nullptr)
+                            : q.planner->updateTree(nullptr, changed_region_, influence);
+  recheck_everything_ = false;
+  changed_region_.setEmpty();
+  // The vehicle drifts off the planned edges by its tracking error, which the safety margin
+  // is there to absorb: the way to the root is blocked only when the hull itself would touch.
+  result.vehicle_to_root_blocked = !vehicleReachesRoot(statePosition(vehicle_state.get()),
+                                                       statePosition(q.planner->root()->state));
+  // Without an active waypoint the root is where the vehicle holds (the query's start or the
+  // waypoint just reached): too close to a newly seen wall is no reason to restart there, and
+  // the motion validator lets the tree leave it by moving away from the wall.
+  if (!result.needsRestart() || q.active_waypoint_id == 0) return;
+  const Eigen::Vector3d root = statePosition(q.planner->root()->state);
+  std::ostringstream text;
+  text << (result.root_in_collision ? "root" : "segment vehicle -> root") << " at (" << root.x()
+       << ", " << root.y() << ", " << root.z() << ") closer than "
+       << (result.root_in_collision ? options_.clearance.clearance()
+                                    : options_.clearance.hull_radius)
+       << " m to the map (version " << map_version_ << ")";
+  cancel(q.active_waypoint_id,
+         result.root_in_collision ? CancelReason::ROOT_IN_COLLISION
+                                  : CancelReason::APPROACH_IN_COLLISION,
+         text.str());
+  q.earlier_iterations += q.planner->iterations();  // reset() zeroes the core's count
+  q.planner->reset(vehicle_state.get());
+  q.active_waypoint_id = 0;
+  q.approach_via.reset();
+  q.solved_at = now;
+}
+
+void PlanningSession::regrowIfFullWithoutSolution() {
+  ActiveQuery& q = *query_;
+  if (q.planner->treeSize() < options_.max_tree_size || q.planner->bestSolution() ||
+      q.planner->root() == nullptr) {
+    return;
+  }
+  // Full without a solution: only popWaypoint() (which needs a solution) or a restart would
+  // prune it, so growing would never resume, even once the map opens a way. Grow a fresh
+  // tree from the same root: the active waypoint stays valid.
+  ob::ScopedState<> root(q.si);
+  q.si->copyState(root.get(), q.planner->root()->state);
+  q.earlier_iterations += q.planner->iterations();
+  q.planner->reset(root.get());
+}
+
+void PlanningSession::finishSlice(double now) {
+  if (!query_) return;
+  answerWaypointRequest();
+  ActiveQuery& q = *query_;
+  if (q.planner->bestSolution()) {
+    q.solved_at = now;
+    q.no_solution_reported = false;  // a later loss of every solution is reported again
+    return;
+  }
+  const double unsolved = now - q.solved_at;
+  if (!q.no_solution_reported && unsolved > q.time_budget) {
+    q.no_solution_reported = true;
+    std::ostringstream text;
+    text << "no solution for " << unsolved << " s (budget " << q.time_budget << " s), "
+         << q.planner->treeSize() << " nodes";
+    cancel(q.active_waypoint_id, CancelReason::NO_SOLUTION, text.str());
+  }
+}
+
+void PlanningSession::answerWaypointRequest() {
+  if (!pending_request_ || !query_ || !query_->planner->bestSolution() ||
+      pending_request_->query_id != query_->query.query_id) {
+    return;
+  }
+  ActiveQuery& q = *query_;
+  const Eigen::Vector3d from = statePosition(q.planner->root()->state);
+  ob::ScopedState<> waypoint_state(q.si);
+  if (!q.planner->popWaypoint(waypoint_state.get())) return;  // the root is the goal already
+  PlannedWaypoint waypoint;
+  waypoint.waypoint_id = next_waypoint_id_++;
+  waypoint.query_id = q.query.query_id;
+  waypoint.position = statePosition(waypoint_state.get());
+  waypoint.heading = std::atan2(waypoint.position.y() - from.y(), waypoint.position.x() - from.x());
+  waypoint.speed = options_.waypoint_speed;
+  waypoint.tolerance = options_.waypoint_tolerance;
+  waypoint.is_final = (waypoint.position - q.goal).norm() <= q.query.goal_tolerance;
+  q.active_waypoint_id = waypoint.waypoint_id;
+  q.active_waypoint = waypoint;
+  q.approach_via = from;
+  pending_request_.reset();
+  outbox_.messages.emplace_back(waypoint);
+}
+
+void PlanningSession::cancel(uint64_t waypoint_id, CancelReason reason, const std::string& text) {
+  outbox_.messages.emplace_back(
+      WaypointCancel{waypoint_id, query_ ? query_->query.query_id : 0, reason, text});
+}
+
+PlanningSession::Outbox PlanningSession::takeOutbox() { return std::exchange(outbox_, Outbox{}); }
+
+uint64_t PlanningSession::queryId() const { return query_ ? query_->query.query_id : 0; }
+
+uint64_t PlanningSession::activeWaypointId() const {
+  return query_ ? query_->active_waypoint_id : 0;
+}
+
+bool PlanningSession::growing() const {
+  return query_ != nullptr && query_->planner->treeSize() < options_.max_tree_size;
+}
+
+const OnlineRRTstar* PlanningSession::planner() const {
+  return query_ ? query_->planner.get() : nullptr;
+}
+
+TreeSnapshot PlanningSession::tree() const {
+  TreeSnapshot tree;
+  if (!query_) return tree;
+  const ActiveQuery& q = *query_;
+  const OnlineRRTstar::Node* best = q.planner->bestSolution();
+  // Depth-first from the root: a parent always gets its index before its children.
+  std::vector<std::pair<const OnlineRRTstar::Node*, int32_t>> stack;
+  if (q.planner->root()) stack.emplace_back(q.planner->root(), -1);
+  while (!stack.empty()) {
+    const auto [node, parent] = stack.back();
+    stack.pop_back();
+    const auto index = static_cast<int32_t>(tree.nodes.size());
+    const Eigen::Vector3d position = statePosition(node->state);
+    tree.nodes.push_back(position);
+    tree.parents.push_back(parent);
+    tree.costs.push_back(node->cost.value());
+    if (parent < 0) tree.root_index = index;
+    if ((position - q.goal).norm() <= q.query.goal_tolerance) {
+      tree.solution_indices.push_back(index);
+    }
+    if (node == best) tree.best_solution_index = index;
+    for (const OnlineRRTstar::Node* child : node->children) stack.emplace_back(child, index);
+  }
+  tree.iterations = q.earlier_iterations + q.planner->iterations();
+  return tree;
+}
+
+PathSnapshot PlanningSession::path() const {
+  PathSnapshot path;
+  if (!query_) return path;
+  for (const ob::State* state : query_->planner->bestPath()) {
+    path.positions.push_back(statePosition(state));
+  }
+  path.cost = query_->planner->bestCost().value();
+  return path;
+}
+
+}  // namespace auv::planning
