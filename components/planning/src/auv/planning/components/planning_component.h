@@ -1,6 +1,6 @@
 #pragma once
-// The `planning` component: the online anytime RRT* of PAPER.md 2.2 on DDS. It keeps a replica
-// of the occupancy map from `map/update`, grows the tree in its own thread, answers
+// The `planning` component: the online anytime RRT* of docs/paper.md §2.2 on DDS. It keeps a
+// replica of the occupancy map from `map/update`, grows the tree in its own thread, answers
 // `planner/waypoint_request` with `planner/waypoint`, and cancels the active waypoint on
 // `planner/cancel` when the map blocks the way to it (Section 2.2.1).
 
