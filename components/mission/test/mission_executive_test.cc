@@ -1,4 +1,4 @@
-// The mission handler's state machine (PAPER.md 2.3) driven with a clock of the test's own:
+// The mission handler's state machine (docs/paper.md §2.3) driven with a clock of the test's own:
 // readiness, queries and waypoint requests, waypoints to the controller, arrival and prefetch,
 // cancels and replans, and every way a mission ends (succeeded, aborted to a hold, failed).
 #include <gtest/gtest.h>

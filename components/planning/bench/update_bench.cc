@@ -1,10 +1,10 @@
-// update_bench: the cost of keeping OnlineRRTstar's tree on a changing map (PAPER.md 2.2.2) and
-// of handing out a waypoint, against tree size. For N = 1k, 2k, 5k, 10k nodes grown on a
-// world's known map: updateTree() with no map change, after a new obstacle blob is inserted
-// across the tree (voxels set occupied, the distance field updated as the planning component
-// does), and after the blob is removed again; popWaypoint(). Anchors measured in the same run:
-// one full rebuild of OMPL's NearestNeighborsGNAT with N states, and N x checkMotion over the
-// tree's edges. The goal: updateTree p99 < 5 ms at 5k nodes. See bench/README.md.
+// update_bench: the cost of keeping OnlineRRTstar's tree on a changing map (docs/paper.md §2.2.2)
+// and of handing out a waypoint, against tree size. For N = 1k, 2k, 5k, 10k nodes grown on a
+// world's known map: updateTree() with no map change, after a new obstacle blob is inserted across
+// the tree (voxels set occupied, the distance field updated as the planning component does), and
+// after the blob is removed again; popWaypoint(). Anchors measured in the same run: one full
+// rebuild of OMPL's NearestNeighborsGNAT with N states, and N x checkMotion over the tree's edges.
+// The goal: updateTree p99 < 5 ms at 5k nodes. See bench/README.md.
 //
 //   update_bench [options] SCENARIO.yaml MAP.bt
 #include <cmath>

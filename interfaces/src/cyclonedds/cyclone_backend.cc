@@ -22,7 +22,7 @@ namespace auv::interfaces::detail {
 namespace {
 
 // Binds Cyclone to loopback unless the user configured it (CYCLONEDDS_URI). Multicast is
-// forced on `lo` so discovery works without peers lists (DDS_NOTES.md). The receive buffer
+// forced on `lo` so discovery works without peers lists (docs/library-notes.md). The receive buffer
 // asks for 4 MiB (Cyclone's default asks 1 MiB) so a burst of fragments of a large sample
 // is not dropped and repaired a heartbeat later; the kernel caps it at net.core.rmem_max,
 // and min="default" accepts whatever is granted (a `min` above rmem_max would make Cyclone
@@ -154,7 +154,7 @@ QosPtr toCycloneQos(const QosProfile& p) {
       p.history == History::KEEP_LAST ? DDS_HISTORY_KEEP_LAST : DDS_HISTORY_KEEP_ALL;
   dds_qset_history(q.get(), history, p.depth);
   if (p.durability == Durability::TRANSIENT_LOCAL) {
-    // Without this Cyclone keeps only one historical sample per writer (DDS_NOTES.md).
+    // Without this Cyclone keeps only one historical sample per writer (docs/library-notes.md).
     dds_qset_durability_service(q.get(), 0, history, p.depth, p.max_samples, p.max_instances,
                                 p.max_samples_per_instance);
   }

@@ -1,7 +1,7 @@
 #pragma once
 // A Cyclone DDS custom sertype that carries the fastddsgen C++ types: its hooks call the
 // type's Fast DDS TopicDataType to serialize, deserialize and compute keys. This gives both
-// vendors one C++ type per message and identical XCDR1 bytes on the wire (DDS_NOTES.md,
+// vendors one C++ type per message and identical XCDR1 bytes on the wire (docs/library-notes.md,
 // "One C++ type for both vendors"). Uses Cyclone 0.10 internal headers: pinned to 0.10.x.
 
 #include <memory>

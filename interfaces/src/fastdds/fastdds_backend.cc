@@ -299,7 +299,7 @@ dds::DomainParticipantQos fastddsParticipantQos(const ParticipantOptions& option
   dds::DomainParticipantQos qos;
   const char* profiles = std::getenv("FASTRTPS_DEFAULT_PROFILES_FILE");
   if (profiles != nullptr && *profiles != '\0') {
-    // XML profiles only apply through load_profiles + the factory default (DDS_NOTES.md).
+    // XML profiles only apply through load_profiles + the factory default (docs/library-notes.md).
     static std::once_flag loaded;
     std::call_once(loaded, [factory] { factory->load_profiles(); });
     qos = factory->get_default_participant_qos();
@@ -396,7 +396,7 @@ class FastddsParticipant : public Participant {
     std::lock_guard<std::mutex> lock(mutex_);
     if (participant_->find_type(type.name).empty()) {
       dds::TypeSupport support(type.make_topic_data_type());
-      // Type information would make Cyclone reject our discovery data (DDS_NOTES.md).
+      // Type information would make Cyclone reject our discovery data (docs/library-notes.md).
       support->auto_fill_type_information(false);
       support->auto_fill_type_object(false);
       check(participant_->register_type(support) == ReturnCode_t::RETCODE_OK,

@@ -1,4 +1,4 @@
-// Poisson surface + trimming (PAPER.md 3.6) on synthetic clouds with known geometry: an open
+// Poisson surface + trimming (docs/paper.md §3.6) on synthetic clouds with known geometry: an open
 // terrain patch, whose watertight Poisson closure (a false surface under and around the patch)
 // must be trimmed away while the observed surface stays.
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// Texturing (PAPER.md 3.7, Waechter et al. 2014) on synthetic scenes with known colours:
+// Texturing (docs/paper.md §3.7, Waechter et al. 2014) on synthetic scenes with known colours:
 // coverage and visibility, MRF against greedy, photo-consistency against a fish, seam
 // levelling across an exposure change, OBJ round trip, re-rendering fidelity.
 #include <gtest/gtest.h>

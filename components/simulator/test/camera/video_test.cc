@@ -38,7 +38,7 @@ TEST(Video, TenFramesReadBackWithTheirTimes) {
   ASSERT_EQ(stamps.size(), 10u);
   {
     VideoRecorder recorder(path, camera.frame_rate, {160, 120});
-    EXPECT_EQ(recorder.fourcc(), "avc1");  // H.264 (LIBRARY_NOTES: available on Debian 12)
+    EXPECT_EQ(recorder.fourcc(), "avc1");  // H.264 (docs/library-notes.md: available on Debian 12)
     for (const FrameStamp& stamp : stamps) {
       recorder.write(testFrame(static_cast<int>(stamp.frame)), stamp.camera_time, stamp.sim_time);
     }

@@ -1,5 +1,5 @@
 #pragma once
-// The mission handler's logic (PAPER.md 2.3), without DDS: a state machine fed with the
+// The mission handler's logic (docs/paper.md §2.3), without DDS: a state machine fed with the
 // vehicle's navigation, the controller's status and the planner's waypoints and cancels, that
 // emits planner queries, waypoint requests and controller commands into an outbox. The
 // `mission` component wires it to topics; tests drive it directly with a clock of their own.

@@ -1,5 +1,5 @@
 #pragma once
-// A mission: start-to-goal queries run in order (PAPER.md 2.3), read from a YAML file
+// A mission: start-to-goal queries run in order (docs/paper.md §2.3), read from a YAML file
 // (format in components/mission/README.md) or received in a StartMissionRequest.
 
 #include <optional>

@@ -1,5 +1,5 @@
 // Distance to the nearest occupied cell: the `d` of the paper's Eq. (1) and of the clearance
-// check. Unknown space counts as free (delayed collision checking, PAPER.md 2.2.2).
+// check. Unknown space counts as free (delayed collision checking, docs/paper.md §2.2.2).
 #pragma once
 
 #include <cstdint>

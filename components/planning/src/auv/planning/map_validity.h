@@ -1,5 +1,5 @@
 // Collision checking against the current map: clearance from the distance field, unknown
-// space free (PAPER.md 2.2.2). Checks are lazy in the paper's sense: a state or motion is
+// space free (docs/paper.md §2.2.2). Checks are lazy in the paper's sense: a state or motion is
 // judged on the map of the moment; OnlineRRTstar::updateTree re-checks the tree when the map
 // grows.
 #pragma once

@@ -1,4 +1,4 @@
-// The paper's modified RRT* (PAPER.md 2.2, Algorithms 1 and 2): one tree grown anytime,
+// The paper's modified RRT* (docs/paper.md §2.2.1, Algorithms 1 and 2): one tree grown anytime,
 // pruned to the next waypoint when the mission handler asks for it, and repaired by
 // updateTree() when the map changes (delayed collision checking).
 #pragma once

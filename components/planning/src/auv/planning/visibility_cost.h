@@ -1,5 +1,5 @@
-// The visibility costmap of PAPER.md Eq. (1) and an OMPL objective that combines it with
-// path length. High cost steers the planner away but never forbids a path (narrow passages
+// The visibility costmap of Eq. (1) (docs/paper.md §2.4) and an OMPL objective that combines it
+// with path length. High cost steers the planner away but never forbids a path (narrow passages
 // stay admissible): validity is decided by MapValidityChecker alone.
 #pragma once
 

@@ -1,5 +1,6 @@
 #pragma once
-// Errors of the reconstruction stages and the checks of their options (STYLE.md rules 4, 6).
+// Errors of the reconstruction stages and the checks of their options (docs/contributing.md,
+// rules 4 and 6).
 
 #include <sstream>
 #include <stdexcept>

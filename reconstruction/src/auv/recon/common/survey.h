@@ -1,5 +1,5 @@
 #pragma once
-// The survey folder of one reconstruction job (../shared/DESIGN.md section 6): each stage reads
+// The survey folder of one reconstruction job (docs/design.md §6): each stage reads
 // the previous stage's folder and writes its own, so any stage can be re-run or stopped early.
 //
 //   survey/

@@ -1,6 +1,6 @@
 #pragma once
 // `auv recon dense`: sparse model + undistorted images -> depth maps and a fused, coloured,
-// oriented point cloud (PAPER.md 3.5). See README.md beside this file.
+// oriented point cloud (docs/paper.md §3.5). See README.md beside this file.
 //
 //   dense/
 //     depth_maps/<image name without extension>.depth.bin   per master (depth_map.h format)

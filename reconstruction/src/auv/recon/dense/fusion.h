@@ -1,6 +1,7 @@
 #pragma once
-// Steps 3 and 4 of dense matching (PAPER.md 3.5: "a 3D point cloud is later obtained by
-// projecting the points to space according to the camera's pose and associated depth value"):
+// Steps 3 and 4 of dense matching (docs/paper.md §3.5; the paper: "a 3D point cloud is later
+// obtained by projecting the points to space according to the camera's pose and associated depth
+// value"):
 // geometric consistency across views and fusion into one coloured, oriented point cloud that
 // records which images saw each point.
 //

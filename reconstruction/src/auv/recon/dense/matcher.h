@@ -1,5 +1,5 @@
 #pragma once
-// Step 2 of dense matching (PAPER.md 3.5): the depth map of a master image by semi-global
+// Step 2 of dense matching (docs/paper.md §3.5): the depth map of a master image by semi-global
 // multi-image matching in the manner of MicMac (Pierrot-Deseilligny & Paparoditis 2006, the
 // paper's refs. [70,71]), coarse to fine over an image pyramid:
 //  * hypotheses: depths sampled uniformly in inverse depth (one label ~ label_px of epipolar

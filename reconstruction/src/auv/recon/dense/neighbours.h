@@ -1,6 +1,6 @@
 #pragma once
-// Step 1 of dense matching (PAPER.md 3.5): for each master image, the neighbouring images it is
-// matched against, chosen from the sparse model by co-visibility (shared sparse points) and
+// Step 1 of dense matching (docs/paper.md §3.5): for each master image, the neighbouring images
+// it is matched against, chosen from the sparse model by co-visibility (shared sparse points) and
 // triangulation angle, and the master's depth range from the sparse points it sees.
 
 #include <cstdint>

@@ -11,7 +11,7 @@
 // mesh near the cameras (`sample_spacing_m` apart on average).
 //
 // Occlusion rays use Embree 3 directly (Open3D 0.16's ray casting returns no hits on Debian:
-// its rays leave Embree's mask at 0; ../shared/LIBRARY_NOTES.md).
+// its rays leave Embree's mask at 0; docs/library-notes.md).
 
 #include <cstdint>
 #include <memory>

@@ -1,5 +1,5 @@
 #pragma once
-// Surface reconstruction (PAPER.md section 3.6): screened Poisson reconstruction of the oriented
+// Surface reconstruction (docs/paper.md §3.6): screened Poisson reconstruction of the oriented
 // dense cloud (Kazhdan and Hoppe 2013, through Open3D), then removal of the false surfaces the
 // watertight indicator function closes over unobserved areas: triangles with an edge much
 // longer than the local sampling (the paper's reference [76]) and vertices of low Poisson

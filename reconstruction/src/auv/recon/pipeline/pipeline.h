@@ -1,7 +1,7 @@
 #pragma once
 // `auv recon run <survey>`: the reconstruction stages in the paper's order (section 3:
 // keyframes -> correct -> features -> match -> sfm -> dense -> mesh -> texture) over one survey
-// folder (../shared/DESIGN.md section 6), each through its library's entry point. A stage whose
+// folder (docs/design.md §6), each through its library's entry point. A stage whose
 // output is newer than all of its input is skipped (unless `force`), so a run continues where
 // an earlier one stopped and re-runs only what changed.
 

@@ -1,5 +1,5 @@
 #pragma once
-// The texturing of PAPER.md section 3.7 after Waechter, Moehrle and Goesele, "Let There Be
+// The texturing of docs/paper.md §3.7 after Waechter, Moehrle and Goesele, "Let There Be
 // Color! Large-Scale Texturing of 3D Reconstructions", ECCV 2014: view selection (visibility,
 // GMI data term, photo-consistency rejection, Potts MRF by alpha-expansion), global seam
 // levelling, local seam blending, atlas packing. README.md lists every option.

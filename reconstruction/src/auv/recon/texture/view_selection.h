@@ -1,6 +1,6 @@
 #pragma once
 // Per-face view selection of Waechter, Moehrle and Goesele, "Let There Be Color! Large-Scale
-// Texturing of 3D Reconstructions", ECCV 2014, section 3 (PAPER.md section 3.7):
+// Texturing of 3D Reconstructions", ECCV 2014, section 3 (docs/paper.md §3.7):
 //  * visibility of each face in each view (inside the image, facing the camera, not hidden by
 //    the mesh itself: z-buffer),
 //  * data term: the gradient magnitude integral over the face's projection (GMI, section 3.1),

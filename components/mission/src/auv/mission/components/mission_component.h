@@ -1,5 +1,5 @@
 #pragma once
-// The `mission` component (`auv run mission`): the mission handler of PAPER.md 2.3 on DDS.
+// The `mission` component (`auv run mission`): the mission handler of docs/paper.md §2.3 on DDS.
 // Subscribes `nav/odometry`, `control/status`, `planner/waypoint`, `planner/cancel`,
 // `map/update` (to refuse goals inside known obstacles), and `planner/path` / `planner/tree`
 // (only for the mission log); publishes `mission/query`, `planner/waypoint_request`,

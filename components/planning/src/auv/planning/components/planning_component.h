@@ -1,5 +1,5 @@
 #pragma once
-// The `planning` component: the online anytime RRT* of the paper's §2.2 on DDS. It keeps a
+// The `planning` component: the online anytime RRT* of docs/paper.md §2.2 on DDS. It keeps a
 // replica of the occupancy map from `map/update` and runs a PlanningSession (the query and
 // waypoint protocol, planning_session.h) in its own thread: it converts what arrives, calls
 // the session and publishes what the session decides.

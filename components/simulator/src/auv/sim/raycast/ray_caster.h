@@ -1,6 +1,6 @@
 #pragma once
 // Ray casting against a world mesh with Embree 3 (Debian's build has ray masks enabled: every
-// ray must carry mask = -1 or it hits nothing; see LIBRARY_NOTES). A RayCaster is immutable
+// ray must carry mask = -1 or it hits nothing; see docs/library-notes.md). A RayCaster is immutable
 // after construction and safe to use from many threads at once.
 
 #include <Eigen/Core>
