@@ -1,12 +1,12 @@
 // Pull benchmark (not a test): `auv recon pull`'s puller against the recorder component in
-// another process, over loopback, beside rsync of the same files from an rsync daemon on
-// 127.0.0.1 measured in the same run; and the resume overhead (bytes received after an
-// interruption / bytes missing). Vendor pairings on DDS domains 5 and 6 (test/README.md).
+// another process (`auv run recorder`, so `install/setup.bash` sourced), over loopback, beside
+// rsync of the same files from an rsync daemon on 127.0.0.1 measured in the same run; and the
+// resume overhead (bytes received after an interruption / bytes missing). Vendor pairings on DDS
+// domains 5 and 6 (test/README.md).
 //
 //   pull_bench [--files 4] [--file-mb 32] [--runs 3] [--in-flight 8] [--chunk-bytes 1048576]
 //              [--root <recordings folder to use instead of random files>] [--out <results.md>]
 //              [--pairs cc,ff,cf,fc]  (vehicle vendor, shore vendor: c Cyclone DDS, f Fast DDS)
-//   pull_bench --serve <root> <cyclonedds|fastdds> <domain> <max_chunk_bytes>   (the vehicle)
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <signal.h>
@@ -26,7 +26,6 @@
 
 #include "auv/interfaces/executor.h"
 #include "auv/recon/transfer/puller.h"
-#include "auv/recorder/components/recorder_component.h"
 
 namespace fs = std::filesystem;
 using auv::interfaces::Vendor;
@@ -45,27 +44,34 @@ struct Options {
   std::string pairs = "cc,ff,cf,fc";  // vehicle/shore vendor pairings (c: Cyclone, f: Fast DDS)
 };
 
-int serve(const std::string& root, const std::string& vendor, int domain, uint32_t max_chunk) {
-  auv::interfaces::Executor::installSignalHandlers();
-  auv::interfaces::Node node(
-      "recorder", auv::interfaces::nodeOptions(auv::interfaces::vendorFromString(vendor), domain,
-                                               {"root:=" + root, "vehicle_name:=bench",
-                                                "max_chunk_bytes:=" + std::to_string(max_chunk)}));
-  auv::recorder::RecorderComponent recorder;
-  recorder.configure(node);
-  recorder.scanNow();
-  recorder.activate();
-  auv::interfaces::Executor executor;
-  executor.add(node);
-  executor.spin();
-  recorder.deactivate();
-  recorder.cleanup();
-  return 0;
-}
-
 pid_t spawn(const std::vector<std::string>& argv) {
   const pid_t pid = fork();
   if (pid == 0) {
+    std::vector<char*> args;
+    for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+    args.push_back(nullptr);
+    execvp(args[0], args.data());
+    _exit(127);
+  }
+  return pid;
+}
+
+/// The vehicle: the recorder component as a deployment runs it, `auv run recorder`, on
+/// `vendor` and `domain` (the variables `auv` reads).
+pid_t spawnVehicle(const fs::path& root, Vendor vendor, int domain, uint32_t max_chunk) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    setenv("AUV_DDS", auv::interfaces::toString(vendor).c_str(), 1);
+    setenv("AUV_DOMAIN_ID", std::to_string(domain).c_str(), 1);
+    const std::vector<std::string> argv = {"auv",
+                                           "run",
+                                           "recorder",
+                                           "-p",
+                                           "root:=" + root.string(),
+                                           "-p",
+                                           "vehicle_name:=bench",
+                                           "-p",
+                                           "max_chunk_bytes:=" + std::to_string(max_chunk)};
     std::vector<char*> args;
     for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
     args.push_back(nullptr);
@@ -180,9 +186,6 @@ PullRun pull(Vendor shore_vendor, int domain, const fs::path& survey, const Opti
 
 int main(int argc, char** argv) {
   std::vector<std::string> args(argv + 1, argv + argc);
-  if (args.size() == 5 && args[0] == "--serve") {
-    return serve(args[1], args[2], std::stoi(args[3]), static_cast<uint32_t>(std::stoul(args[4])));
-  }
   Options o;
   for (size_t i = 0; i + 1 < args.size(); i += 2) {
     if (args[i] == "--files")
@@ -227,7 +230,6 @@ int main(int argc, char** argv) {
   }
   root = fs::canonical(root);
   const uint64_t total = folderBytes(root);
-  const std::string self = fs::canonical("/proc/self/exe").string();
 
   // rsync daemon on 127.0.0.1 with a temporary configuration, on a free port.
   const int port = freePort();
@@ -284,9 +286,7 @@ int main(int argc, char** argv) {
            "÷ missing) | repeats, corrupted |\n"
         << "|---|---|---|---|---|---|\n";
   for (const Pair& pair : pairs) {
-    const pid_t vehicle =
-        spawn({self, "--serve", root.string(), auv::interfaces::toString(pair.vehicle),
-               std::to_string(pair.domain), std::to_string(o.chunk_bytes)});
+    const pid_t vehicle = spawnVehicle(root, pair.vehicle, pair.domain, o.chunk_bytes);
     // Untimed warm-up: the recorder has catalogued (hashed) every file and is discovered.
     fs::remove_all(work / "survey");
     pull(pair.shore, pair.domain, work / "survey", o, vehicle);

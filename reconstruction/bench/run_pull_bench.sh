@@ -11,6 +11,8 @@ bench="$here/../../install/lib/auv_reconstruction/pull_bench"
 [ -x "$bench" ] || bench="$(command -v pull_bench || true)"
 [ -z "$bench" ] && [ -x "$here/pull_bench" ] && bench="$here/pull_bench"
 if [ -z "$bench" ]; then echo "run_pull_bench: pull_bench not built (./scripts/build.sh)" >&2; exit 1; fi
+# The vehicle is `auv run recorder` (pull_bench starts it per vendor pairing).
+command -v auv >/dev/null || { echo "run_pull_bench: auv not on PATH (source install/setup.bash)" >&2; exit 1; }
 mkdir -p "$workspace/bench_results"
 out="$workspace/bench_results/pull_bench_$(date +%Y%m%d_%H%M%S).md"
 "$bench" --out "$out" "$@"

@@ -10,7 +10,7 @@
 #include <random>
 
 #include "auv/recon/transfer/manifest.h"
-#include "auv/recorder/sha256.h"
+#include "auv/transfer/sha256.h"
 
 namespace auv::recon::transfer {
 namespace {
@@ -47,14 +47,14 @@ std::string readFile(const fs::path& path) {
 void writeChunk(PartialFile& file, const std::string& bytes, size_t index) {
   const std::string chunk = bytes.substr(file.chunkOffset(index), file.chunkLength(index));
   file.writeChunk(index, reinterpret_cast<const uint8_t*>(chunk.data()), chunk.size(),
-                  recorder::Sha256::of(chunk.data(), chunk.size()));
+                  auv::transfer::Sha256::of(chunk.data(), chunk.size()));
 }
 
 TEST(PartialFile, ResumeReverifiesChunksOnDiskAndFinishesVerified) {
   TempDir dir;
   const std::string bytes = randomBytes(10000, 1);
   const RemoteFile remote{"left/a.mp4", bytes.size(),
-                          recorder::Sha256::of(bytes.data(), bytes.size())};
+                          auv::transfer::Sha256::of(bytes.data(), bytes.size())};
   const fs::path final_path = dir.path() / "left" / "a.mp4";
   {
     PartialFile file(final_path, remote, 4096);
@@ -95,11 +95,12 @@ TEST(PartialFile, RecordOfAnotherVersionIsReplaced) {
   const std::string new_bytes = randomBytes(5000, 3);
   const fs::path final_path = dir.path() / "a.mp4";
   {
-    PartialFile file(final_path, {"a.mp4", 5000, recorder::Sha256::of(old_bytes.data(), 5000)},
+    PartialFile file(final_path, {"a.mp4", 5000, auv::transfer::Sha256::of(old_bytes.data(), 5000)},
                      4096);
     writeChunk(file, old_bytes, 0);
   }
-  PartialFile file(final_path, {"a.mp4", 5000, recorder::Sha256::of(new_bytes.data(), 5000)}, 4096);
+  PartialFile file(final_path, {"a.mp4", 5000, auv::transfer::Sha256::of(new_bytes.data(), 5000)},
+                   4096);
   EXPECT_EQ(file.reusedChunks(), 0u);
   EXPECT_NE(file.startNote().find("another version"), std::string::npos) << file.startNote();
   EXPECT_EQ(file.missingBytes(), 5000u);
@@ -122,11 +123,11 @@ TEST(PartialFile, WholeFileMismatchNamesTheCorruptedChunkAndKeepsTheRest) {
   TempDir dir;
   const std::string bytes = randomBytes(10000, 5);
   const fs::path final_path = dir.path() / "a.mp4";
-  PartialFile file(final_path, {"a.mp4", bytes.size(), recorder::Sha256::of(bytes.data(), 10000)},
-                   4096);
+  PartialFile file(final_path,
+                   {"a.mp4", bytes.size(), auv::transfer::Sha256::of(bytes.data(), 10000)}, 4096);
   writeChunk(file, bytes, 0);
   std::string damaged = bytes.substr(4096, 4096);
-  const std::string vehicle_digest = recorder::Sha256::of(damaged.data(), damaged.size());
+  const std::string vehicle_digest = auv::transfer::Sha256::of(damaged.data(), damaged.size());
   damaged[7] ^= 0x01;
   file.writeChunk(1, reinterpret_cast<const uint8_t*>(damaged.data()), damaged.size(),
                   vehicle_digest);

@@ -13,7 +13,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "auv/recorder/sha256.h"
+#include "auv/transfer/sha256.h"
 
 namespace auv::system_tests {
 namespace fs = std::filesystem;
@@ -230,7 +230,7 @@ unsigned long long folderBytes(const std::string& folder) {
 
 std::string fileSha256(const std::string& path) {
   try {
-    return recorder::sha256OfFile(path);
+    return transfer::sha256OfFile(path);
   } catch (const std::exception&) {
     return "";  // unreadable: compares unequal to any digest
   }

@@ -10,8 +10,8 @@
 
 #include "auv/interfaces/executor.h"
 #include "auv/recorder/components/recorder_component.h"
-#include "auv/recorder/recorder_names.h"
-#include "auv/recorder/sha256.h"
+#include "auv/transfer/names.h"
+#include "auv/transfer/sha256.h"
 #include "test_files.h"
 
 namespace auv::recorder {
@@ -44,11 +44,11 @@ class Harness {
         shore_("shore", nodeOptions(shore_vendor, domain)) {
     recorder.configure(recorder_node_);
     list = shore_.createClient<msg::RecordingCatalogueRequest, msg::RecordingCatalogueReply>(
-        listRecordingsService(vehicle), interfaces::bulkTransferQos());
+        transfer::listRecordingsService(vehicle), interfaces::bulkTransferQos());
     fetch = shore_.createClient<msg::FileChunkRequest, msg::FileChunkReply>(
-        fetchChunkService(vehicle), interfaces::bulkTransferQos());
+        transfer::fetchChunkService(vehicle), interfaces::bulkTransferQos());
     feed = shore_.createSubscription<msg::RecordingInfo>(
-        recordingsTopic(vehicle), interfaces::latchedStateQos(),
+        transfer::recordingsTopic(vehicle), interfaces::latchedStateQos(),
         std::function<void(const msg::RecordingInfo&)>([this](const msg::RecordingInfo& info) {
           std::lock_guard<std::mutex> lock(feed_mutex_);
           feed_samples_.push_back(info);
@@ -136,7 +136,7 @@ void catalogueAndChunksAcrossVendors(Vendor recorder_vendor, Vendor shore_vendor
   EXPECT_EQ(info.size_bytes(), 300000u);
   EXPECT_EQ(info.frame_count(), 40u);
   EXPECT_EQ(info.start_time().sec(), 10);
-  EXPECT_EQ(info.sha256(), sha256OfFile(dir.path() / left));
+  EXPECT_EQ(info.sha256(), transfer::sha256OfFile(dir.path() / left));
   EXPECT_EQ(reply.recordings()[1].file_path(), right);
 
   // Asking for more than the cap gets the cap: the file arrives in 5 chunks.

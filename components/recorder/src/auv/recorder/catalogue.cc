@@ -1,7 +1,5 @@
 #include "auv/recorder/catalogue.h"
 
-#include <sys/stat.h>
-
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -9,7 +7,7 @@
 #include <stdexcept>
 #include <tuple>
 
-#include "auv/recorder/sha256.h"
+#include "auv/transfer/sha256.h"
 
 namespace fs = std::filesystem;
 
@@ -49,15 +47,6 @@ auto findRecordingOf(Recordings& recordings, const std::string& file_path) {
 }
 
 }  // namespace
-
-std::optional<FileStamp> stampOf(const fs::path& path) {
-  struct stat st {};
-  if (::lstat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return std::nullopt;
-  FileStamp stamp;
-  stamp.size = static_cast<uint64_t>(st.st_size);
-  stamp.mtime_ns = static_cast<int64_t>(st.st_mtim.tv_sec) * 1000000000 + st.st_mtim.tv_nsec;
-  return stamp;
-}
 
 void CatalogueOptions::check() const {
   if (root.empty()) throw std::invalid_argument("root: empty (the recordings folder)");
@@ -259,15 +248,15 @@ Recording Catalogue::refresh(const Found& found, const std::optional<Recording>&
   std::shared_ptr<const std::vector<Sha256::Digest>> chunk_digests;
   try {
     if (options_.chunk_digest_bytes > 0) {
-      FileDigests digests =
-          sha256OfFileAndChunks(options_.root / found.disk_path, options_.chunk_digest_bytes);
+      transfer::FileDigests digests = transfer::sha256OfFileAndChunks(
+          options_.root / found.disk_path, options_.chunk_digest_bytes);
       sha = std::move(digests.sha256);
       chunk_digests =
           std::make_shared<const std::vector<Sha256::Digest>>(std::move(digests.chunks));
     } else {
-      sha = sha256OfFile(options_.root / found.disk_path);
+      sha = transfer::sha256OfFile(options_.root / found.disk_path);
     }
-    if (has_sidecar) sidecar_sha = sha256OfFile(options_.root / found.sidecar_disk_path);
+    if (has_sidecar) sidecar_sha = transfer::sha256OfFile(options_.root / found.sidecar_disk_path);
     report.hashed += has_sidecar ? 2 : 1;
   } catch (const std::exception& e) {
     r.problem = e.what();

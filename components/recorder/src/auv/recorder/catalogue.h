@@ -21,22 +21,15 @@
 #include <string>
 #include <vector>
 
-#include "auv/recorder/sha256.h"
+#include "auv/transfer/file_stamp.h"
+#include "auv/transfer/sha256.h"
 
 namespace auv::recorder {
 
-/// What identifies one state of a file on disk: changed size or mtime = changed file.
-struct FileStamp {
-  uint64_t size = 0;
-  int64_t mtime_ns = 0;
-  bool operator==(const FileStamp& other) const {
-    return size == other.size && mtime_ns == other.mtime_ns;
-  }
-  bool operator!=(const FileStamp& other) const { return !(*this == other); }
-};
-
-/// Stamp of a regular file; nullopt if it does not exist or is not a regular file.
-std::optional<FileStamp> stampOf(const std::filesystem::path& path);
+// The protocol's pieces the catalogue is made of (components/transfer).
+using transfer::FileStamp;
+using transfer::Sha256;
+using transfer::stampOf;
 
 struct CatalogueOptions {
   std::filesystem::path root;                      ///< recordings root

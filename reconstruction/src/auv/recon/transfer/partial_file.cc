@@ -10,7 +10,7 @@
 #include <map>
 #include <sstream>
 
-#include "auv/recorder/sha256.h"
+#include "auv/transfer/sha256.h"
 
 namespace fs = std::filesystem;
 
@@ -106,7 +106,7 @@ bool PartialFile::loadRecord() {
     } else if (key == "chunk") {
       size_t index = 0;
       std::string digest;
-      if ((fields >> index >> digest) && recorder::isSha256Hex(digest)) chunks[index] = digest;
+      if ((fields >> index >> digest) && auv::transfer::isSha256Hex(digest)) chunks[index] = digest;
     }
   }
   if (file != remote_.path || size != remote_.size || sha != remote_.sha256 || chunk_bytes == 0) {
@@ -131,8 +131,8 @@ bool PartialFile::loadRecord() {
     if (index >= count) continue;
     std::string actual;
     try {
-      actual = recorder::sha256OfRange(fd_, chunkOffset(index), chunkLength(index),
-                                       partPath(final_path_).string());
+      actual = auv::transfer::sha256OfRange(fd_, chunkOffset(index), chunkLength(index),
+                                            partPath(final_path_).string());
     } catch (const std::exception&) {
       actual.clear();
     }
@@ -205,7 +205,7 @@ void PartialFile::writeChunk(size_t index, const uint8_t* data, size_t size,
 }
 
 void PartialFile::advanceWholeDigest(const uint8_t* written, size_t index) {
-  if (!whole_) whole_ = std::make_unique<recorder::Sha256>();
+  if (!whole_) whole_ = std::make_unique<auv::transfer::Sha256>();
   if (chunkOffset(index) == hashed_to_) {
     // The usual case: the chunk that continues the digest, still in the caller's buffer.
     whole_->update(written, chunkLength(index));
@@ -235,7 +235,7 @@ std::vector<size_t> PartialFile::finish() {
   if (!allChunks()) throw std::logic_error(remote_.path + ": finish() with chunks missing");
   const fs::path part = partPath(final_path_);
   // The digest so far covers [0, hashed_to_); the rest (chunks reused on resume) is read.
-  if (!whole_) whole_ = std::make_unique<recorder::Sha256>();
+  if (!whole_) whole_ = std::make_unique<auv::transfer::Sha256>();
   std::string actual;
   if (hashed_to_ < remote_.size) {
     const uint64_t rest = remote_.size - hashed_to_;
@@ -258,7 +258,7 @@ std::vector<size_t> PartialFile::finish() {
     for (size_t i = 0; i < have_.size(); ++i) {
       std::string chunk;
       try {
-        chunk = recorder::sha256OfRange(fd_, chunkOffset(i), chunkLength(i), part.string());
+        chunk = auv::transfer::sha256OfRange(fd_, chunkOffset(i), chunkLength(i), part.string());
       } catch (const std::exception&) {
         chunk.clear();
       }

@@ -20,7 +20,7 @@
 #include <string>
 #include <vector>
 
-#include "auv/recorder/sha256.h"
+#include "auv/transfer/sha256.h"
 
 namespace auv::recon::transfer {
 
@@ -100,7 +100,7 @@ class PartialFile {
   int fd_ = -1;         // the .part file
   int record_fd_ = -1;  // the progress record, opened for appending
   // SHA-256 of bytes [0, hashed_to_) of the .part, fed as chunks are written in order.
-  std::unique_ptr<recorder::Sha256> whole_;
+  std::unique_ptr<auv::transfer::Sha256> whole_;
   uint64_t hashed_to_ = 0;
 };
 

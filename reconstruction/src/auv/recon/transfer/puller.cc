@@ -18,10 +18,10 @@
 #include "auv/interfaces/msg_time.h"
 #include "auv/recon/transfer/manifest.h"
 #include "auv/recon/transfer/partial_file.h"
-#include "auv/recorder/bulk_allocator.h"
-#include "auv/recorder/chunk_reader.h"
-#include "auv/recorder/recorder_names.h"
-#include "auv/recorder/sha256.h"
+#include "auv/transfer/bulk_allocator.h"
+#include "auv/transfer/chunk_reader.h"
+#include "auv/transfer/names.h"
+#include "auv/transfer/sha256.h"
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
@@ -86,7 +86,7 @@ struct Puller::Impl {
 
 void PullOptions::check() const {
   try {
-    recorder::checkVehicleName(vehicle);
+    auv::transfer::checkVehicleName(vehicle);
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(std::string("--vehicle: ") + e.what());
   }
@@ -98,10 +98,10 @@ void PullOptions::check() const {
     throw std::invalid_argument("--in-flight: " + std::to_string(in_flight) +
                                 " is outside [1, 256] (the bulk_transfer profile keeps 256)");
   }
-  if (chunk_bytes < 4096 || chunk_bytes > recorder::kLargestMaxChunkBytes) {
+  if (chunk_bytes < 4096 || chunk_bytes > auv::transfer::kLargestMaxChunkBytes) {
     throw std::invalid_argument("--chunk-bytes: " + std::to_string(chunk_bytes) +
                                 " is outside [4096, " +
-                                std::to_string(recorder::kLargestMaxChunkBytes) + "]");
+                                std::to_string(auv::transfer::kLargestMaxChunkBytes) + "]");
   }
   for (const auto& camera : cameras) {
     if (camera.empty() || camera.find('/') != std::string::npos || camera == "." ||
@@ -114,11 +114,11 @@ void PullOptions::check() const {
 Puller::Puller(interfaces::Node& node, PullOptions options)
     : impl_(std::make_unique<Impl>()), options_(std::move(options)) {
   options_.check();
-  recorder::keepChunkBuffersInHeap();  // every chunk received allocates multi-MiB buffers
+  auv::transfer::keepChunkBuffersInHeap();  // every chunk received allocates multi-MiB buffers
   impl_->list = node.createClient<msg::RecordingCatalogueRequest, msg::RecordingCatalogueReply>(
-      recorder::listRecordingsService(options_.vehicle), interfaces::bulkTransferQos());
+      auv::transfer::listRecordingsService(options_.vehicle), interfaces::bulkTransferQos());
   impl_->fetch = node.createClient<msg::FileChunkRequest, msg::FileChunkReply>(
-      recorder::fetchChunkService(options_.vehicle), interfaces::bulkTransferQos());
+      auv::transfer::fetchChunkService(options_.vehicle), interfaces::bulkTransferQos());
   impl_->domain_id = node.domainId();
 }
 
@@ -170,7 +170,7 @@ PullResult Puller::run() {
     stats_.lost = "vehicle '" + options_.vehicle + "' " + what + " within " +
                   std::to_string(static_cast<int>(std::lround(options_.timeout_s))) +
                   " s (--timeout; domain " + std::to_string(impl_->domain_id) + ", service " +
-                  recorder::listRecordingsService(options_.vehicle) + ")";
+                  auv::transfer::listRecordingsService(options_.vehicle) + ")";
     stats_.seconds = secondsSince(start);
     return PullResult::VEHICLE_LOST;
   };
@@ -252,10 +252,10 @@ PullResult Puller::run() {
       ++complete_listed;
       // Paths come from the network: they must stay inside recordings/.
       try {
-        recorder::checkRelativePath(info.file_path());
-        if (!info.sidecar_file().empty()) recorder::checkRelativePath(info.sidecar_file());
-        if (!recorder::isSha256Hex(info.sha256()) ||
-            (!info.sidecar_file().empty() && !recorder::isSha256Hex(info.sidecar_sha256()))) {
+        auv::transfer::checkRelativePath(info.file_path());
+        if (!info.sidecar_file().empty()) auv::transfer::checkRelativePath(info.sidecar_file());
+        if (!auv::transfer::isSha256Hex(info.sha256()) ||
+            (!info.sidecar_file().empty() && !auv::transfer::isSha256Hex(info.sidecar_sha256()))) {
           throw std::invalid_argument("catalogue entry without a valid sha256");
         }
       } catch (const std::exception& e) {
@@ -283,7 +283,7 @@ PullResult Puller::run() {
           // after the rename): verified by hashing, never overwritten.
           std::string local;
           try {
-            local = recorder::sha256OfFile(final_path);
+            local = auv::transfer::sha256OfFile(final_path);
           } catch (const std::exception& e) {
             local = e.what();
           }
@@ -542,8 +542,9 @@ PullResult Puller::run() {
         // whole-file SHA-256 in finish(), which names the chunks to fetch again if it fails:
         // one hashing pass on shore instead of two. Pieces of a chunk are checked now.
         const bool corrupted =
-            !recorder::isSha256Hex(reply.data_sha256()) ||
-            (!whole_chunk && recorder::Sha256::of(data.data(), data.size()) != reply.data_sha256());
+            !auv::transfer::isSha256Hex(reply.data_sha256()) ||
+            (!whole_chunk &&
+             auv::transfer::Sha256::of(data.data(), data.size()) != reply.data_sha256());
         if (corrupted) {
           ++stats_.chunks_corrupted;
           if (++file.corrupted > kMaxCorruptedChunksPerFile) {
@@ -572,7 +573,7 @@ PullResult Puller::run() {
             continue;
           }
           file.partial->writeChunk(work.chunk, buffer.data(), buffer.size(),
-                                   recorder::Sha256::of(buffer.data(), buffer.size()));
+                                   auv::transfer::Sha256::of(buffer.data(), buffer.size()));
           file.buffers.erase(work.chunk);
           progress.bytes_done += data.size();
           finishIfComplete(file);

@@ -3,12 +3,15 @@
 #include <cmath>
 
 #include "auv/interfaces/msg_time.h"
-#include "auv/recorder/bulk_allocator.h"
-#include "auv/recorder/recorder_names.h"
-#include "auv/recorder/sha256.h"
+#include "auv/transfer/bulk_allocator.h"
+#include "auv/transfer/names.h"
+#include "auv/transfer/sha256.h"
 
 namespace auv::recorder {
 namespace {
+
+using transfer::Chunk;
+using transfer::ChunkError;
 
 msg::Time secondsToTime(double seconds) {
   return interfaces::toMsgTime(static_cast<int64_t>(std::llround(seconds * 1e9)));
@@ -37,14 +40,14 @@ msg::RecordingInfo toRecordingInfo(const Recording& r) {
 void RecorderComponent::Options::check() const {
   if (root.empty()) throw std::invalid_argument("parameter root: empty (the recordings folder)");
   try {
-    checkVehicleName(vehicle_name);
+    transfer::checkVehicleName(vehicle_name);
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(std::string("parameter vehicle_name: ") + e.what());
   }
-  if (max_chunk_bytes < 4096 || max_chunk_bytes > kLargestMaxChunkBytes) {
+  if (max_chunk_bytes < 4096 || max_chunk_bytes > transfer::kLargestMaxChunkBytes) {
     throw std::invalid_argument("parameter max_chunk_bytes: " + std::to_string(max_chunk_bytes) +
-                                " is outside [4096, " + std::to_string(kLargestMaxChunkBytes) +
-                                "]");
+                                " is outside [4096, " +
+                                std::to_string(transfer::kLargestMaxChunkBytes) + "]");
   }
   CatalogueOptions catalogue{root, extensions};
   try {
@@ -78,19 +81,19 @@ void RecorderComponent::configure(interfaces::Node& node) {
                                           {"cap of one fetch_chunk reply's data",
                                            "B",
                                            4096.0,
-                                           static_cast<double>(kLargestMaxChunkBytes),
+                                           static_cast<double>(transfer::kLargestMaxChunkBytes),
                                            {},
                                            true});
   o.extensions = p.declare<std::vector<std::string>>(
       "extensions", o.extensions,
       {"file endings of recordings (with the dot)", "", {}, {}, {}, true});
   o.check();
-  keepChunkBuffersInHeap();  // every chunk served allocates multi-MiB buffers
+  transfer::keepChunkBuffersInHeap();  // every chunk served allocates multi-MiB buffers
   // Chunk digests on the max_chunk_bytes grid, the grid a pull asks for by default: serving
   // a chunk then costs no hashing (reconstruction/bench/README.md).
   catalogue_ =
       std::make_unique<Catalogue>(CatalogueOptions{o.root, o.extensions, o.max_chunk_bytes});
-  reader_ = std::make_unique<ChunkReader>(o.root, o.max_chunk_bytes);
+  reader_ = std::make_unique<transfer::ChunkReader>(o.root, o.max_chunk_bytes);
   std::error_code error;
   if (!std::filesystem::is_directory(o.root, error)) {
     AUV_WARN(node.logger(), "recordings root '" << o.root
@@ -98,16 +101,16 @@ void RecorderComponent::configure(interfaces::Node& node) {
                                                    "stays empty until it appears");
   }
 
-  feed_pub_ = node.createPublisher<msg::RecordingInfo>(recordingsTopic(o.vehicle_name),
+  feed_pub_ = node.createPublisher<msg::RecordingInfo>(transfer::recordingsTopic(o.vehicle_name),
                                                        interfaces::latchedStateQos());
   list_service_ = node.createService<msg::RecordingCatalogueRequest, msg::RecordingCatalogueReply>(
-      listRecordingsService(o.vehicle_name),
+      transfer::listRecordingsService(o.vehicle_name),
       [this](const msg::RecordingCatalogueRequest& request, msg::RecordingCatalogueReply& reply) {
         onList(request, reply);
       },
       interfaces::bulkTransferQos());
   fetch_service_ = node.createService<msg::FileChunkRequest, msg::FileChunkReply>(
-      fetchChunkService(o.vehicle_name),
+      transfer::fetchChunkService(o.vehicle_name),
       [this](const msg::FileChunkRequest& request, msg::FileChunkReply& reply) {
         onFetch(request, reply);
       },
@@ -205,7 +208,7 @@ void RecorderComponent::onFetch(const msg::FileChunkRequest& request, msg::FileC
   try {
     const auto served = catalogue_->servedFile(request.file_path());
     if (!served) {
-      checkRelativePath(request.file_path());  // a malformed path is named as such
+      transfer::checkRelativePath(request.file_path());  // a malformed path is named as such
       // Requests already in flight when the first one found the change get the same answer
       // (not "not found", which a puller retries until its timeout).
       if (auto why = catalogue_->changedProblem(request.file_path())) {

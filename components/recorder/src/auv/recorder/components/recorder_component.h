@@ -1,7 +1,8 @@
 #pragma once
 // The `recorder` component (`auv run recorder -p root:=<dir> -p vehicle_name:=<name>`): serves
 // the catalogue of a recordings root and chunks of its files to the shore, per
-// idl/msg/recorder.idl, under `<vehicle_name>/recorder/...`:
+// idl/msg/recorder.idl and the transfer protocol (components/transfer/README.md), under
+// `<vehicle_name>/recorder/...`:
 //   list_recordings (service, bulk_transfer)  the catalogue
 //   fetch_chunk     (service, bulk_transfer)  bytes of a complete recording or sidecar
 //   recordings      (topic, latched_state)    one RecordingInfo per file as it changes
@@ -20,7 +21,7 @@
 
 #include "auv/interfaces/component.h"
 #include "auv/recorder/catalogue.h"
-#include "auv/recorder/chunk_reader.h"
+#include "auv/transfer/chunk_reader.h"
 
 namespace auv::recorder {
 
@@ -66,7 +67,7 @@ class RecorderComponent : public interfaces::Component {
   interfaces::Node* node_ = nullptr;
   Options options_;
   std::unique_ptr<Catalogue> catalogue_;
-  std::unique_ptr<ChunkReader> reader_;
+  std::unique_ptr<transfer::ChunkReader> reader_;
   std::atomic<uint64_t> chunks_served_{0};
   ChunkObserver chunk_observer_;
 

@@ -1,4 +1,4 @@
-#include "auv/recorder/chunk_reader.h"
+#include "auv/transfer/chunk_reader.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -10,7 +10,7 @@
 
 namespace fs = std::filesystem;
 
-namespace auv::recorder {
+namespace auv::transfer {
 
 void checkRelativePath(const std::string& relative) {
   auto bad = [&](const std::string& why) {
@@ -113,4 +113,4 @@ Chunk ChunkReader::read(const std::string& relative, uint64_t offset, uint32_t l
   return chunk;
 }
 
-}  // namespace auv::recorder
+}  // namespace auv::transfer

@@ -3,7 +3,8 @@
 // already on disk; a chunk corrupted on the way is detected and fetched again; a file truncated
 // on the vehicle is reported and never presented as complete; a vehicle that disappears gives
 // a clear error; a recorder restarted mid-pull is picked up and the pull completes. Each test
-// on its own domain id (134-139, test/README.md).
+// on its own domain id (134-139, test/README.md). A system test: the shore's package does not
+// depend on the vehicle's component, this package depends on both.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -20,8 +21,8 @@
 #include "auv/recon/transfer/partial_file.h"
 #include "auv/recon/transfer/puller.h"
 #include "auv/recorder/components/recorder_component.h"
-#include "auv/recorder/recorder_names.h"
-#include "auv/recorder/sha256.h"
+#include "auv/transfer/names.h"
+#include "auv/transfer/sha256.h"
 
 namespace auv::recon::transfer {
 namespace {
@@ -146,8 +147,8 @@ void expectIdentical(const fs::path& root, const fs::path& survey,
     if (path.size() > 4 && path.compare(path.size() - 4, 4, ".mp4") == 0) {
       const ManifestEntry* entry = manifest.find(path);
       ASSERT_NE(entry, nullptr) << path;
-      EXPECT_EQ(entry->sha256, recorder::sha256OfFile(root / path));
-      EXPECT_EQ(entry->sidecar_sha256, recorder::sha256OfFile(root / (path + ".frames.csv")));
+      EXPECT_EQ(entry->sha256, auv::transfer::sha256OfFile(root / path));
+      EXPECT_EQ(entry->sidecar_sha256, auv::transfer::sha256OfFile(root / (path + ".frames.csv")));
       EXPECT_EQ(entry->frame_count, 30u);
     }
   }
@@ -250,11 +251,11 @@ TEST(Pull, CorruptedChunkIsDetectedAndFetchedAgain) {
   const auto paths = makeRecordings(root.path(), {{"left", 400000}});
   recorder::Catalogue catalogue({root.path(), {".mp4"}});
   catalogue.scan();
-  recorder::ChunkReader reader(root.path(), 65536);
+  auv::transfer::ChunkReader reader(root.path(), 65536);
   Node vehicle("recorder", nodeOptions(Vendor::CYCLONEDDS, 136));
   std::atomic<int> requests_at_offset{0};
   auto list = vehicle.createService<msg::RecordingCatalogueRequest, msg::RecordingCatalogueReply>(
-      recorder::listRecordingsService("sparus"),
+      auv::transfer::listRecordingsService("sparus"),
       [&](const msg::RecordingCatalogueRequest&, msg::RecordingCatalogueReply& reply) {
         std::vector<msg::RecordingInfo> infos;
         for (const auto& r : catalogue.list("", true))
@@ -264,15 +265,15 @@ TEST(Pull, CorruptedChunkIsDetectedAndFetchedAgain) {
       },
       interfaces::bulkTransferQos());
   auto fetch = vehicle.createService<msg::FileChunkRequest, msg::FileChunkReply>(
-      recorder::fetchChunkService("sparus"),
+      auv::transfer::fetchChunkService("sparus"),
       [&](const msg::FileChunkRequest& request, msg::FileChunkReply& reply) {
-        recorder::Chunk chunk =
+        auv::transfer::Chunk chunk =
             reader.read(request.file_path(), request.offset(), request.length());
         reply.file_path(request.file_path());
         reply.offset(request.offset());
         reply.total_size(chunk.total_size);
         reply.eof(request.offset() + chunk.data.size() == chunk.total_size);
-        reply.data_sha256(recorder::Sha256::of(chunk.data.data(), chunk.data.size()));
+        reply.data_sha256(auv::transfer::Sha256::of(chunk.data.data(), chunk.data.size()));
         if (request.file_path() == paths[0] && request.offset() == 131072 &&
             requests_at_offset++ == 0) {
           chunk.data[100] ^= 0x40;

@@ -1,4 +1,4 @@
-#include "auv/recorder/sha256.h"
+#include "auv/transfer/sha256.h"
 
 #include <fcntl.h>
 #include <openssl/evp.h>
@@ -10,7 +10,7 @@
 #include <stdexcept>
 #include <vector>
 
-namespace auv::recorder {
+namespace auv::transfer {
 
 struct Sha256::Context {
   EVP_MD_CTX* md = nullptr;
@@ -138,4 +138,4 @@ bool isSha256Hex(const std::string& text) {
   return true;
 }
 
-}  // namespace auv::recorder
+}  // namespace auv::transfer

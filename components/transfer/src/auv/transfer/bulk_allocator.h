@@ -9,7 +9,7 @@
 
 #include <cstddef>
 
-namespace auv::recorder {
+namespace auv::transfer {
 
 /// Serves buffers below 32 MiB from the heap and returns freed heap memory to the system only
 /// beyond 64 MiB. Process-wide, so called once by the processes that move file chunks: the
@@ -21,4 +21,4 @@ inline void keepChunkBuffersInHeap() {
   mallopt(M_TRIM_THRESHOLD, kTrimThreshold);
 }
 
-}  // namespace auv::recorder
+}  // namespace auv::transfer

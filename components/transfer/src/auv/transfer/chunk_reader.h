@@ -10,9 +10,9 @@
 #include <string>
 #include <vector>
 
-#include "auv/recorder/catalogue.h"
+#include "auv/transfer/file_stamp.h"
 
-namespace auv::recorder {
+namespace auv::transfer {
 
 /// Why a chunk could not be read; maps to a msg::ReplyCode in the component.
 class ChunkError : public std::runtime_error {
@@ -55,4 +55,4 @@ class ChunkReader {
 /// Throws ChunkError INVALID_PATH unless `relative` is a clean relative '/'-path.
 void checkRelativePath(const std::string& relative);
 
-}  // namespace auv::recorder
+}  // namespace auv::transfer

@@ -1,12 +1,12 @@
 // The chunk reader: paths from the network cannot leave the recordings root; ranges, caps and
 // files changed since they were catalogued.
-#include "auv/recorder/chunk_reader.h"
+#include "auv/transfer/chunk_reader.h"
 
 #include <gtest/gtest.h>
 
 #include "test_files.h"
 
-namespace auv::recorder {
+namespace auv::transfer {
 namespace {
 
 namespace fs = std::filesystem;
@@ -86,4 +86,4 @@ TEST(ChunkReader, RefusesAFileChangedSinceItWasCatalogued) {
 }
 
 }  // namespace
-}  // namespace auv::recorder
+}  // namespace auv::transfer

@@ -1,16 +1,18 @@
 #pragma once
-// DDS names of one vehicle's recorder: `<vehicle>/recorder/...`, so the recorders of several
-// vehicles share a domain without colliding. Used by the component and by `auv recon pull`.
+// The transfer protocol's DDS names, per vehicle: `<vehicle>/recorder/...`, so the recorders of
+// several vehicles share a domain without colliding; the chunk size limits both sides agree on.
+// Used by the vehicle's recorder component and by the shore's `auv recon pull`
+// (components/transfer/README.md).
 
 #include <cctype>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
 
-namespace auv::recorder {
+namespace auv::transfer {
 
 /// Default cap of one FileChunkReply's data (parameter max_chunk_bytes): 1 MiB samples
-/// cross both vendors reliably and amortise the per-request cost (components/recorder/bench).
+/// cross both vendors reliably and amortise the per-request cost (docs/performance.md).
 inline constexpr uint32_t kDefaultMaxChunkBytes = 1u << 20;
 /// Largest cap accepted: 16 MiB samples still cross, but gain nothing and cost memory.
 inline constexpr uint32_t kLargestMaxChunkBytes = 16u << 20;
@@ -35,4 +37,4 @@ inline std::string recordingsTopic(const std::string& vehicle) {
   return vehicle + "/recorder/recordings";
 }
 
-}  // namespace auv::recorder
+}  // namespace auv::transfer

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-namespace auv::recorder {
+namespace auv::transfer {
 
 /// Incremental SHA-256. Not copyable; digest() may be called once.
 class Sha256 {
@@ -59,4 +59,4 @@ FileDigests sha256OfFileAndChunks(const std::filesystem::path& path, uint32_t ch
 /// True for 64 lowercase hex digits.
 bool isSha256Hex(const std::string& text);
 
-}  // namespace auv::recorder
+}  // namespace auv::transfer
