@@ -1,6 +1,7 @@
 #pragma once
 // Pulls a vehicle's recordings into `<survey>/recordings/<camera>/` over the recorder's
-// services (components/recorder): waits for the vehicle, lists its catalogue, and fetches what
+// services (the transfer protocol, components/transfer/README.md; the vehicle's side is
+// components/recorder): waits for the vehicle, lists its catalogue, and fetches what
 // is not verified on disk yet, several chunks in flight. Resumable (PartialFile), verified
 // (per-chunk digest on the wire, whole-file SHA-256 before the rename, Manifest), and it gives
 // up with VEHICLE_LOST when the vehicle stays silent for `timeout_s`; a vehicle that restarts
@@ -80,8 +81,9 @@ class Puller {
   bool vehicleReady() const;
 
   /// Pulls until every complete recording is verified on disk (or failed), the vehicle is
-  /// lost, or stop(). Throws std::runtime_error for local problems (survey not writable,
-  /// manifest unreadable, another pull running on the survey).
+  /// lost, or stop(): one PullSession (pull_session.h) on the locked survey. Throws
+  /// std::runtime_error for local problems (survey not writable, manifest unreadable, another pull
+  /// running on the survey).
   PullResult run();
   /// Makes run() return INTERRUPTED soon, partial files kept for a resume. Any thread.
   void stop() { stop_ = true; }
