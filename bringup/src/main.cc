@@ -105,17 +105,8 @@ int main(int argc, char** argv) {
     }
     std::cerr << "auv: unknown command '" << command << "'\n" << kUsage;
     return 2;
-  } catch (const auv::bringup::CliError& e) {
-    std::cerr << "auv " << command << ": " << e.what() << std::endl;
-    return e.exitCode();
-  } catch (const std::invalid_argument& e) {
-    std::cerr << "auv " << command << ": " << e.what() << std::endl;
-    return 2;
-  } catch (const auv::interfaces::ParameterError& e) {
-    std::cerr << "auv " << command << ": " << e.what() << std::endl;
-    return 2;
   } catch (const std::exception& e) {
     std::cerr << "auv " << command << ": " << e.what() << std::endl;
-    return 1;
+    return auv::config::exitCodeFor(e);  // input errors 2, failures 1
   }
 }

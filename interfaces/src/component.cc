@@ -10,6 +10,7 @@
 #include <set>
 #include <sstream>
 
+#include "auv/config/errors.h"
 #include "auv/interfaces/executor.h"
 
 namespace auv::interfaces {
@@ -120,7 +121,7 @@ int runComponents(const std::vector<ComponentSpec>& specs, const NodeOptions& op
   } catch (const std::exception& e) {
     std::cerr << "auv run: " << e.what() << std::endl;
     for (auto& instance : instances) instance.component->cleanup();
-    return 1;
+    return config::exitCodeFor(e);  // a bad parameter is the user's input: 2
   }
   executor.spin();
   int status = 0;

@@ -1,6 +1,6 @@
 #include "auv/interfaces/parameters.h"
 
-#include "auv/interfaces/spelling.h"
+#include "auv/config/spelling.h"
 
 #include "parameter_conversion.h"
 
@@ -66,7 +66,6 @@ struct Override {
   YAML::Mark mark;     // position of the key in the source (null for the command line)
 };
 
-
 std::string lastComponent(const std::string& name) {
   const size_t dot = name.rfind('.');
   return dot == std::string::npos ? name : name.substr(dot + 1);
@@ -79,7 +78,7 @@ std::optional<std::string> closestName(const std::string& name,
   std::optional<std::string> best;
   size_t best_distance = threshold + 1;
   for (const auto& candidate : declared) {
-    const size_t distance = editDistance(name, candidate);
+    const size_t distance = config::editDistance(name, candidate);
     if (distance < best_distance) {
       best_distance = distance;
       best = candidate;

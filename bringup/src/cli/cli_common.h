@@ -7,15 +7,17 @@
 #include <string>
 #include <vector>
 
+#include "auv/config/errors.h"
+
 namespace auv::bringup {
 
 /// A user error: printed as one line "auv <command>: <message>", exit code 2 (usage/input)
 /// or 1 (runtime, e.g. no data within the timeout).
-class CliError : public std::runtime_error {
+class CliError : public config::Error {
  public:
-  CliError(const std::string& message, int exit_code = 2)
-      : runtime_error(message), exit_code_(exit_code) {}
-  int exitCode() const { return exit_code_; }
+  CliError(const std::string& message, int exit_code = config::ConfigError::kExitCode)
+      : config::Error(message), exit_code_(exit_code) {}
+  int exitCode() const override { return exit_code_; }
 
  private:
   int exit_code_;

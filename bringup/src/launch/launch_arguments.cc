@@ -4,7 +4,7 @@
 #include <optional>
 #include <regex>
 
-#include "auv/interfaces/spelling.h"
+#include "auv/config/spelling.h"
 #include "launch_description.h"
 
 namespace auv::bringup {
@@ -20,7 +20,7 @@ std::string closest(const std::string& name, const std::vector<LaunchArgument>& 
   std::string best;
   size_t best_distance = 3;
   for (const LaunchArgument& a : declared) {
-    const size_t d = interfaces::editDistance(name, a.name);
+    const size_t d = config::editDistance(name, a.name);
     if (d < best_distance) best_distance = d, best = a.name;
   }
   return best;

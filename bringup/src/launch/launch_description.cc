@@ -1,6 +1,6 @@
 #include "launch_description.h"
 
-#include "auv/interfaces/spelling.h"
+#include "auv/config/spelling.h"
 
 #include <algorithm>
 #include <cerrno>
@@ -68,7 +68,7 @@ std::string suggest(const std::string& word, const std::vector<std::string>& can
   for (const std::string& candidate : candidates) {
     std::string normalized = candidate;
     std::replace(normalized.begin(), normalized.end(), '-', '_');
-    const size_t distance = interfaces::editDistance(lowered, normalized);
+    const size_t distance = config::editDistance(lowered, normalized);
     if (distance < best_distance) {
       best_distance = distance;
       best = candidate;

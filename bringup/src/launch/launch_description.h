@@ -10,6 +10,8 @@
 
 #include "launch_arguments.h"
 
+#include "auv/config/errors.h"
+
 namespace auv::bringup {
 
 /// What the supervisor does when a process exits on its own.
@@ -77,7 +79,7 @@ struct LaunchDescription {
 /// Invalid launch file: unreadable, malformed YAML, or a field that fails validation.
 /// what() is "<file>: <field path>: <problem>" (plus " (line L, column C)" when known), or
 /// "<file>:<line>:<col>: malformed YAML: <problem>" for syntax errors (which have no field).
-class LaunchFileError : public std::runtime_error {
+class LaunchFileError : public config::ConfigError {
  public:
   LaunchFileError(std::string file, std::string field, std::string problem, int line = 0,
                   int column = 0);

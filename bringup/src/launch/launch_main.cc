@@ -124,12 +124,10 @@ int launchMain(const std::vector<std::string>& args, const std::string& auv_exec
     std::cout.flush();
     Supervisor supervisor(std::move(launch), options);
     return supervisor.run().exit_code;
-  } catch (const std::invalid_argument& e) {
-    std::cerr << "auv launch: " << file << ": " << e.what() << "\n";
-    return kUsageError;
   } catch (const std::exception& e) {
-    std::cerr << "auv launch: " << e.what() << "\n";
-    return kSetupError;
+    const int code = config::exitCodeFor(e);
+    std::cerr << "auv launch: " << (code == kUsageError ? file + ": " : "") << e.what() << "\n";
+    return code;
   }
 }
 

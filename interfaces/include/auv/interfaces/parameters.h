@@ -47,12 +47,15 @@
 #include <variant>
 #include <vector>
 
+#include "auv/config/errors.h"
+
 namespace auv::interfaces {
 
-/// Thrown for bad parameter files, bad values, bad declarations and bad get() requests.
-class ParameterError : public std::runtime_error {
+/// Thrown for bad parameter files, bad values, bad declarations and bad get() requests: the
+/// user's input is wrong (exit code 2, auv/config/errors.h).
+class ParameterError : public config::ConfigError {
  public:
-  using std::runtime_error::runtime_error;
+  using config::ConfigError::ConfigError;
 };
 
 /// A parameter value; the alternative's index is its ParameterType.

@@ -21,13 +21,12 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "auv/config/errors.h"
+
 namespace auv::control {
 
 /// An option or model value is unusable; the message names the field ("vehicle.mass: ...").
-class ConfigError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
+using config::ConfigError;
 
 /// The vehicle's kinematic state. Sparus II is passively stable in roll and pitch, so the state
 /// is 4-DOF: position (NED), yaw, and body velocities in surge, sway, heave, yaw.

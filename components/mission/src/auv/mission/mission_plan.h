@@ -9,14 +9,16 @@
 
 #include <Eigen/Core>
 
+#include "auv/config/errors.h"
 #include "auv/msg/all.h"
 
 namespace auv::mission {
 
-/// A malformed or unacceptable mission; the message names the file/query and the field.
-class MissionError : public std::runtime_error {
+/// A malformed or unacceptable mission; the message names the file/query and the field (the
+/// user's input: exit code 2).
+class MissionError : public config::ConfigError {
  public:
-  using std::runtime_error::runtime_error;
+  using config::ConfigError::ConfigError;
 };
 
 /// One query: everything a PlannerQuery carries except ids, stamps and the start (the vehicle's

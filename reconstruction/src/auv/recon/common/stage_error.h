@@ -6,22 +6,26 @@
 #include <stdexcept>
 #include <string>
 
+#include "auv/config/errors.h"
+
 namespace auv::recon {
 
 /// A stage cannot do its work with what it was given (too few registered images, an empty
 /// cloud, a truncated video, ...). The message names the stage and the cause; the CLI prints it
-/// and exits 1. Earlier outputs in the survey stay untouched (StagedOutput).
-class StageError : public std::runtime_error {
+/// and exits 1 (a RuntimeFailure). Earlier outputs in the survey stay untouched (StagedOutput).
+class StageError : public config::RuntimeFailure {
  public:
   StageError(const std::string& stage, const std::string& cause)
-      : std::runtime_error(stage + ": " + cause), stage_(stage) {}
+      : config::RuntimeFailure(stage + ": " + cause), stage_(stage) {}
   const std::string& stage() const { return stage_; }
 
  private:
   std::string stage_;
 };
 
-/// An option value outside its range: "<field> = <value>: <requirement>".
+/// An option value outside its range: "<field> = <value>: <requirement>". A
+/// std::invalid_argument, like every options check() of the cores: exit code 2
+/// (config::exitCodeFor).
 class OptionError : public std::invalid_argument {
  public:
   using std::invalid_argument::invalid_argument;

@@ -30,12 +30,12 @@ CommandRegistrar::CommandRegistrar(std::string name, int order, std::string summ
 int runReportingErrors(const std::string& command, const std::function<int()>& body) {
   try {
     return body();
-  } catch (const std::invalid_argument& e) {  // OptionError, bad usage
-    std::cerr << "auv recon " << command << ": " << e.what() << "\n";
-    return kExitUsage;
-  } catch (const std::exception& e) {  // StageError, I/O
-    std::cerr << "auv recon " << command << ": error: " << e.what() << "\n";
-    return kExitFailed;
+  } catch (const std::exception& e) {
+    // OptionError, bad usage: 2; StageError, I/O: 1 (auv/config/errors.h).
+    const int code = config::exitCodeFor(e);
+    std::cerr << "auv recon " << command << ": " << (code == kExitUsage ? "" : "error: ")
+              << e.what() << "\n";
+    return code;
   }
 }
 

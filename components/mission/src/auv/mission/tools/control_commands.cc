@@ -24,8 +24,8 @@ namespace {
 using namespace std::chrono_literals;
 using Clock = std::chrono::steady_clock;
 
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
+struct UsageError : config::ConfigError {
+  using config::ConfigError::ConfigError;
 };
 
 /// `--name value` options and `--flag`s of one command; anything else is positional.
@@ -198,12 +198,8 @@ int startMain(const std::vector<std::string>& args) {
       if (reportMain({options.values.at("--report")}) != 0) return 1;
     }
     return last->state() == msg::MISSION_STATE_SUCCEEDED ? 0 : 1;
-  } catch (const UsageError& error) {
-    return fail("start", error.what(), 2);
-  } catch (const MissionError& error) {
-    return fail("start", error.what(), 2);
-  } catch (const std::exception& error) {
-    return fail("start", error.what(), 1);
+  } catch (const std::exception& error) {  // usage, mission file: 2; failures: 1
+    return fail("start", error.what(), config::exitCodeFor(error));
   }
 }
 
@@ -222,10 +218,8 @@ int statusMain(const std::vector<std::string>& args) {
     if (!last) return fail("status", "no mission/status received: " + noHandler(node), 1);
     if (!follow) std::cout << describe(*last) << std::endl;
     return 0;
-  } catch (const UsageError& error) {
-    return fail("status", error.what(), 2);
   } catch (const std::exception& error) {
-    return fail("status", error.what(), 1);
+    return fail("status", error.what(), config::exitCodeFor(error));
   }
 }
 
@@ -249,10 +243,8 @@ int abortMain(const std::vector<std::string>& args) {
     }
     std::cout << reply.message() << std::endl;
     return 0;
-  } catch (const UsageError& error) {
-    return fail("abort", error.what(), 2);
   } catch (const std::exception& error) {
-    return fail("abort", error.what(), 1);
+    return fail("abort", error.what(), config::exitCodeFor(error));
   }
 }
 

@@ -5,6 +5,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "auv/config/errors.h"
 #include "auv/sim/camera/calibration_sequence.h"
 #include "auv/sim/camera/camera_rig.h"
 #include "auv/sim/tools/cli_args.h"
@@ -114,7 +115,7 @@ int calibrationMain(const std::vector<std::string>& args) {
     return 0;
   } catch (const std::exception& e) {
     std::cerr << "auv sim calibration: " << e.what() << std::endl;
-    return 1;
+    return config::exitCodeFor(e);  // bad input 2, failures 1
   }
 }
 

@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <iostream>
 
+#include "auv/config/errors.h"
 #include "auv/sim/raycast/ray_caster.h"
 #include "auv/sim/tools/commands.h"
 #include "auv/sim/world/hull_contact.h"
@@ -64,7 +65,7 @@ int checkMain(const std::vector<std::string>& args) {
     return 0;
   } catch (const std::exception& e) {
     std::cerr << "auv sim check: " << e.what() << std::endl;
-    return 1;
+    return config::exitCodeFor(e);  // bad input 2, failures 1
   }
 }
 

@@ -5,6 +5,7 @@
 #include <fstream>
 #include <iostream>
 
+#include "auv/config/errors.h"
 #include "auv/sim/tools/cli_args.h"
 #include "auv/sim/tools/commands.h"
 #include "auv/sim/world/mission_export.h"
@@ -65,7 +66,7 @@ int missionMain(const std::vector<std::string>& args) {
     return 0;
   } catch (const std::exception& e) {
     std::cerr << "auv sim mission: " << e.what() << "\n";
-    return 1;
+    return config::exitCodeFor(e);  // bad input 2, failures 1
   }
 }
 

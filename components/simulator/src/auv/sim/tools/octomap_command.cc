@@ -16,6 +16,7 @@
 #include <octomap/OcTree.h>
 #include <unistd.h>
 
+#include "auv/config/errors.h"
 #include "auv/sim/tools/cli_args.h"
 #include "auv/sim/tools/commands.h"
 #include "auv/sim/world/scenario.h"
@@ -334,7 +335,7 @@ int octomapMain(const std::vector<std::string>& args) {
     std::error_code ignored;
     if (!temporary.empty()) fs::remove(temporary, ignored);
     std::cerr << "auv sim octomap: " << e.what() << std::endl;
-    return 1;
+    return config::exitCodeFor(e);  // bad input 2, failures 1
   }
 }
 

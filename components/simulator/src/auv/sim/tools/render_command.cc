@@ -5,6 +5,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "auv/config/errors.h"
 #include "auv/sim/camera/render_run.h"
 #include "auv/sim/common/yaml_section.h"
 #include "auv/sim/tools/cli_args.h"
@@ -117,7 +118,7 @@ int renderMain(const std::vector<std::string>& args) {
     return 2;
   } catch (const std::exception& e) {
     std::cerr << "auv sim render: " << e.what() << std::endl;
-    return 1;
+    return config::exitCodeFor(e);  // bad input 2, failures 1
   }
 }
 

@@ -16,7 +16,7 @@
 #include <sstream>
 #include <system_error>
 
-#include "auv/interfaces/spelling.h"
+#include "auv/config/spelling.h"
 #include "auv/sim/worldgen/world_builders.h"
 
 namespace auv::sim {
@@ -57,7 +57,7 @@ std::string joined(const std::vector<std::string>& names) {
   std::string closest;
   size_t best = 4;  // suggest only near misses
   for (const std::string& known : availableWorlds()) {
-    const size_t d = interfaces::editDistance(name, known);
+    const size_t d = config::editDistance(name, known);
     if (d < best) best = d, closest = known;
   }
   if (!closest.empty()) message += " (did you mean '" + closest + "'?)";

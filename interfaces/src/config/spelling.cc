@@ -1,9 +1,9 @@
-#include "auv/interfaces/spelling.h"
+#include "auv/config/spelling.h"
 
 #include <algorithm>
 #include <vector>
 
-namespace auv::interfaces {
+namespace auv::config {
 
 size_t editDistance(const std::string& a, const std::string& b) {
   std::vector<std::vector<size_t>> d(a.size() + 1, std::vector<size_t>(b.size() + 1));
@@ -21,4 +21,4 @@ size_t editDistance(const std::string& a, const std::string& b) {
   return d[a.size()][b.size()];
 }
 
-}  // namespace auv::interfaces
+}  // namespace auv::config

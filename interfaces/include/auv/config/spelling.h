@@ -4,10 +4,10 @@
 #include <cstddef>
 #include <string>
 
-namespace auv::interfaces {
+namespace auv::config {
 
 /// Optimal string alignment distance: Levenshtein plus adjacent transpositions, so
 /// "rnage" is one edit from "range".
 size_t editDistance(const std::string& a, const std::string& b);
 
-}  // namespace auv::interfaces
+}  // namespace auv::config

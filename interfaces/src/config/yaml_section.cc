@@ -1,13 +1,13 @@
-#include "auv/sim/common/yaml_section.h"
+#include "auv/config/yaml_section.h"
 
 #include <cerrno>
 #include <cmath>
 #include <limits>
 #include <sstream>
 
-#include "auv/interfaces/spelling.h"
+#include "auv/config/spelling.h"
 
-namespace auv::sim {
+namespace auv::config {
 namespace {
 
 std::string describe(const YAML::Node& node) {
@@ -211,7 +211,7 @@ void YamlSection::rejectUnknownKeys(const std::vector<std::string>& known) const
     size_t best_distance = 3;  // suggest only close spellings
     for (const std::string& k : known) {
       if (k == key) found = true;
-      const size_t d = interfaces::editDistance(k, key);
+      const size_t d = editDistance(k, key);
       if (d < best_distance) best_distance = d, best = k;
     }
     if (found) continue;
@@ -236,4 +236,4 @@ YamlSection loadYamlFile(const std::string& file) {
   return YamlSection(root, "", file);
 }
 
-}  // namespace auv::sim
+}  // namespace auv::config
