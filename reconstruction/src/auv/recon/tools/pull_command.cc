@@ -8,6 +8,7 @@
 #include <sstream>
 #include <thread>
 
+#include "auv/config/errors.h"
 #include "auv/interfaces/executor.h"
 #include "auv/recon/tools/command.h"
 #include "auv/recon/transfer/progress_display.h"
@@ -174,6 +175,7 @@ int pullMain(const std::vector<std::string>& args) {
   } catch (const std::exception& e) {
     display.finish();
     std::cerr << "auv recon pull: " << e.what() << "\n";
+    code = config::exitCodeFor(e);  // a bad survey folder 2, a failed pull 1
   }
   exitSkippingStaticDestructors(code);
 }
