@@ -6,6 +6,8 @@
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "auv/recon/common/stage_error.h"
+
 namespace auv::recon::features {
 namespace {
 
