@@ -15,6 +15,7 @@
 #include "auv/recon/common/stage_error.h"
 #include "auv/recon/mesh/mesh_stage.h"
 #include "auv/recon/scene/colmap_text.h"
+#include "auv/recon/scene/mesh_io.h"
 #include "auv/recon/texture/texture_stage.h"
 #include "synthetic_scene.h"
 
@@ -43,7 +44,7 @@ void writeSurvey(const Survey& survey, FaceMesh& mesh) {
   o3d_mesh.triangles_ = mesh.faces;
   o3d_mesh.ComputeVertexNormals();
   fs::create_directories(survey.mesh());
-  mesh::writeMeshPly(survey.mesh() / "mesh.ply", o3d_mesh);
+  scene::writeMeshPly(survey.mesh() / "mesh.ply", o3d_mesh);
 
   scene::Reconstruction model;
   model.cameras[1] = scene::Camera::pinhole(1, 160, 120, 100, 100, 79.5, 59.5);
