@@ -95,8 +95,8 @@ bool upToDate(const std::vector<fs::path>& inputs, const std::vector<fs::path>& 
 
 void PipelineOptions::check() const {
   const std::string one_of = "must be one of " + joined(stageNames(), ", ");
-  AUV_RECON_CHECK_OPTION(stageIndex(from) < stageNames().size(), from, one_of);
-  AUV_RECON_CHECK_OPTION(stageIndex(to) < stageNames().size(), to, one_of);
+  AUV_RECON_CHECK_OPTION(stageIndex(from) < stageNames().size(), from, one_of.c_str());
+  AUV_RECON_CHECK_OPTION(stageIndex(to) < stageNames().size(), to, one_of.c_str());
   AUV_RECON_CHECK_OPTION(stageIndex(from) <= stageIndex(to), from, "must not come after `to`");
   AUV_RECON_CHECK_OPTION(config.empty() || fs::is_regular_file(config), config, "no such file");
 }
