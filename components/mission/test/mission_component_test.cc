@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "auv/interfaces/executor.h"
+#include "auv/interfaces/msg_eigen.h"
 #include "auv/mission/components/mission_component.h"
 
 namespace auv::mission {
@@ -30,14 +31,8 @@ using interfaces::Vendor;
 #define EXPECT_CONTAINS(text, part) \
   EXPECT_NE(std::string(text).find(part), std::string::npos) << "'" << (text) << "'"
 
-msg::Point point(const Eigen::Vector3d& v) {
-  msg::Point p;
-  p.x(v.x());
-  p.y(v.y());
-  p.z(v.z());
-  return p;
-}
-Eigen::Vector3d vector(const msg::Point& p) { return {p.x(), p.y(), p.z()}; }
+msg::Point point(const Eigen::Vector3d& v) { return interfaces::toPoint(v); }
+Eigen::Vector3d vector(const msg::Point& p) { return interfaces::toEigen(p); }
 
 std::vector<std::string> missionParameters(std::vector<std::string> extra = {}) {
   std::vector<std::string> parameters = {

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "auv/interfaces/msg_eigen.h"
 #include "auv/mission/mission_executive.h"
 
 namespace auv::mission {
@@ -31,14 +32,8 @@ MissionQuery query(const Eigen::Vector3d& goal, const std::string& name = "q") {
   return q;
 }
 
-msg::Point point(const Eigen::Vector3d& v) {
-  msg::Point p;
-  p.x(v.x());
-  p.y(v.y());
-  p.z(v.z());
-  return p;
-}
-Eigen::Vector3d vector(const msg::Point& p) { return {p.x(), p.y(), p.z()}; }
+msg::Point point(const Eigen::Vector3d& v) { return interfaces::toPoint(v); }
+Eigen::Vector3d vector(const msg::Point& p) { return interfaces::toEigen(p); }
 
 class MissionExecutiveTest : public ::testing::Test {
  protected:

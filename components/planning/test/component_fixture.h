@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "auv/interfaces/executor.h"
+#include "auv/interfaces/msg_eigen.h"
 #include "auv/interfaces/msg_time.h"
 #include "auv/planning/components/planning_component.h"
 #include "test_maps.h"
@@ -44,14 +45,8 @@ const Eigen::Vector3d kGoal(18.0, 0.0, kDepth);
 const Eigen::Vector3d kBoundsMin(0.0, -10.0, 4.0);
 const Eigen::Vector3d kBoundsMax(20.0, 10.0, 6.0);
 
-inline msg::Point toPoint(const Eigen::Vector3d& v) {
-  msg::Point p;
-  p.x(v.x());
-  p.y(v.y());
-  p.z(v.z());
-  return p;
-}
-inline Eigen::Vector3d toVector(const msg::Point& p) { return {p.x(), p.y(), p.z()}; }
+using interfaces::toPoint;
+inline Eigen::Vector3d toVector(const msg::Point& p) { return interfaces::toEigen(p); }
 inline int64_t stampNs(const msg::Header& header) {
   return interfaces::toNanoseconds(header.stamp());
 }

@@ -211,12 +211,12 @@ int syntheticMain(const std::vector<std::string>& args) {
         num_disparities, sgbm_seconds, sgbm_cpu);
   }
 
-  DenseOptions options;
+  DenseStageOptions options;
   options.max_image_size = max_image_size;
   options.min_points = 1000;
   std::printf("dense_bench: auv recon dense on the survey (max_image_size %d)...\n",
               max_image_size);
-  const DenseSummary summary = runDense(survey, options);
+  const DenseStageResult summary = runDenseStage(survey, options);
 
   // Accuracy: precision of the points, completeness of true surface samples (every 8th pixel
   // of every view's true depth), F-score, at thresholds.

@@ -24,8 +24,8 @@
 #include <opencv2/core.hpp>
 
 #include "auv/recon/common/survey.h"
+#include "auv/recon/features/features_stage.h"
 #include "auv/recon/features/match_stage.h"
-#include "auv/recon/features/sift_extractor.h"
 #include "auv/recon/scene/colmap_text.h"
 #include "auv/recon/sfm/alignment.h"
 #include "auv/recon/sfm/sfm_stage.h"
@@ -127,20 +127,20 @@ int main(int argc, char** argv) {
 
   // Ours: features, match, sfm (library entry points, as `auv recon run` calls them).
   {
-    features::ExtractionOptions extraction;
+    features::FeaturesStageOptions extraction;
     extraction.threads = threads;
     features::MatchStageOptions matching;
     matching.threads = threads;
     sfm::SfmStageOptions mapping;
     mapping.threads = threads;
     auto start = Clock::now();
-    features::extractSurveyFeatures(survey, extraction);
+    features::runFeaturesStage(survey, extraction);
     const double t_features = since(start);
     start = Clock::now();
-    features::matchSurvey(survey, matching);
+    features::runMatchStage(survey, matching);
     const double t_match = since(start);
     start = Clock::now();
-    const sfm::SfmSummary s = sfm::reconstructSurvey(survey, mapping);
+    const sfm::SfmStageResult s = sfm::runSfmStage(survey, mapping);
     const double t_sfm = since(start);
     const ModelFigures f = figures(scene::readColmapText(survey.sparse()), truth);
     result["ours"] = {{"seconds_features", t_features},

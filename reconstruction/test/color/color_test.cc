@@ -216,7 +216,7 @@ fs::path surveyWithKeyframes(const std::string& name, bool calibration) {
 
 TEST(CorrectStage, CorrectsUndistortsAndWritesThePinholeIntrinsics) {
   const fs::path survey = surveyWithKeyframes("stage", true);
-  const CorrectStageResult result = correctSurvey(Survey(survey), CorrectStageOptions());
+  const CorrectStageResult result = runCorrectStage(Survey(survey), CorrectStageOptions());
   ASSERT_EQ(result.cameras.size(), 1u);
   EXPECT_EQ(result.cameras[0].images, 3);
   EXPECT_TRUE(result.cameras[0].undistorted);
@@ -243,7 +243,7 @@ TEST(CorrectStage, MissingCalibrationIsAClearErrorAndEarlierOutputStays) {
   fs::create_directories(survey / "corrected" / "left");
   std::ofstream(survey / "corrected" / "left" / "earlier.png") << "earlier";
   try {
-    correctSurvey(Survey(survey), CorrectStageOptions());
+    runCorrectStage(Survey(survey), CorrectStageOptions());
     FAIL() << "no calibration, yet it went on";
   } catch (const StageError& e) {
     const std::string message = e.what();
@@ -256,7 +256,7 @@ TEST(CorrectStage, MissingCalibrationIsAClearErrorAndEarlierOutputStays) {
   // The explicit choice: colour correction only, images keep their distortion, no intrinsics.
   CorrectStageOptions options;
   options.undistort_images = false;
-  const CorrectStageResult result = correctSurvey(Survey(survey), options);
+  const CorrectStageResult result = runCorrectStage(Survey(survey), options);
   EXPECT_FALSE(result.cameras[0].undistorted);
   EXPECT_FALSE(fs::exists(survey / "corrected" / "left" / "earlier.png"));  // replaced
   EXPECT_FALSE(fs::exists(survey / "corrected" / "left.yaml"));
@@ -268,7 +268,7 @@ TEST(CorrectStage, KeyframeOfAnotherSizeThanTheCalibrationNamesBoth) {
   cv::imwrite((survey / "keyframes" / "left" / "left_0001_000099.png").string(),
               cv::Mat(60, 80, CV_8UC3, cv::Scalar(1, 2, 3)));
   try {
-    correctSurvey(Survey(survey), CorrectStageOptions());
+    runCorrectStage(Survey(survey), CorrectStageOptions());
     FAIL();
   } catch (const StageError& e) {
     const std::string message = e.what();
@@ -279,7 +279,7 @@ TEST(CorrectStage, KeyframeOfAnotherSizeThanTheCalibrationNamesBoth) {
   EXPECT_TRUE(fs::is_empty(survey / "corrected"));  // no staging folder left
   // No keyframes at all.
   const fs::path empty = freshFolder("nokeyframes");
-  EXPECT_THROW(correctSurvey(Survey(empty), CorrectStageOptions()), StageError);
+  EXPECT_THROW(runCorrectStage(Survey(empty), CorrectStageOptions()), StageError);
   fs::remove_all(survey);
   fs::remove_all(empty);
 }

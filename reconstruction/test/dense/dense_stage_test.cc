@@ -59,7 +59,7 @@ class DenseStage : public ::testing::Test {
   }
 
   fs::path root_;
-  DenseOptions options_;
+  DenseStageOptions options_;
 };
 
 // Tolerances: median distance of the fused points to the true surface < 1 cm at 4 m
@@ -68,7 +68,7 @@ class DenseStage : public ::testing::Test {
 TEST_F(DenseStage, FusedCloudLiesOnTheTrueSurface) {
   const testing::Scene scene;
   const Survey survey = makeSurvey(scene);
-  const DenseSummary summary = runDense(survey, options_);
+  const DenseStageResult summary = runDenseStage(survey, options_);
   EXPECT_EQ(summary.registered_images, 9u);
   EXPECT_EQ(summary.depth_maps, 9u);
   EXPECT_EQ(summary.width, 240);
@@ -133,7 +133,7 @@ TEST_F(DenseStage, MaxImageSizeScalesTheDepthMaps) {
   const Survey survey = makeSurvey(testing::Scene(), 2, 2);
   options_.max_image_size = 120;
   options_.min_points = 100;
-  const DenseSummary summary = runDense(survey, options_);
+  const DenseStageResult summary = runDenseStage(survey, options_);
   EXPECT_EQ(summary.width, 120);
   EXPECT_EQ(summary.height, 90);
   EXPECT_GT(summary.points, 100u);
@@ -142,7 +142,7 @@ TEST_F(DenseStage, MaxImageSizeScalesTheDepthMaps) {
 TEST_F(DenseStage, TooFewRegisteredImages) {
   const Survey survey = makeSurvey(testing::Scene(), 1, 1);
   try {
-    runDense(survey, options_);
+    runDenseStage(survey, options_);
     FAIL() << "no error";
   } catch (const StageError& e) {
     EXPECT_EQ(e.stage(), "dense");
@@ -160,7 +160,7 @@ TEST_F(DenseStage, EmptyCloudFailsAndKeepsTheEarlierOutput) {
   fs::create_directories(survey.dense());
   std::ofstream(survey.dense() / "fused.ply") << "earlier";
   try {
-    runDense(survey, options_);
+    runDenseStage(survey, options_);
     FAIL() << "no error";
   } catch (const StageError& e) {
     EXPECT_NE(std::string(e.what()).find("dense: the fused cloud has 0 points"), std::string::npos)
@@ -179,7 +179,7 @@ TEST_F(DenseStage, EmptyCloudFailsAndKeepsTheEarlierOutput) {
 TEST_F(DenseStage, MissingInputsAreNamed) {
   Survey survey(root_ / "nothing");
   try {
-    runDense(survey, options_);
+    runDenseStage(survey, options_);
     FAIL() << "no error";
   } catch (const StageError& e) {
     EXPECT_NE(std::string(e.what()).find("sfm"), std::string::npos) << e.what();
@@ -188,7 +188,7 @@ TEST_F(DenseStage, MissingInputsAreNamed) {
   const Survey full = makeSurvey(testing::Scene(), 2, 1);
   fs::remove(full.corrected() / "cam" / "image_2.png");
   try {
-    runDense(full, options_);
+    runDenseStage(full, options_);
     FAIL() << "no error";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("image_2.png"), std::string::npos) << e.what();
@@ -204,10 +204,10 @@ TEST_F(DenseStage, DistortedCamerasAreRefused) {
 }
 
 TEST_F(DenseStage, OptionsAreChecked) {
-  DenseOptions options;
+  DenseStageOptions options;
   options.max_image_size = 10;
   EXPECT_THROW(options.check(), OptionError);
-  options = DenseOptions();
+  options = DenseStageOptions();
   options.matcher.p2 = 1;  // below p1
   try {
     options.check();
@@ -222,7 +222,7 @@ TEST(DenseOptionsBind, TakesFlagsAndTheConfigSection) {
       fs::temp_directory_path() / ("dense_bind_" + std::to_string(::getpid()) + ".yaml");
   std::ofstream(file) << "dense:\n  max_image_size: 512\n  directions: 4\n"
                          "  keep_depth_maps: false\n  min_consistent: 3\n";
-  DenseOptions options;
+  DenseStageOptions options;
   OptionSet set("dense");
   options.bind(set);
   ASSERT_TRUE(set.parse({"--config", file.string(), "--max-neighbours", "5", "--p2", "300"}));

@@ -187,7 +187,7 @@ TEST(Figures, PerCameraContributionOfTwoCameras) {
   FiguresOptions options;
   options.image_size_px = 600;
   options.point_size_px = 3;
-  const FiguresResult result = writeFigures(Survey(survey), {}, options);
+  const FiguresStageResult result = writeFigures(Survey(survey), {}, options);
   EXPECT_EQ(result.cloud, "sparse");
   EXPECT_FALSE(result.trajectory);
   // 81 x 21 points: x in [-4, -1.1] left only (30 columns), [1.1, 4] right only (30), both 21.
@@ -242,7 +242,7 @@ TEST(Figures, PerCameraContributionOfTwoCameras) {
 TEST_F(SyntheticSurvey, TrajectoryFigureWithGroundTruth) {
   FiguresOptions options;
   options.image_size_px = 500;
-  const FiguresResult result = writeFigures(Survey(survey_), run_, options);
+  const FiguresStageResult result = writeFigures(Survey(survey_), run_, options);
   EXPECT_TRUE(result.trajectory);
   EXPECT_EQ(result.points_per_combination.size(), 1u);  // one camera
   const cv::Mat figure = cv::imread((survey_ / "figures" / "trajectory.png").string());

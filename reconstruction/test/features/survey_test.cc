@@ -11,8 +11,8 @@
 
 #include "auv/recon/common/report.h"
 #include "auv/recon/common/stage_error.h"
+#include "auv/recon/features/features_stage.h"
 #include "auv/recon/features/match_stage.h"
-#include "auv/recon/features/sift_extractor.h"
 
 namespace fs = std::filesystem;
 
@@ -156,14 +156,14 @@ TEST(SurveyStages, SceauxCastleVerifiedPairsHavePlausibleInliers) {
                   (1416 + 0.5) * s - 0.5, (1064 + 0.5) * s - 0.5);
 
   const Survey survey(root);
-  ExtractionOptions extraction;
+  FeaturesStageOptions extraction;
   extraction.threads = 2;
-  const ExtractionSummary features = extractSurveyFeatures(survey, extraction);
+  const FeaturesStageResult features = runFeaturesStage(survey, extraction);
   EXPECT_EQ(features.images, 11u);
   EXPECT_GT(features.min_features, 1000u);
   MatchStageOptions matching;
   matching.threads = 2;
-  const MatchSummary summary = matchSurvey(survey, matching);
+  const MatchStageResult summary = runMatchStage(survey, matching);
   EXPECT_EQ(summary.candidate_pairs, 55u);
   EXPECT_EQ(summary.essential_pairs, summary.verified_pairs);  // calibrated: essential
   const std::vector<VerifiedPair> pairs = readVerifiedPairs(verifiedPairsFile(root / "features"));
@@ -200,7 +200,7 @@ TEST(SurveyStages, SceauxCastleVerifiedPairsHavePlausibleInliers) {
 TEST(SurveyStages, MissingCorrectedFolderIsNamed) {
   const fs::path root = freshFolder("no_corrected");
   try {
-    extractSurveyFeatures(Survey(root), ExtractionOptions{});
+    runFeaturesStage(Survey(root), FeaturesStageOptions{});
     FAIL() << "no exception";
   } catch (const StageError& e) {
     EXPECT_NE(std::string(e.what()).find((root / "corrected").string()), std::string::npos)
@@ -208,7 +208,7 @@ TEST(SurveyStages, MissingCorrectedFolderIsNamed) {
     EXPECT_NE(std::string(e.what()).find("auv recon correct"), std::string::npos) << e.what();
   }
   try {
-    matchSurvey(Survey(root), MatchStageOptions{});
+    runMatchStage(Survey(root), MatchStageOptions{});
     FAIL() << "no exception";
   } catch (const StageError& e) {
     EXPECT_NE(std::string(e.what()).find("auv recon features"), std::string::npos) << e.what();
@@ -224,9 +224,9 @@ TEST(SurveyStages, UnreadableImageIsNamedAndEarlierFeaturesStayIntact) {
   cv::imwrite((root / "corrected" / "left" / "left_0001_000002.png").string(),
               texture(320, 240, 4));
   const Survey survey(root);
-  ExtractionOptions options;
+  FeaturesStageOptions options;
   options.threads = 1;
-  ASSERT_EQ(extractSurveyFeatures(survey, options).images, 2u);
+  ASSERT_EQ(runFeaturesStage(survey, options).images, 2u);
   const std::string index_before = [&] {
     std::ifstream in(root / "features" / "index.csv");
     return std::string(std::istreambuf_iterator<char>(in), {});
@@ -234,7 +234,7 @@ TEST(SurveyStages, UnreadableImageIsNamedAndEarlierFeaturesStayIntact) {
   // A corrupt PNG joins the folder: the stage fails naming it, features/ is untouched.
   std::ofstream(root / "corrected" / "left" / "left_0001_000003.png") << "\x89PNG garbage";
   try {
-    extractSurveyFeatures(survey, options);
+    runFeaturesStage(survey, options);
     FAIL() << "no exception";
   } catch (const StageError& e) {
     EXPECT_NE(std::string(e.what()).find("left_0001_000003.png"), std::string::npos) << e.what();
@@ -262,12 +262,12 @@ TEST(SurveyStages, UncalibratedCamerasUseTheFundamentalMatrix) {
                 view);
   }
   const Survey survey(root);
-  ExtractionOptions extraction;
+  FeaturesStageOptions extraction;
   extraction.threads = 1;
-  extractSurveyFeatures(survey, extraction);
+  runFeaturesStage(survey, extraction);
   MatchStageOptions matching;
   matching.threads = 1;
-  const MatchSummary summary = matchSurvey(survey, matching);
+  const MatchStageResult summary = runMatchStage(survey, matching);
   EXPECT_EQ(summary.candidate_pairs, 3u);
   EXPECT_EQ(summary.verified_pairs, 3u);
   EXPECT_EQ(summary.fundamental_pairs, 3u);
@@ -285,7 +285,7 @@ TEST(SurveyStages, UncalibratedCamerasUseTheFundamentalMatrix) {
     out << "distortion_coefficients" << (cv::Mat_<double>(1, 5) << -0.2, 0.05, 0, 0, 0);
   }
   try {
-    matchSurvey(survey, matching);
+    runMatchStage(survey, matching);
     FAIL() << "no exception";
   } catch (const StageError& e) {
     EXPECT_NE(std::string(e.what()).find("cam.yaml: non-zero distortion_coefficients"),

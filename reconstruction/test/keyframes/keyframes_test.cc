@@ -21,8 +21,8 @@
 #include "auv/recon/common/option_set.h"
 #include "auv/recon/common/report.h"
 #include "auv/recon/common/stage_error.h"
+#include "auv/recon/keyframes/keyframes_stage.h"
 #include "auv/recon/keyframes/selector.h"
-#include "auv/recon/keyframes/stage.h"
 #include "auv/recon/keyframes/video.h"
 
 namespace fs = std::filesystem;
@@ -319,9 +319,9 @@ TEST(FrameTimes, ReadsTheSidecarAndNamesTheBadLine) {
 TEST(KeyframeStage, WritesKeyframesIndexAndReport) {
   const fs::path survey = freshFolder("stage");
   writeRecording(survey, "left", 60);
-  KeyframeStageOptions options;
+  KeyframesStageOptions options;
   options.selection = smallOptions();
-  const KeyframeStageResult result = selectSurveyKeyframes(Survey(survey), options);
+  const KeyframesStageResult result = runKeyframesStage(Survey(survey), options);
   ASSERT_EQ(result.cameras.size(), 1u);
   EXPECT_EQ(result.cameras[0].frames, 60);
   const auto index = readCsv(survey / "keyframes" / "left" / "index.csv");
@@ -367,10 +367,10 @@ TEST(KeyframeStage, TruncatedVideoIsAClearErrorAndEarlierKeyframesStay) {
   fs::create_directories(survey / "keyframes" / "left");
   std::ofstream(survey / "keyframes" / "left" / "index.csv") << "earlier\n";
   fs::resize_file(video, fs::file_size(video) / 2);
-  KeyframeStageOptions options;
+  KeyframesStageOptions options;
   options.selection = smallOptions();
   try {
-    selectSurveyKeyframes(Survey(survey), options);
+    runKeyframesStage(Survey(survey), options);
     FAIL() << "a truncated video was accepted";
   } catch (const StageError& e) {
     const std::string message = e.what();
@@ -385,7 +385,7 @@ TEST(KeyframeStage, TruncatedVideoIsAClearErrorAndEarlierKeyframesStay) {
 
   // --keep-damaged: the keyframes before the damage are kept, the problem reported.
   options.video.keep_damaged = true;
-  const KeyframeStageResult result = selectSurveyKeyframes(Survey(survey), options);
+  const KeyframesStageResult result = runKeyframesStage(Survey(survey), options);
   ASSERT_EQ(result.problems.size(), 1u);
   EXPECT_NE(result.problems[0].find("truncated"), std::string::npos) << result.problems[0];
   EXPECT_LT(result.cameras[0].frames, 60);
@@ -400,9 +400,9 @@ TEST(KeyframeStage, GarbageVideoAndMismatchedSidecarAreClearErrors) {
   fs::create_directories(survey / "recordings" / "left");
   const fs::path garbage = survey / "recordings" / "left" / "left_0001.mp4";
   std::ofstream(garbage) << std::string(5000, 'x');
-  KeyframeStageOptions options;
+  KeyframesStageOptions options;
   try {
-    selectSurveyKeyframes(Survey(survey), options);
+    runKeyframesStage(Survey(survey), options);
     FAIL() << "garbage accepted";
   } catch (const StageError& e) {
     EXPECT_NE(std::string(e.what()).find(garbage.string()), std::string::npos) << e.what();
@@ -412,7 +412,7 @@ TEST(KeyframeStage, GarbageVideoAndMismatchedSidecarAreClearErrors) {
   const fs::path video = writeRecording(survey, "left", 30, "avi", 10);
   options.selection = smallOptions();
   try {
-    selectSurveyKeyframes(Survey(survey), options);
+    runKeyframesStage(Survey(survey), options);
     FAIL() << "a mismatched sidecar was accepted";
   } catch (const StageError& e) {
     EXPECT_NE(std::string(e.what()).find("sidecar"), std::string::npos) << e.what();
@@ -423,18 +423,18 @@ TEST(KeyframeStage, GarbageVideoAndMismatchedSidecarAreClearErrors) {
 
 TEST(KeyframeStage, EmptyOrMissingFoldersAreClearErrors) {
   const fs::path survey = freshFolder("empty");
-  KeyframeStageOptions options;
-  EXPECT_THROW(selectSurveyKeyframes(Survey(survey), options), StageError);  // no recordings/
+  KeyframesStageOptions options;
+  EXPECT_THROW(runKeyframesStage(Survey(survey), options), StageError);  // no recordings/
   fs::create_directories(survey / "recordings" / "left");
   try {
-    selectSurveyKeyframes(Survey(survey), options);
+    runKeyframesStage(Survey(survey), options);
     FAIL() << "an empty camera folder was accepted";
   } catch (const StageError& e) {
     EXPECT_NE(std::string(e.what()).find("no videos"), std::string::npos) << e.what();
   }
   options.cameras = {"forward"};
   try {
-    selectSurveyKeyframes(Survey(survey), options);
+    runKeyframesStage(Survey(survey), options);
     FAIL() << "a missing camera was accepted";
   } catch (const StageError& e) {
     EXPECT_NE(std::string(e.what()).find("forward"), std::string::npos) << e.what();
@@ -455,12 +455,12 @@ TEST(KeyframeCommand, ExitCodesAndMessages) {
   fs::remove_all(survey);
 }
 
-TEST(KeyframeStageOptions, BindTakesFlagsAndTheConfigSection) {
+TEST(KeyframesStageOptions, BindTakesFlagsAndTheConfigSection) {
   const fs::path folder = freshFolder("bind");
   std::ofstream(folder / "recon.yaml")
       << "keyframes:\n  lk_levels: 2\n  camera: [left, right]\n  keep_damaged: true\n"
          "dense:\n  max_image_size: 512\n";  // other sections are not this stage's business
-  KeyframeStageOptions options;
+  KeyframesStageOptions options;
   OptionSet set("keyframes");
   options.bind(set);
   // Flags win over the file wherever --config stands.

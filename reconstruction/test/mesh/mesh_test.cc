@@ -16,6 +16,7 @@
 #include "auv/recon/common/stage_error.h"
 #include "auv/recon/mesh/mesh_stage.h"
 #include "auv/recon/mesh/surface.h"
+#include "auv/recon/scene/mesh_io.h"
 
 namespace fs = std::filesystem;
 namespace o3d = open3d::geometry;
@@ -243,8 +244,8 @@ TEST(MeshStage, WritesTheMeshAndReportAndKeepsEarlierOutputsOnFailure) {
   fs::create_directories(survey.dense());
   ASSERT_TRUE(
       open3d::io::WritePointCloud((survey.dense() / "fused.ply").string(), terrainCloud(15000)));
-  const MeshStageSummary summary = runMeshStage(survey, options);
-  const o3d::TriangleMesh written = readMesh(survey.mesh() / "mesh.ply", "test");
+  const MeshStageResult summary = runMeshStage(survey, options);
+  const o3d::TriangleMesh written = scene::readMesh(survey.mesh() / "mesh.ply", "test");
   EXPECT_EQ(written.triangles_.size(), summary.stats.triangles);
   EXPECT_TRUE(written.HasVertexColors());
   EXPECT_TRUE(fs::exists(survey.mesh() / "mesh_untrimmed.ply"));
@@ -266,7 +267,7 @@ TEST(MeshStage, WritesTheMeshAndReportAndKeepsEarlierOutputsOnFailure) {
     EXPECT_NE(std::string(e.what()).find("fused.ply"), std::string::npos) << e.what();
   }
   EXPECT_EQ(fs::file_size(survey.mesh() / "mesh.ply"), size_before);
-  EXPECT_EQ(readMesh(survey.mesh() / "mesh.ply", "test").triangles_.size(),
+  EXPECT_EQ(scene::readMesh(survey.mesh() / "mesh.ply", "test").triangles_.size(),
             summary.stats.triangles);
 
   // A file that is not a cloud: the error names it.

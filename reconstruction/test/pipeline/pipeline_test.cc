@@ -247,7 +247,7 @@ TEST(Pipeline, ChainsFeaturesMatchAndSfmThenSkipsWhatIsUpToDate) {
   options.to = "sfm";
   options.config = (root / "recon.yaml").string();
   std::ostringstream log;
-  PipelineSummary first = runPipeline(survey, options, log);
+  PipelineResult first = runPipeline(survey, options, log);
   ASSERT_EQ(first.stages.size(), 3u);
   for (const auto& s : first.stages) EXPECT_EQ(s.outcome, StageOutcome::RAN) << s.stage;
   const scene::Reconstruction model = scene::readColmapText(survey.sparse());
@@ -255,14 +255,14 @@ TEST(Pipeline, ChainsFeaturesMatchAndSfmThenSkipsWhatIsUpToDate) {
   const auto sparse_time = fs::last_write_time(survey.sparse() / "images.txt");
 
   // Nothing changed: every stage is skipped and sparse/ is untouched.
-  PipelineSummary second = runPipeline(survey, options, log);
+  PipelineResult second = runPipeline(survey, options, log);
   for (const auto& s : second.stages) EXPECT_EQ(s.outcome, StageOutcome::UP_TO_DATE) << s.stage;
   EXPECT_EQ(fs::last_write_time(survey.sparse() / "images.txt"), sparse_time);
 
   // New verified matches: sfm runs again, features and match do not.
   fs::last_write_time(survey.root() / "features" / "matches" / "pairs.csv",
                       fs::file_time_type::clock::now() + std::chrono::seconds(1));
-  PipelineSummary third = runPipeline(survey, options, log);
+  PipelineResult third = runPipeline(survey, options, log);
   ASSERT_EQ(third.stages.size(), 3u);
   EXPECT_EQ(third.stages[0].outcome, StageOutcome::UP_TO_DATE);
   EXPECT_EQ(third.stages[1].outcome, StageOutcome::UP_TO_DATE);

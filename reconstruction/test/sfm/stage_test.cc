@@ -12,8 +12,8 @@
 
 #include "auv/recon/common/report.h"
 #include "auv/recon/common/stage_error.h"
+#include "auv/recon/features/features_stage.h"
 #include "auv/recon/features/match_stage.h"
-#include "auv/recon/features/sift_extractor.h"
 #include "auv/recon/scene/colmap_text.h"
 #include "auv/recon/sfm/navigation.h"
 #include "auv/recon/sfm/sfm_stage.h"
@@ -73,15 +73,15 @@ TEST(SfmStage, SceauxCastleRegistersAllElevenImagesBelowOnePixel) {
   // K.txt: f 2905.88, c (1416, 1064) at full size; pixel centres: c' = (c + 0.5) / 2 - 0.5.
   writeCorrectedYaml(survey.corrected() / "castle.yaml", 1416, 1064, 2905.88 / 2, 707.75, 531.75);
 
-  features::ExtractionOptions extraction;
+  features::FeaturesStageOptions extraction;
   extraction.threads = 2;
-  features::extractSurveyFeatures(survey, extraction);
+  features::runFeaturesStage(survey, extraction);
   features::MatchStageOptions matching;
   matching.threads = 2;
-  features::matchSurvey(survey, matching);
+  features::runMatchStage(survey, matching);
 
   SfmStageOptions options;
-  const SfmSummary summary = reconstructSurvey(survey, options);
+  const SfmStageResult summary = runSfmStage(survey, options);
   EXPECT_EQ(summary.images_total, 11u);
   EXPECT_EQ(summary.images_registered, 11u);
   EXPECT_LT(summary.mean_reprojection_error_px, 1.0);
@@ -103,13 +103,13 @@ TEST(SfmStage, SceauxCastleRegistersAllElevenImagesBelowOnePixel) {
   // Bad input after a good run: the earlier sparse/ stays as it was.
   const auto before = fs::last_write_time(survey.sparse() / "images.txt");
   fs::rename(survey.corrected() / "castle.yaml", root / "castle.yaml.away");
-  const std::string missing = errorOf([&] { reconstructSurvey(survey, options); });
+  const std::string missing = errorOf([&] { runSfmStage(survey, options); });
   EXPECT_NE(missing.find("castle.yaml"), std::string::npos) << missing;
   EXPECT_NE(missing.find("auv recon correct"), std::string::npos) << missing;
   fs::rename(root / "castle.yaml.away", survey.corrected() / "castle.yaml");
   SfmStageOptions strict = options;
   strict.mapper.init_min_inliers = 100000;
-  const std::string no_pair = errorOf([&] { reconstructSurvey(survey, strict); });
+  const std::string no_pair = errorOf([&] { runSfmStage(survey, strict); });
   EXPECT_NE(no_pair.find("no initial pair"), std::string::npos) << no_pair;
   EXPECT_EQ(fs::last_write_time(survey.sparse() / "images.txt"), before);
   EXPECT_EQ(scene::readColmapText(survey.sparse()).images.size(), summary.images_registered);
@@ -120,11 +120,11 @@ TEST(SfmStage, EmptyOrIncompleteSurveysGiveClearErrors) {
   const fs::path root = freshFolder("bad");
   const Survey survey(root);
   // No corrected/ at all.
-  std::string error = errorOf([&] { reconstructSurvey(survey, {}); });
+  std::string error = errorOf([&] { runSfmStage(survey, {}); });
   EXPECT_NE(error.find("corrected"), std::string::npos) << error;
   // A camera folder, no calibration.
   fs::create_directories(survey.corrected() / "left");
-  error = errorOf([&] { reconstructSurvey(survey, {}); });
+  error = errorOf([&] { runSfmStage(survey, {}); });
   EXPECT_NE(error.find("left.yaml"), std::string::npos) << error;
   // Calibration with distortion: SfM wants the undistorted intrinsics.
   {
@@ -133,11 +133,11 @@ TEST(SfmStage, EmptyOrIncompleteSurveysGiveClearErrors) {
     storage << "camera_matrix" << (cv::Mat_<double>(3, 3) << 500, 0, 320, 0, 500, 240, 0, 0, 1);
     storage << "distortion_coefficients" << (cv::Mat_<double>(1, 5) << 0.1, 0, 0, 0, 0);
   }
-  error = errorOf([&] { reconstructSurvey(survey, {}); });
+  error = errorOf([&] { runSfmStage(survey, {}); });
   EXPECT_NE(error.find("distortion_coefficients"), std::string::npos) << error;
   writeCorrectedYaml(survey.corrected() / "left.yaml", 640, 480, 500, 320, 240);
   // No features yet.
-  error = errorOf([&] { reconstructSurvey(survey, {}); });
+  error = errorOf([&] { runSfmStage(survey, {}); });
   EXPECT_NE(error.find("features"), std::string::npos) << error;
   EXPECT_FALSE(fs::exists(survey.sparse()));
   fs::remove_all(root);

@@ -15,6 +15,7 @@
 #include "auv/recon/common/stage_error.h"
 #include "auv/recon/mesh/mesh_stage.h"
 #include "auv/recon/scene/colmap_text.h"
+#include "auv/recon/scene/mesh_io.h"
 #include "auv/recon/texture/texture_stage.h"
 #include "synthetic_scene.h"
 
@@ -43,7 +44,7 @@ void writeSurvey(const Survey& survey, FaceMesh& mesh) {
   o3d_mesh.triangles_ = mesh.faces;
   o3d_mesh.ComputeVertexNormals();
   fs::create_directories(survey.mesh());
-  mesh::writeMeshPly(survey.mesh() / "mesh.ply", o3d_mesh);
+  scene::writeMeshPly(survey.mesh() / "mesh.ply", o3d_mesh);
 
   scene::Reconstruction model;
   model.cameras[1] = scene::Camera::pinhole(1, 160, 120, 100, 100, 79.5, 59.5);
@@ -93,7 +94,7 @@ TEST(TextureStage, TexturesASurveyAndKeepsEarlierOutputsOnFailure) {
 
   FaceMesh mesh;
   writeSurvey(survey, mesh);
-  const TextureStageSummary summary = runTextureStage(survey, options);
+  const TextureStageResult summary = runTextureStage(survey, options);
   EXPECT_EQ(summary.views, 4u);
   EXPECT_EQ(summary.stats.faces, mesh.faces.size());
   EXPECT_EQ(summary.stats.faces_unseen, 0u);
@@ -173,7 +174,7 @@ TEST(TextureStage, ChainsWithTheMeshStageOnASyntheticSurvey) {
   ASSERT_TRUE(open3d::io::WritePointCloud((survey.dense() / "fused.ply").string(), cloud));
   mesh::MeshStageOptions mesh_options;
   mesh_options.surface.poisson_depth = 7;
-  const mesh::MeshStageSummary meshed = mesh::runMeshStage(survey, mesh_options);
+  const mesh::MeshStageResult meshed = mesh::runMeshStage(survey, mesh_options);
 
   scene::Reconstruction model;
   model.cameras[1] = scene::Camera::pinhole(1, 200, 150, 130, 130, 99.5, 74.5);
@@ -196,7 +197,7 @@ TEST(TextureStage, ChainsWithTheMeshStageOnASyntheticSurvey) {
   scene::writeColmapText(model, survey.sparse());
   TextureStageOptions options;
   options.texture.atlas.max_page_size = 2048;
-  const TextureStageSummary textured = runTextureStage(survey, options);
+  const TextureStageResult textured = runTextureStage(survey, options);
   std::cout << meshed.stats.triangles << " mesh triangles, " << textured.stats.faces_seen
             << " textured, " << textured.stats.faces_unseen << " unseen" << std::endl;
   EXPECT_EQ(textured.stats.faces, meshed.stats.triangles);

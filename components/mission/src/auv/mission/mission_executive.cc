@@ -1,4 +1,5 @@
 #include "auv/mission/mission_executive.h"
+#include "auv/interfaces/msg_eigen.h"
 
 #include <cmath>
 #include <sstream>
@@ -14,15 +15,8 @@ std::string formatSeconds(double seconds) {
   return out.str();
 }
 
-Eigen::Vector3d toVector(const msg::Point& p) { return {p.x(), p.y(), p.z()}; }
-
-msg::Point toPoint(const Eigen::Vector3d& v) {
-  msg::Point p;
-  p.x(v.x());
-  p.y(v.y());
-  p.z(v.z());
-  return p;
-}
+Eigen::Vector3d toVector(const msg::Point& p) { return interfaces::toEigen(p); }
+using interfaces::toPoint;
 
 }  // namespace
 

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <memory>
 #include <optional>
+#include <sstream>
 
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -62,7 +63,7 @@ void CorrectStageOptions::bind(OptionSet& set) {
   set.add("png_compression", &png_compression, "PNG compression level 0-9");
 }
 
-CorrectStageResult correctSurvey(const Survey& survey, const CorrectStageOptions& options) {
+CorrectStageResult runCorrectStage(const Survey& survey, const CorrectStageOptions& options) {
   options.check();
   const auto start = std::chrono::steady_clock::now();
   Survey::requireExists(survey.keyframes(), kStage, "keyframes");
@@ -210,6 +211,26 @@ CorrectStageResult correctSurvey(const Survey& survey, const CorrectStageOptions
                               {"alpha", options.undistort.alpha}}}};
   updateReport(survey.report(), kStage, section);
   return result;
+}
+
+StageReport CorrectStage::runWith(const Survey& survey, const CorrectStageOptions& options) const {
+  const CorrectStageResult result = runCorrectStage(survey, options);
+  StageReport report;
+  int images = 0;
+  for (const auto& camera : result.cameras) {
+    std::ostringstream line;
+    line << "correct: " << camera.camera << ": " << camera.images << " images"
+         << (camera.undistorted ? ", undistorted" : ", not undistorted")
+         << ", mean cast removed (alpha, beta) = (" << camera.mean_alpha << ", " << camera.mean_beta
+         << ")";
+    report.lines.push_back(line.str());
+    images += camera.images;
+  }
+  std::ostringstream done;
+  done << "correct: done in " << result.seconds << " s -> " << survey.corrected().string();
+  report.lines.push_back(done.str());
+  report.summary = std::to_string(images) + " images corrected";
+  return report;
 }
 
 }  // namespace auv::recon::color

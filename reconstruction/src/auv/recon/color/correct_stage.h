@@ -5,11 +5,13 @@
 // corrected images (same keys, zero distortion), and the `correct` section of report.json.
 // Camera folders are written aside and swapped into place only when every camera succeeded.
 
+#include <filesystem>
 #include <string>
 #include <vector>
 
 #include "auv/recon/calibration/undistort.h"
 #include "auv/recon/color/correction.h"
+#include "auv/recon/common/stage.h"
 #include "auv/recon/common/survey.h"
 
 namespace auv::recon {
@@ -50,6 +52,25 @@ struct CorrectStageResult {
 /// Runs the stage. Throws StageError naming the camera and the file at fault (no keyframes,
 /// missing or malformed calibration, an image of another size than the calibration's, an
 /// unreadable image); earlier outputs intact.
-CorrectStageResult correctSurvey(const Survey& survey, const CorrectStageOptions& options);
+CorrectStageResult runCorrectStage(const Survey& survey, const CorrectStageOptions& options);
+
+/// The `correct` stage (common/stage.h): `auv recon correct` and a step of `auv recon run`.
+class CorrectStage final : public StageWith<CorrectStageOptions> {
+ public:
+  std::string name() const override { return "correct"; }
+  std::string usage() const override {
+    return "<survey>   colour-correct and undistort the keyframes";
+  }
+  std::string surveyHelp() const override {
+    return "survey folder (reads keyframes/ and calibration/, writes corrected/)";
+  }
+  std::vector<std::filesystem::path> inputs(const Survey& survey) const override {
+    return {survey.keyframes(), survey.calibration()};
+  }
+  std::vector<std::filesystem::path> outputs(const Survey& survey) const override {
+    return {survey.corrected()};
+  }
+  StageReport runWith(const Survey& survey, const CorrectStageOptions& options) const override;
+};
 
 }  // namespace auv::recon::color

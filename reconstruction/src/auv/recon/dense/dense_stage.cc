@@ -85,7 +85,7 @@ nlohmann::json figures(const SubStageFigures& f) {
 }
 }  // namespace
 
-void DenseOptions::check() const {
+void DenseStageOptions::check() const {
   AUV_RECON_CHECK_OPTION(max_image_size == 0 || max_image_size >= 64, max_image_size,
                          "must be 0 (full size) or >= 64 px");
   AUV_RECON_CHECK_OPTION(min_registered_images >= 2, min_registered_images, "must be >= 2");
@@ -96,7 +96,7 @@ void DenseOptions::check() const {
   fusion.check();
 }
 
-void DenseOptions::bind(OptionSet& set) {
+void DenseStageOptions::bind(OptionSet& set) {
   set.add("max_image_size", &max_image_size,
           "px: longer side depth maps are computed at (0: full size)");
   set.add("min_registered_images", &min_registered_images,
@@ -141,7 +141,7 @@ void DenseOptions::bind(OptionSet& set) {
   set.add("pixel_step", &f.pixel_step, "px: new points start on this grid of a master");
 }
 
-nlohmann::json DenseOptions::toJson() const {
+nlohmann::json DenseStageOptions::toJson() const {
   const MatcherOptions& m = matcher;
   const NeighbourOptions& n = neighbours;
   return {{"max_image_size", max_image_size},
@@ -178,7 +178,7 @@ nlohmann::json DenseOptions::toJson() const {
             {"pixel_step", fusion.pixel_step}}}};
 }
 
-nlohmann::json DenseSummary::toJson() const {
+nlohmann::json DenseStageResult::toJson() const {
   return {{"registered_images", registered_images},
           {"masters", masters},
           {"depth_maps", depth_maps},
@@ -194,11 +194,11 @@ nlohmann::json DenseSummary::toJson() const {
           {"writing", figures(writing)}};
 }
 
-DenseSummary densify(const scene::Reconstruction& model, const fs::path& image_folder,
-                     const fs::path& output_folder, const DenseOptions& options) {
+DenseStageResult densify(const scene::Reconstruction& model, const fs::path& image_folder,
+                         const fs::path& output_folder, const DenseStageOptions& options) {
   options.check();
   const auto start = Clock::now();
-  DenseSummary summary;
+  DenseStageResult summary;
   summary.registered_images = model.images.size();
   if (static_cast<int>(model.images.size()) < options.min_registered_images) {
     throw StageError(kStage, "the sparse model has " + std::to_string(model.images.size()) +
@@ -349,7 +349,7 @@ DenseSummary densify(const scene::Reconstruction& model, const fs::path& image_f
   return summary;
 }
 
-DenseSummary runDense(const Survey& survey, const DenseOptions& options) {
+DenseStageResult runDenseStage(const Survey& survey, const DenseStageOptions& options) {
   options.check();
   Survey::requireExists(survey.sparse() / "images.txt", kStage, "sfm");
   Survey::requireExists(survey.corrected(), kStage, "correct");
@@ -359,11 +359,25 @@ DenseSummary runDense(const Survey& survey, const DenseOptions& options) {
   } catch (const std::exception& e) {
     throw StageError(kStage, std::string("cannot read the sparse model: ") + e.what());
   }
-  const DenseSummary summary = densify(model, survey.corrected(), survey.dense(), options);
+  const DenseStageResult summary = densify(model, survey.corrected(), survey.dense(), options);
   nlohmann::json section = summary.toJson();
   section["options"] = options.toJson();
   updateReport(survey.report(), kStage, section);
   return summary;
+}
+
+StageReport DenseStage::runWith(const Survey& survey, const DenseStageOptions& options) const {
+  const DenseStageResult result = runDenseStage(survey, options);
+  std::ostringstream line;
+  line << "dense: " << result.depth_maps << " depth maps (" << result.width << "x" << result.height
+       << " px), " << result.points << " points (" << result.depths_inconsistent
+       << " depths dropped as inconsistent) in " << result.seconds << " s; "
+       << (survey.dense() / "fused.ply").string();
+  StageReport report;
+  report.lines.push_back(line.str());
+  report.summary = std::to_string(result.depth_maps) + " depth maps, " +
+                   std::to_string(result.points) + " points";
+  return report;
 }
 
 }  // namespace auv::recon::dense

@@ -13,6 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "auv/recon/common/stage.h"
 #include "auv/recon/common/survey.h"
 #include "auv/recon/dense/fusion.h"
 #include "auv/recon/dense/matcher.h"
@@ -25,7 +26,7 @@ class OptionSet;
 
 namespace auv::recon::dense {
 
-struct DenseOptions {
+struct DenseStageOptions {
   int max_image_size = 1024;      ///< px: longer image side depth maps are computed at (0: full)
   int min_registered_images = 2;  ///< fewer registered images in the model: StageError
   int min_points = 1000;          ///< a fused cloud with fewer points: StageError
@@ -49,7 +50,7 @@ struct SubStageFigures {
   size_t peak_memory_bytes = 0;
 };
 
-struct DenseSummary {
+struct DenseStageResult {
   size_t registered_images = 0;
   size_t masters = 0;              ///< images with neighbours and a depth range
   size_t depth_maps = 0;           ///< depth maps computed
@@ -68,10 +69,29 @@ struct DenseSummary {
 /// image names are relative to it), written through a StagedOutput to `output_folder`.
 /// Throws StageError("dense", ...) for too few registered images, no image to match or a
 /// cloud below min_points (the previous `output_folder` then stays as it was).
-DenseSummary densify(const scene::Reconstruction& model, const std::filesystem::path& image_folder,
-                     const std::filesystem::path& output_folder, const DenseOptions& options);
+DenseStageResult densify(const scene::Reconstruction& model,
+                         const std::filesystem::path& image_folder,
+                         const std::filesystem::path& output_folder,
+                         const DenseStageOptions& options);
 
 /// The survey's sparse/ and corrected/ -> dense/, and the "dense" section of report.json.
-DenseSummary runDense(const Survey& survey, const DenseOptions& options);
+DenseStageResult runDenseStage(const Survey& survey, const DenseStageOptions& options);
+
+/// The `dense` stage (common/stage.h): `auv recon dense` and a step of `auv recon run`.
+class DenseStage final : public StageWith<DenseStageOptions> {
+ public:
+  std::string name() const override { return "dense"; }
+  std::string usage() const override {
+    return "<survey>   depth maps and the fused point cloud (dense/)";
+  }
+  std::string surveyHelp() const override { return "survey folder (reads sparse/ and corrected/)"; }
+  std::vector<std::filesystem::path> inputs(const Survey& survey) const override {
+    return {survey.sparse()};
+  }
+  std::vector<std::filesystem::path> outputs(const Survey& survey) const override {
+    return {survey.dense()};
+  }
+  StageReport runWith(const Survey& survey, const DenseStageOptions& options) const override;
+};
 
 }  // namespace auv::recon::dense

@@ -12,8 +12,6 @@
 
 #include <open3d/geometry/PointCloud.h>
 #include <open3d/geometry/TriangleMesh.h>
-#include <open3d/io/PointCloudIO.h>
-#include <open3d/io/TriangleMeshIO.h>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -29,6 +27,7 @@
 #include "auv/recon/evaluate/surface_metrics.h"
 #include "auv/recon/evaluate/well_imaged_region.h"
 #include "auv/recon/scene/colmap_text.h"
+#include "auv/recon/scene/mesh_io.h"
 #include "auv/recon/scene/ply.h"
 
 namespace fs = std::filesystem;
@@ -320,9 +319,7 @@ json evaluateSurvey(const Survey& survey, const fs::path& ground_truth_run,
   const fs::path fused = survey.dense() / "fused.ply";
   if (fs::exists(fused)) {
     open3d::geometry::PointCloud cloud;
-    open3d::io::ReadPointCloudOption read_options;
-    check(open3d::io::ReadPointCloud(fused.string(), cloud, read_options),
-          fused.string() + ": unreadable point cloud");
+    check(scene::readPointCloud(fused, cloud), fused.string() + ": unreadable point cloud");
     check(!cloud.points_.empty(), fused.string() + ": empty point cloud");
     surfaces["dense"] = scoresJson(scoreSurface(
         *mesh, samples.points, well_imaged, transformed(cloud.points_, sim), nullptr, thresholds));
@@ -332,8 +329,7 @@ json evaluateSurvey(const Survey& survey, const fs::path& ground_truth_run,
   const fs::path mesh_file = survey.mesh() / "mesh.ply";
   if (fs::exists(mesh_file)) {
     open3d::geometry::TriangleMesh reconstructed;
-    open3d::io::ReadTriangleMeshOptions read_options;
-    check(open3d::io::ReadTriangleMesh(mesh_file.string(), reconstructed, read_options),
+    check(scene::readTriangleMesh(mesh_file, reconstructed),
           mesh_file.string() + ": unreadable mesh");
     check(!reconstructed.triangles_.empty(), mesh_file.string() + ": mesh without triangles");
     reconstructed.Transform(sim.matrix());

@@ -12,7 +12,6 @@
 
 #include <open3d/geometry/PointCloud.h>
 #include <open3d/geometry/TriangleMesh.h>
-#include <open3d/io/PointCloudIO.h>
 #include <Eigen/Eigenvalues>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -25,6 +24,7 @@
 #include "auv/recon/evaluate/ground_truth.h"
 #include "auv/recon/evaluate/image_matching.h"
 #include "auv/recon/scene/colmap_text.h"
+#include "auv/recon/scene/mesh_io.h"
 #include "auv/recon/scene/ply.h"
 
 namespace fs = std::filesystem;
@@ -385,8 +385,8 @@ cv::Rect drawLegend(cv::Mat& image, const std::vector<LegendEntry>& entries,
   return layout.box;
 }
 
-FiguresResult writeFigures(const Survey& survey, const fs::path& ground_truth_run,
-                           const FiguresOptions& options) {
+FiguresStageResult writeFigures(const Survey& survey, const fs::path& ground_truth_run,
+                                const FiguresOptions& options) {
   options.check();
   Survey::requireExists(survey.sparse() / "images.txt", kStage, "sfm");
   scene::Reconstruction sparse;
@@ -416,13 +416,13 @@ FiguresResult writeFigures(const Survey& survey, const fs::path& ground_truth_ru
   };
 
   // The cloud and each point's cameras.
-  FiguresResult result;
+  FiguresStageResult result;
   std::vector<Eigen::Vector3d> points;
   std::vector<uint32_t> masks;
   const fs::path fused = survey.dense() / "fused.ply", views = survey.dense() / "fused_views.bin";
   if (options.cloud != "sparse" && fs::exists(fused) && fs::exists(views)) {
     open3d::geometry::PointCloud cloud;
-    if (!open3d::io::ReadPointCloud(fused.string(), cloud)) {
+    if (!scene::readPointCloud(fused, cloud)) {
       throw StageError(kStage, fused.string() + ": unreadable point cloud");
     }
     std::vector<std::vector<uint32_t>> images;

@@ -91,7 +91,7 @@ cv::Size legendImageSize(const std::vector<LegendEntry>& entries, double font_sc
 cv::Rect drawLegend(cv::Mat& image, const std::vector<LegendEntry>& entries,
                     double pixels_per_metre, double font_scale);
 
-struct FiguresResult {
+struct FiguresStageResult {
   std::vector<std::filesystem::path> files;
   std::string cloud;  ///< "dense" or "sparse"
   std::map<std::string, size_t> points_per_combination;
@@ -102,7 +102,7 @@ struct FiguresResult {
 /// Writes the figures into <survey>/figures/ (replaced as a whole: StagedOutput). With an empty
 /// `ground_truth_run`, only (a) in the reconstruction's own frame. Throws StageError
 /// ("figures", ...) when the survey has no sparse model or no point with a camera.
-FiguresResult writeFigures(const Survey& survey, const std::filesystem::path& ground_truth_run,
-                           const FiguresOptions& options);
+FiguresStageResult writeFigures(const Survey& survey, const std::filesystem::path& ground_truth_run,
+                                const FiguresOptions& options);
 
 }  // namespace auv::recon::evaluate

@@ -8,11 +8,11 @@
 #include <sstream>
 
 #include <open3d/geometry/TriangleMesh.h>
-#include <open3d/io/TriangleMeshIO.h>
 #include <yaml-cpp/yaml.h>
 
 #include "auv/recon/common/stage_error.h"
 #include "auv/recon/scene/colmap_text.h"
+#include "auv/recon/scene/mesh_io.h"
 
 namespace fs = std::filesystem;
 
@@ -163,10 +163,7 @@ std::shared_ptr<const open3d::geometry::TriangleMesh> GroundTruth::worldMesh() c
                                  ") not found");
   }
   auto mesh = std::make_shared<open3d::geometry::TriangleMesh>();
-  open3d::io::ReadTriangleMeshOptions options;
-  options.print_progress = false;
-  if (!open3d::io::ReadTriangleMesh(mesh_file_.string(), *mesh, options) ||
-      mesh->triangles_.empty()) {
+  if (!scene::readTriangleMesh(mesh_file_, *mesh) || mesh->triangles_.empty()) {
     throw StageError(kStage,
                      "ground truth: world mesh " + mesh_file_.string() + ": unreadable or empty");
   }

@@ -235,7 +235,7 @@ VerifiedPair verifyPair(const PairGeometryInput& input, const VerificationOption
   return pair;
 }
 
-MatchSummary matchSurvey(const Survey& survey, const MatchStageOptions& options) {
+MatchStageResult runMatchStage(const Survey& survey, const MatchStageOptions& options) {
   options.check();
   const auto start = std::chrono::steady_clock::now();
   const fs::path features_folder = survey.root() / "features";
@@ -391,7 +391,7 @@ MatchSummary matchSurvey(const Survey& survey, const MatchStageOptions& options)
   progress.finish();
   if (!first_error.empty()) throw StageError(kStage, first_error);
 
-  MatchSummary summary;
+  MatchStageResult summary;
   summary.images = entries.size();
   summary.candidate_pairs = candidates.size();
   std::vector<VerifiedPair> verified;
@@ -454,6 +454,22 @@ MatchSummary matchSurvey(const Survey& survey, const MatchStageOptions& options)
                   {"min_inliers", options.verification.min_inliers},
                   {"max_threshold_px", options.verification.max_threshold_px}}}});
   return summary;
+}
+
+StageReport MatchStage::runWith(const Survey& survey, const MatchStageOptions& options) const {
+  const MatchStageResult result = runMatchStage(survey, options);
+  std::ostringstream line;
+  line << "match: " << result.verified_pairs << " of " << result.candidate_pairs
+       << " candidate pairs verified (" << result.essential_pairs << " essential, "
+       << result.fundamental_pairs << " fundamental), " << result.verified_matches
+       << " inlier matches over " << result.images << " images in " << result.seconds << " s -> "
+       << (survey.root() / "features" / "matches").string();
+  StageReport report;
+  report.lines.push_back(line.str());
+  report.summary = std::to_string(result.verified_pairs) + " of " +
+                   std::to_string(result.candidate_pairs) + " pairs verified, " +
+                   std::to_string(result.verified_matches) + " matches";
+  return report;
 }
 
 }  // namespace auv::recon::features

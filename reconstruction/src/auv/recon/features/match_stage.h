@@ -4,8 +4,11 @@
 // pair with AC-RANSAC (paper section 3.4.1): essential matrix when both cameras are calibrated
 // (corrected/<camera>.yaml), else the fundamental matrix. Writes features/matches/ (match_store.h).
 
+#include <filesystem>
 #include <string>
+#include <vector>
 
+#include "auv/recon/common/stage.h"
 #include "auv/recon/common/survey.h"
 #include "auv/recon/estimators/ac_ransac.h"
 #include "auv/recon/features/descriptor_matcher.h"
@@ -62,7 +65,7 @@ struct MatchStageOptions {
   void bind(OptionSet& set);
 };
 
-struct MatchSummary {
+struct MatchStageResult {
   size_t images = 0;
   size_t candidate_pairs = 0;
   size_t verified_pairs = 0;
@@ -74,6 +77,25 @@ struct MatchSummary {
 /// Reads features/ (FeatureStore), selects, matches and verifies pairs and writes
 /// features/matches/ (StagedOutput) and the `match` section of report.json. Throws StageError
 /// naming what is missing (features/, a feature file) or when no pair verifies.
-MatchSummary matchSurvey(const Survey& survey, const MatchStageOptions& options);
+MatchStageResult runMatchStage(const Survey& survey, const MatchStageOptions& options);
+
+/// The `match` stage (common/stage.h): `auv recon match` and a step of `auv recon run`.
+class MatchStage final : public StageWith<MatchStageOptions> {
+ public:
+  std::string name() const override { return "match"; }
+  std::string usage() const override {
+    return "<survey>   match and verify image pairs (AC-RANSAC)";
+  }
+  std::string surveyHelp() const override {
+    return "survey folder (reads features/, writes features/matches/)";
+  }
+  std::vector<std::filesystem::path> inputs(const Survey& survey) const override {
+    return {survey.root() / "features" / "index.csv"};
+  }
+  std::vector<std::filesystem::path> outputs(const Survey& survey) const override {
+    return {survey.root() / "features" / "matches"};
+  }
+  StageReport runWith(const Survey& survey, const MatchStageOptions& options) const override;
+};
 
 }  // namespace auv::recon::features

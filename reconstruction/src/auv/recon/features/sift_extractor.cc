@@ -1,29 +1,15 @@
 #include "auv/recon/features/sift_extractor.h"
 
 #include <algorithm>
-#include <atomic>
-#include <chrono>
 #include <cmath>
-#include <mutex>
-#include <thread>
 
-#include <nlohmann/json.hpp>
 #include <opencv2/features2d.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "auv/recon/common/option_set.h"
-#include "auv/recon/common/progress.h"
-#include "auv/recon/common/report.h"
 #include "auv/recon/common/stage_error.h"
-#include "auv/recon/common/staged_output.h"
-
-namespace fs = std::filesystem;
 
 namespace auv::recon::features {
 namespace {
-
-constexpr const char* kStage = "features";
 
 // Float SIFT rows (OpenCV: L2-normalised x 512) -> uint8 rows of (Root)SIFT x 512.
 cv::Mat quantizeDescriptors(const cv::Mat& descriptors, bool root_sift) {
@@ -45,11 +31,6 @@ cv::Mat quantizeDescriptors(const cv::Mat& descriptors, bool root_sift) {
   return out;
 }
 
-int threadCount(int requested) {
-  if (requested > 0) return requested;
-  return std::max(1u, std::thread::hardware_concurrency());
-}
-
 }  // namespace
 
 void SiftOptions::check() const {
@@ -64,28 +45,6 @@ void SiftOptions::check() const {
                          "must be in [1, 10]");
   AUV_RECON_CHECK_OPTION(max_image_size == 0 || max_image_size >= 64, max_image_size,
                          "must be 0 (never downscale) or >= 64 px");
-}
-
-void ExtractionOptions::check() const {
-  sift.check();
-  AUV_RECON_CHECK_OPTION(threads >= 0, threads, "must be >= 0 (0: all cores)");
-}
-
-void ExtractionOptions::bind(OptionSet& set) {
-  set.add("max_features", &sift.max_features, "most SIFT keypoints per image (0: all)");
-  set.add("max_features_megapixels", &sift.max_features_megapixels,
-          "MP: max_features holds up to this image size, larger images keep proportionally more "
-          "(0: fixed)");
-  set.add("contrast_threshold", &sift.contrast_threshold,
-          "SIFT DoG contrast threshold (OpenCV's default 0.04 is too high underwater)");
-  set.add("edge_threshold", &sift.edge_threshold, "SIFT edge response threshold");
-  set.add("sigma", &sift.sigma, "px: Gaussian sigma of the first octave");
-  set.add("octave_layers", &sift.octave_layers, "SIFT scales per octave");
-  set.add("max_image_size", &sift.max_image_size,
-          "px: detect on images downscaled to this larger side (0: full size)");
-  set.add("root_sift", &sift.root_sift, "RootSIFT descriptors (else plain SIFT)");
-  set.add("camera", &cameras, "only this camera (repeatable; default all)");
-  set.add("threads", &threads, "images extracted at once (0: all cores)");
 }
 
 ImageFeatures extractSift(const cv::Mat& image, const std::string& image_name,
@@ -166,119 +125,6 @@ ImageFeatures extractSift(const cv::Mat& image, const std::string& image_name,
   }
   features.descriptors = quantizeDescriptors(selected, options.root_sift);
   return features;
-}
-
-ExtractionSummary extractSurveyFeatures(const Survey& survey, const ExtractionOptions& options) {
-  options.check();
-  const auto start = std::chrono::steady_clock::now();
-  Survey::requireExists(survey.corrected(), kStage, "correct");
-  std::vector<std::string> cameras = Survey::cameraFolders(survey.corrected(), kStage);
-  if (!options.cameras.empty()) {
-    for (const std::string& wanted : options.cameras) {
-      if (std::find(cameras.begin(), cameras.end(), wanted) == cameras.end()) {
-        throw StageError(kStage,
-                         "camera '" + wanted + "' has no folder in " + survey.corrected().string());
-      }
-    }
-    cameras = options.cameras;
-    std::sort(cameras.begin(), cameras.end());
-  }
-
-  struct Job {
-    std::string camera;
-    fs::path image;
-  };
-  std::vector<Job> jobs;
-  for (const std::string& camera : cameras) {
-    for (const fs::path& file :
-         listFiles(survey.corrected() / camera, {".png", ".jpg", ".jpeg", ".tif", ".tiff"})) {
-      jobs.push_back({camera, file});
-    }
-  }
-  if (jobs.empty()) {
-    throw StageError(
-        kStage, "no images (.png/.jpg) in the camera folders of " + survey.corrected().string());
-  }
-
-  StagedOutput output(survey.root() / "features");
-  for (const std::string& camera : cameras) fs::create_directories(output.path() / camera);
-
-  std::vector<FeatureIndexEntry> entries(jobs.size());
-  Progress progress("features", "images", jobs.size());
-  std::mutex error_mutex;
-  std::string first_error;
-  std::atomic<size_t> next{0};
-  auto worker = [&] {
-    for (size_t i = next++; i < jobs.size(); i = next++) {
-      {
-        std::lock_guard<std::mutex> lock(error_mutex);
-        if (!first_error.empty()) return;
-      }
-      const Job& job = jobs[i];
-      try {
-        const cv::Mat image = cv::imread(job.image.string(), cv::IMREAD_COLOR);
-        if (image.empty()) {
-          throw std::runtime_error(job.image.string() +
-                                   ": cannot read the image (missing, "
-                                   "truncated or not an image)");
-        }
-        const std::string name = job.camera + "/" + job.image.filename().string();
-        const ImageFeatures features = extractSift(image, name, options.sift);
-        FeatureIndexEntry& e = entries[i];
-        e.image = name;
-        e.camera = job.camera;
-        e.width = features.width;
-        e.height = features.height;
-        e.count = features.size();
-        e.file = fs::path(job.camera) / (job.image.stem().string() + ".sift");
-        writeImageFeatures(output.path() / e.file, features);
-      } catch (const std::exception& error) {
-        std::lock_guard<std::mutex> lock(error_mutex);
-        if (first_error.empty()) first_error = error.what();
-        return;
-      }
-      progress.advance();
-    }
-  };
-  const int threads = std::min<int>(threadCount(options.threads), static_cast<int>(jobs.size()));
-  std::vector<std::thread> pool;
-  for (int t = 1; t < threads; ++t) pool.emplace_back(worker);
-  worker();
-  for (std::thread& t : pool) t.join();
-  progress.finish();
-  if (!first_error.empty()) throw StageError(kStage, first_error);
-
-  writeFeatureIndex(output.path() / "index.csv", entries);
-  output.commit();
-
-  ExtractionSummary summary;
-  summary.images = entries.size();
-  summary.min_features = entries.front().count;
-  for (const FeatureIndexEntry& e : entries) {
-    summary.features += e.count;
-    summary.min_features = std::min(summary.min_features, e.count);
-    summary.max_features = std::max(summary.max_features, e.count);
-  }
-  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  nlohmann::json report = {{"images", summary.images},
-                           {"features", summary.features},
-                           {"features_per_image",
-                            {{"min", summary.min_features},
-                             {"mean", static_cast<double>(summary.features) / summary.images},
-                             {"max", summary.max_features}}},
-                           {"seconds", summary.seconds},
-                           {"threads", threads},
-                           {"options",
-                            {{"max_features", options.sift.max_features},
-                             {"max_features_megapixels", options.sift.max_features_megapixels},
-                             {"contrast_threshold", options.sift.contrast_threshold},
-                             {"edge_threshold", options.sift.edge_threshold},
-                             {"sigma", options.sift.sigma},
-                             {"octave_layers", options.sift.octave_layers},
-                             {"max_image_size", options.sift.max_image_size},
-                             {"root_sift", options.sift.root_sift}}}};
-  updateReport(survey.report(), kStage, report);
-  return summary;
 }
 
 }  // namespace auv::recon::features

@@ -52,29 +52,4 @@ struct SiftOptions {
 ImageFeatures extractSift(const cv::Mat& image, const std::string& image_name,
                           const SiftOptions& options);
 
-struct ExtractionOptions {
-  SiftOptions sift;
-  /// Only these cameras (folders of corrected/); empty: all.
-  std::vector<std::string> cameras;
-  /// Images extracted at once (0: the machine's cores); memory grows with it.
-  int threads = 0;
-
-  void check() const;
-  /// Binds the fields to flags / the `features:` section of a config file.
-  void bind(OptionSet& set);
-};
-
-struct ExtractionSummary {
-  size_t images = 0;
-  size_t features = 0;  ///< total over the images
-  size_t min_features = 0, max_features = 0;
-  double seconds = 0;
-};
-
-/// `auv recon features <survey>`: extracts every image of corrected/<camera>/ into
-/// <survey>/features/ (StagedOutput: a failure leaves an earlier features/ intact), with a
-/// progress bar, and writes the `features` section of report.json. Throws StageError naming the
-/// missing corrected/ folder or the unreadable image.
-ExtractionSummary extractSurveyFeatures(const Survey& survey, const ExtractionOptions& options);
-
 }  // namespace auv::recon::features

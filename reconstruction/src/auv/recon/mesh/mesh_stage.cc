@@ -2,63 +2,20 @@
 
 #include <chrono>
 #include <iostream>
+#include <sstream>
 
-#include <open3d/io/PointCloudIO.h>
-#include <open3d/io/TriangleMeshIO.h>
 #include <nlohmann/json.hpp>
 
 #include "auv/recon/common/progress.h"
 #include "auv/recon/common/report.h"
 #include "auv/recon/common/stage_error.h"
 #include "auv/recon/common/staged_output.h"
-#include "auv/recon/scene/ply.h"
+#include "auv/recon/scene/mesh_io.h"
 
 namespace fs = std::filesystem;
 namespace o3d = open3d::geometry;
 
 namespace auv::recon::mesh {
-
-o3d::PointCloud readCloud(const fs::path& file) {
-  Survey::requireExists(file, "mesh", "dense");
-  o3d::PointCloud cloud;
-  if (!open3d::io::ReadPointCloud(file.string(), cloud, {"auto", true, true, false})) {
-    throw StageError("mesh", file.string() + ": cannot read the point cloud (not a PLY?)");
-  }
-  return cloud;
-}
-
-void writeMeshPly(const fs::path& file, const o3d::TriangleMesh& mesh) {
-  scene::PlyData ply;
-  ply.positions = mesh.vertices_;
-  if (mesh.HasVertexNormals()) ply.normals = mesh.vertex_normals_;
-  if (mesh.HasVertexColors()) {
-    ply.colors.reserve(mesh.vertex_colors_.size());
-    for (const auto& c : mesh.vertex_colors_) {
-      ply.colors.push_back(
-          (c.cwiseMax(0.0).cwiseMin(1.0) * 255.0).array().round().cast<uint8_t>().matrix());
-    }
-  }
-  ply.triangles.reserve(mesh.triangles_.size());
-  for (const auto& t : mesh.triangles_) {
-    ply.triangles.push_back(
-        {static_cast<uint32_t>(t(0)), static_cast<uint32_t>(t(1)), static_cast<uint32_t>(t(2))});
-  }
-  scene::writePly(file, ply);
-}
-
-o3d::TriangleMesh readMesh(const fs::path& file, const std::string& stage) {
-  Survey::requireExists(file, stage, "mesh");
-  o3d::TriangleMesh mesh;
-  open3d::io::ReadTriangleMeshOptions options;
-  options.enable_post_processing = false;
-  if (!open3d::io::ReadTriangleMesh(file.string(), mesh, options)) {
-    throw StageError(stage, file.string() + ": cannot read the mesh");
-  }
-  if (mesh.triangles_.empty()) {
-    throw StageError(stage, file.string() + ": the mesh has no triangles");
-  }
-  return mesh;
-}
 
 void MeshStageOptions::bind(OptionSet& set) {
   SurfaceOptions& s = surface;
@@ -79,12 +36,12 @@ void MeshStageOptions::bind(OptionSet& set) {
   set.add("write_untrimmed", &write_untrimmed, "also write mesh/mesh_untrimmed.ply");
 }
 
-MeshStageSummary runMeshStage(const Survey& survey, const MeshStageOptions& options) {
+MeshStageResult runMeshStage(const Survey& survey, const MeshStageOptions& options) {
   options.check();
   const auto start = std::chrono::steady_clock::now();
   const fs::path input = survey.dense() / "fused.ply";
-  const o3d::PointCloud cloud = readCloud(input);
-  MeshStageSummary summary;
+  const o3d::PointCloud cloud = scene::readCloud(input, "mesh", "dense");
+  MeshStageResult summary;
   summary.cloud_points = cloud.points_.size();
   std::cerr << "mesh: " << cloud.points_.size() << " points from " << input.string()
             << ", Poisson depth " << options.surface.poisson_depth << std::endl;
@@ -103,9 +60,9 @@ MeshStageSummary runMeshStage(const Survey& survey, const MeshStageOptions& opti
   summary.area = surfaceArea(*result.trimmed);
 
   StagedOutput staged(survey.mesh());
-  writeMeshPly(staged.path() / "mesh.ply", *result.trimmed);
+  scene::writeMeshPly(staged.path() / "mesh.ply", *result.trimmed);
   if (options.write_untrimmed)
-    writeMeshPly(staged.path() / "mesh_untrimmed.ply", *result.untrimmed);
+    scene::writeMeshPly(staged.path() / "mesh_untrimmed.ply", *result.untrimmed);
   staged.commit();
   progress.advance();
   progress.finish();
@@ -140,6 +97,20 @@ MeshStageSummary runMeshStage(const Survey& survey, const MeshStageOptions& opti
                               {"min_points", o.min_points}}}};
   updateReport(survey.report(), "mesh", section);
   return summary;
+}
+
+StageReport MeshStage::runWith(const Survey& survey, const MeshStageOptions& options) const {
+  const MeshStageResult result = runMeshStage(survey, options);
+  std::ostringstream line;
+  line << "mesh: " << result.stats.triangles << " triangles (" << result.stats.poisson_triangles
+       << " from Poisson; removed " << result.stats.removed_long_edges << " long-edge, "
+       << result.stats.removed_low_density << " low-density, " << result.stats.removed_components
+       << " in small components), area " << result.area << " m2 of " << result.area_untrimmed
+       << " m2, " << result.seconds << " s -> " << (survey.mesh() / "mesh.ply").string();
+  StageReport report;
+  report.lines.push_back(line.str());
+  report.summary = "mesh in " + survey.mesh().string();
+  return report;
 }
 
 }  // namespace auv::recon::mesh

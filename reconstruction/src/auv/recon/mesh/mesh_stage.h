@@ -4,11 +4,13 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include <open3d/geometry/PointCloud.h>
 #include <open3d/geometry/TriangleMesh.h>
 
 #include "auv/recon/common/option_set.h"
+#include "auv/recon/common/stage.h"
 #include "auv/recon/common/survey.h"
 #include "auv/recon/mesh/surface.h"
 
@@ -22,27 +24,34 @@ struct MeshStageOptions {
   void bind(OptionSet& set);
 };
 
-struct MeshStageSummary {
+struct MeshStageResult {
   TrimStats stats;
   size_t cloud_points = 0;
   double area_untrimmed = 0, area = 0;  ///< m^2
   double seconds = 0;
 };
 
-/// Reads a point cloud (PLY), throwing StageError("mesh", ...) naming the file when it is
-/// missing or unreadable.
-open3d::geometry::PointCloud readCloud(const std::filesystem::path& file);
-
-/// Writes a mesh (positions, vertex normals and colours when present, triangles) as binary PLY
-/// through a temporary name.
-void writeMeshPly(const std::filesystem::path& file, const open3d::geometry::TriangleMesh& mesh);
-
-/// Reads a mesh PLY; StageError(stage, ...) naming the file when missing, unreadable or empty.
-open3d::geometry::TriangleMesh readMesh(const std::filesystem::path& file,
-                                        const std::string& stage);
-
 /// The whole stage on a survey folder. The mesh folder is replaced only when everything is
 /// written (StagedOutput): a failure leaves the previous mesh/ as it was.
-MeshStageSummary runMeshStage(const Survey& survey, const MeshStageOptions& options);
+MeshStageResult runMeshStage(const Survey& survey, const MeshStageOptions& options);
+
+/// The `mesh` stage (common/stage.h): `auv recon mesh` and a step of `auv recon run`.
+class MeshStage final : public StageWith<MeshStageOptions> {
+ public:
+  std::string name() const override { return "mesh"; }
+  std::string usage() const override {
+    return "<survey>   Poisson surface of the dense cloud, trimmed";
+  }
+  std::string surveyHelp() const override {
+    return "survey folder (reads dense/fused.ply, writes mesh/)";
+  }
+  std::vector<std::filesystem::path> inputs(const Survey& survey) const override {
+    return {survey.dense()};
+  }
+  std::vector<std::filesystem::path> outputs(const Survey& survey) const override {
+    return {survey.mesh()};
+  }
+  StageReport runWith(const Survey& survey, const MeshStageOptions& options) const override;
+};
 
 }  // namespace auv::recon::mesh

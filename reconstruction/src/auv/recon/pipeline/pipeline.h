@@ -1,9 +1,9 @@
 #pragma once
-// `auv recon run <survey>`: the reconstruction stages in the paper's order (section 3:
+// `auv recon run <survey>`: the chained stages of stages.h in the paper's order (section 3:
 // keyframes -> correct -> features -> match -> sfm -> dense -> mesh -> texture) over one survey
-// folder (docs/design.md §6), each through its library's entry point. A stage whose
-// output is newer than all of its input is skipped (unless `force`), so a run continues where
-// an earlier one stopped and re-runs only what changed.
+// folder (docs/design.md §6), each through its Stage (common/stage.h). A stage whose outputs
+// are newer than all of its inputs is skipped (unless `force`), so a run continues where an
+// earlier one stopped and re-runs only what changed.
 
 #include <filesystem>
 #include <functional>
@@ -19,7 +19,7 @@ class OptionSet;
 
 namespace auv::recon::pipeline {
 
-/// The stages `run` chains, in order.
+/// The names of the stages `run` chains, in order (stages.h).
 const std::vector<std::string>& stageNames();
 
 struct PipelineOptions {
@@ -38,15 +38,16 @@ struct PipelineOptions {
 enum class StageOutcome { RAN, UP_TO_DATE };
 std::string stageOutcomeName(StageOutcome outcome);
 
-struct StageReport {
+/// One stage of a run.
+struct PipelineStep {
   std::string stage;
   StageOutcome outcome = StageOutcome::RAN;
   double seconds = 0;
-  std::string note;  ///< the stage's one-line result, or why it was skipped
+  std::string note;  ///< the stage's one-line result (StageReport::summary), or why it was skipped
 };
 
-struct PipelineSummary {
-  std::vector<StageReport> stages;
+struct PipelineResult {
+  std::vector<PipelineStep> stages;
   double seconds = 0;
 };
 
@@ -56,8 +57,7 @@ struct PipelineSummary {
 /// std::invalid_argument naming the file, section and key. A stage's failure (StageError
 /// naming it) stops the run and propagates; the outputs of the stages before it stay (each
 /// stage writes through a staging folder).
-PipelineSummary runPipeline(const Survey& survey, const PipelineOptions& options,
-                            std::ostream& log);
+PipelineResult runPipeline(const Survey& survey, const PipelineOptions& options, std::ostream& log);
 
 /// Newest modification time of the files under `paths` (files or folders, hidden entries
 /// skipped); false when there is no file at all.

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <iostream>
 #include <map>
+#include <sstream>
 
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
@@ -183,10 +184,10 @@ void writeSparseModel(const scene::Reconstruction& rec, const fs::path& folder) 
   scene::writePly(folder / "cameras.ply", glyphs);
 }
 
-SfmSummary reconstructSurvey(const Survey& survey, const SfmStageOptions& options) {
+SfmStageResult runSfmStage(const Survey& survey, const SfmStageOptions& options) {
   options.check();
   const auto start = Clock::now();
-  SfmSummary summary;
+  SfmStageResult summary;
   // Keypoint colours for the points, read with the keypoints.
   SfmInput input = readSfmInput(survey);
   std::map<uint32_t, std::vector<std::array<uint8_t, 3>>> colors;
@@ -305,6 +306,26 @@ SfmSummary reconstructSurvey(const Survey& survey, const SfmStageOptions& option
   updateReport(survey.report(), kStage, section);
   summary.mapper = std::move(result);
   return summary;
+}
+
+StageReport SfmStage::runWith(const Survey& survey, const SfmStageOptions& options) const {
+  const SfmStageResult s = runSfmStage(survey, options);
+  std::ostringstream line;
+  line << "sfm: " << s.images_registered << " of " << s.images_total << " images registered, "
+       << s.points << " points, mean track length " << s.mean_track_length
+       << ", mean reprojection error " << s.mean_reprojection_error_px << " px";
+  if (s.navigation.applied) {
+    line << ", aligned to the navigation (" << s.navigation.images << " images, rms "
+         << s.navigation.rms_m << " m)";
+  }
+  line << " in " << s.seconds << " s -> " << survey.sparse().string();
+  std::ostringstream summary;
+  summary << s.images_registered << " of " << s.images_total << " images registered, " << s.points
+          << " points, " << s.mean_reprojection_error_px << " px";
+  StageReport report;
+  report.lines.push_back(line.str());
+  report.summary = summary.str();
+  return report;
 }
 
 }  // namespace auv::recon::sfm

@@ -3,9 +3,11 @@
 // (paper section 3.4.2), written as sparse/ (COLMAP text model, points.ply, cameras.ply) and
 // the `sfm` section of report.json.
 
+#include <filesystem>
 #include <string>
 #include <vector>
 
+#include "auv/recon/common/stage.h"
 #include "auv/recon/common/survey.h"
 #include "auv/recon/sfm/correspondences.h"
 #include "auv/recon/sfm/incremental_mapper.h"
@@ -36,7 +38,7 @@ struct SfmStageOptions {
   void bind(OptionSet& set);
 };
 
-struct SfmSummary {
+struct SfmStageResult {
   size_t images_total = 0, images_registered = 0, points = 0, observations = 0;
   size_t cameras = 0;
   double mean_track_length = 0, mean_reprojection_error_px = 0;
@@ -56,11 +58,30 @@ SfmInput readSfmInput(const Survey& survey);
 /// writes sparse/ through a staging folder and the report section. Expected failures (no
 /// initial pair, too few registered images) throw StageError with the numbers; earlier
 /// outputs stay intact.
-SfmSummary reconstructSurvey(const Survey& survey, const SfmStageOptions& options);
+SfmStageResult runSfmStage(const Survey& survey, const SfmStageOptions& options);
 
 /// Writes a model as the stage does into `folder` (cameras.txt, images.txt, points3D.txt,
 /// points.ply, cameras.ply).
 void writeSparseModel(const scene::Reconstruction& reconstruction,
                       const std::filesystem::path& folder);
+
+/// The `sfm` stage (common/stage.h): `auv recon sfm` and a step of `auv recon run`.
+class SfmStage final : public StageWith<SfmStageOptions> {
+ public:
+  std::string name() const override { return "sfm"; }
+  std::string usage() const override {
+    return "<survey>   incremental structure from motion (sparse model)";
+  }
+  std::string surveyHelp() const override {
+    return "survey folder (reads corrected/, features/; writes sparse/)";
+  }
+  std::vector<std::filesystem::path> inputs(const Survey& survey) const override {
+    return {survey.root() / "features" / "matches", survey.corrected()};
+  }
+  std::vector<std::filesystem::path> outputs(const Survey& survey) const override {
+    return {survey.sparse()};
+  }
+  StageReport runWith(const Survey& survey, const SfmStageOptions& options) const override;
+};
 
 }  // namespace auv::recon::sfm

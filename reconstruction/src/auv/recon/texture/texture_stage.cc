@@ -11,6 +11,7 @@
 #include "auv/recon/common/staged_output.h"
 #include "auv/recon/mesh/mesh_stage.h"
 #include "auv/recon/scene/colmap_text.h"
+#include "auv/recon/scene/mesh_io.h"
 #include "auv/recon/texture/image_cache.h"
 
 namespace fs = std::filesystem;
@@ -49,11 +50,11 @@ void TextureStageOptions::bind(OptionSet& set) {
   set.add("image_cache", &image_cache, "images kept in memory at once");
 }
 
-TextureStageSummary runTextureStage(const Survey& survey, const TextureStageOptions& options) {
+TextureStageResult runTextureStage(const Survey& survey, const TextureStageOptions& options) {
   options.check();
   const auto start = std::chrono::steady_clock::now();
   const fs::path mesh_file = survey.mesh() / "mesh.ply";
-  const open3d::geometry::TriangleMesh input = mesh::readMesh(mesh_file, "texture");
+  const open3d::geometry::TriangleMesh input = scene::readMesh(mesh_file, "texture");
   Survey::requireExists(survey.sparse() / "images.txt", "texture", "sfm");
   scene::Reconstruction model;
   try {
@@ -129,7 +130,7 @@ TextureStageSummary runTextureStage(const Survey& survey, const TextureStageOpti
   writeFileAtomically(staged.path() / "face_views.csv", face_views.str());
   staged.commit();
 
-  TextureStageSummary summary;
+  TextureStageResult summary;
   summary.stats = result.stats;
   summary.views = views.size();
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -178,6 +179,21 @@ TextureStageSummary runTextureStage(const Survey& survey, const TextureStageOpti
         {"max_atlas_megapixels", options.texture.atlas.max_atlas_megapixels}}}};
   updateReport(survey.report(), "texture", section);
   return summary;
+}
+
+StageReport TextureStage::runWith(const Survey& survey, const TextureStageOptions& options) const {
+  const TextureStageResult result = runTextureStage(survey, options);
+  const auto& s = result.stats;
+  std::ostringstream line;
+  line << "texture: " << s.faces_seen << " of " << s.faces << " faces textured from "
+       << s.views_used << " of " << result.views << " views (" << s.faces_unseen << " unseen), "
+       << s.seams << " seam edges (greedy " << s.greedy_seams << "), " << s.atlas.patches
+       << " patches on " << s.atlas.pages << " page(s) of " << s.atlas.page_size << " px, "
+       << result.seconds << " s -> " << (survey.textured() / "model.obj").string();
+  StageReport report;
+  report.lines.push_back(line.str());
+  report.summary = "textured model in " + survey.textured().string();
+  return report;
 }
 
 }  // namespace auv::recon::texture

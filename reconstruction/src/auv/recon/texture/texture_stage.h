@@ -6,6 +6,7 @@
 #include <cstddef>
 
 #include "auv/recon/common/option_set.h"
+#include "auv/recon/common/stage.h"
 #include "auv/recon/common/survey.h"
 #include "auv/recon/texture/texturer.h"
 
@@ -21,7 +22,7 @@ struct TextureStageOptions {
   void bind(OptionSet& set);
 };
 
-struct TextureStageSummary {
+struct TextureStageResult {
   TextureStats stats;
   size_t views = 0;
   double seconds = 0;
@@ -30,6 +31,25 @@ struct TextureStageSummary {
 /// The whole stage. textured/ is replaced only when everything is written (StagedOutput).
 /// StageError("texture", ...) naming the file for a missing mesh, sparse model or image, a
 /// camera that is not pinhole, or a mesh no view sees.
-TextureStageSummary runTextureStage(const Survey& survey, const TextureStageOptions& options);
+TextureStageResult runTextureStage(const Survey& survey, const TextureStageOptions& options);
+
+/// The `texture` stage (common/stage.h): `auv recon texture` and a step of `auv recon run`.
+class TextureStage final : public StageWith<TextureStageOptions> {
+ public:
+  std::string name() const override { return "texture"; }
+  std::string usage() const override {
+    return "<survey>   textured model (view selection, seam levelling)";
+  }
+  std::string surveyHelp() const override {
+    return "survey folder (reads mesh/mesh.ply, sparse/, corrected/; writes textured/)";
+  }
+  std::vector<std::filesystem::path> inputs(const Survey& survey) const override {
+    return {survey.mesh(), survey.sparse()};
+  }
+  std::vector<std::filesystem::path> outputs(const Survey& survey) const override {
+    return {survey.textured()};
+  }
+  StageReport runWith(const Survey& survey, const TextureStageOptions& options) const override;
+};
 
 }  // namespace auv::recon::texture

@@ -22,13 +22,16 @@ int runMain(const std::vector<std::string>& args) {
       if (args[i].rfind("--config=", 0) == 0) options.config = args[i].substr(9);
     }
     if (!set.parse(args)) {
-      std::cout << "Stages: keyframes correct features match sfm dense mesh texture. A stage\n"
+      std::string names;
+      for (const std::string& name : pipeline::stageNames()) names += " " + name;
+      std::cout << "Stages:" << names
+                << ". A stage\n"
                    "whose output is newer than its input is skipped (--force runs it).\n"
                    "--config recon.yaml: one section per stage, the keys of its flags.\n";
       return tools::kExitOk;
     }
     options.check();
-    const pipeline::PipelineSummary s = pipeline::runPipeline(Survey(survey), options, std::cerr);
+    const pipeline::PipelineResult s = pipeline::runPipeline(Survey(survey), options, std::cerr);
     size_t ran = 0;
     for (const auto& stage : s.stages) ran += stage.outcome == pipeline::StageOutcome::RAN;
     std::cout << "run: " << ran << " of " << s.stages.size() << " stages ran in " << s.seconds

@@ -1,4 +1,5 @@
 #include "auv/mapping/components/mapping_component.h"
+#include "auv/interfaces/msg_eigen.h"
 #include "auv/interfaces/msg_time.h"
 #include "auv/mapping/components/message_conversions.h"
 
@@ -7,17 +8,7 @@
 #include <sstream>
 
 namespace auv::mapping {
-namespace {
-
-msg::Point toPoint(const Eigen::Vector3d& v) {
-  msg::Point p;
-  p.x(v.x());
-  p.y(v.y());
-  p.z(v.z());
-  return p;
-}
-
-}  // namespace
+using interfaces::toPoint;
 
 void MappingComponent::configure(interfaces::Node& node) {
   node_ = &node;

@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 
+#include "auv/interfaces/msg_eigen.h"
 #include "auv/interfaces/msg_time.h"
 #include "auv/mapping/map_builder.h"
 #include "auv/mapping/pose_buffer.h"
@@ -11,16 +12,7 @@
 
 namespace auv::mapping {
 
-inline Eigen::Isometry3d toIsometry(const msg::Pose& pose) {
-  Eigen::Isometry3d result = Eigen::Isometry3d::Identity();
-  result.translation() =
-      Eigen::Vector3d(pose.position().x(), pose.position().y(), pose.position().z());
-  Eigen::Quaterniond q(pose.orientation().w(), pose.orientation().x(), pose.orientation().y(),
-                       pose.orientation().z());
-  if (q.norm() < 1e-9) q = Eigen::Quaterniond::Identity();  // unset orientation
-  result.linear() = q.normalized().toRotationMatrix();
-  return result;
-}
+using interfaces::toIsometry;  // msg::Pose; an unset orientation is the identity
 
 inline Eigen::Isometry3d toIsometry(const StampedPose& pose) {
   Eigen::Isometry3d result = Eigen::Isometry3d::Identity();

@@ -1,4 +1,5 @@
 #include "auv/planning/components/planning_component.h"
+#include "auv/interfaces/msg_eigen.h"
 #include "auv/interfaces/msg_time.h"
 
 #include <chrono>
@@ -11,15 +12,8 @@ namespace auv::planning {
 
 namespace {
 
-Eigen::Vector3d toVector(const msg::Point& p) { return {p.x(), p.y(), p.z()}; }
-
-msg::Point toPoint(const Eigen::Vector3d& v) {
-  msg::Point p;
-  p.x(v.x());
-  p.y(v.y());
-  p.z(v.z());
-  return p;
-}
+Eigen::Vector3d toVector(const msg::Point& p) { return interfaces::toEigen(p); }
+using interfaces::toPoint;
 
 void setStamp(msg::Header& header, int64_t ns) { header.stamp(interfaces::toMsgTime(ns)); }
 

@@ -1,4 +1,5 @@
 #include "auv/sim/components/message_conversion.h"
+#include "auv/interfaces/msg_eigen.h"
 #include "auv/interfaces/msg_time.h"
 
 #include <cmath>
@@ -6,21 +7,8 @@
 namespace auv::sim {
 namespace {
 
-msg::Point toPoint(const Eigen::Vector3d& p) {
-  msg::Point out;
-  out.x(p.x());
-  out.y(p.y());
-  out.z(p.z());
-  return out;
-}
-
-msg::Vector3 toVector3(const Eigen::Vector3d& v) {
-  msg::Vector3 out;
-  out.x(v.x());
-  out.y(v.y());
-  out.z(v.z());
-  return out;
-}
+using interfaces::toPoint;
+using interfaces::toVector3;
 
 msg::Header header(double t, const char* frame) {
   msg::Header h;
@@ -35,16 +23,7 @@ msg::Time toTime(double seconds) { return interfaces::toMsgTime(std::llround(sec
 
 double toSeconds(const msg::Time& time) { return interfaces::toNanoseconds(time) * 1e-9; }
 
-msg::Pose toPose(const Eigen::Isometry3d& pose) {
-  msg::Pose out;
-  out.position(toPoint(pose.translation()));
-  const Eigen::Quaterniond q(pose.linear());
-  out.orientation().x(q.x());
-  out.orientation().y(q.y());
-  out.orientation().z(q.z());
-  out.orientation().w(q.w());
-  return out;
-}
+msg::Pose toPose(const Eigen::Isometry3d& pose) { return interfaces::toPose(pose); }
 
 msg::Odometry toOdometry(const NavigationEstimate& estimate) {
   msg::Odometry odom;

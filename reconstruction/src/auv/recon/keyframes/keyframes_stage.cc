@@ -1,4 +1,4 @@
-#include "auv/recon/keyframes/stage.h"
+#include "auv/recon/keyframes/keyframes_stage.h"
 
 #include <algorithm>
 #include <chrono>
@@ -66,7 +66,7 @@ std::string rejectedCsv(const std::vector<VideoKeyframes>& videos) {
   return out.str();
 }
 
-nlohmann::json optionsJson(const KeyframeStageOptions& o) {
+nlohmann::json optionsJson(const KeyframesStageOptions& o) {
   const KeyframeOptions& s = o.selection;
   return {{"analysis_width", s.analysis_width},
           {"min_motion", s.min_motion},
@@ -130,7 +130,7 @@ nlohmann::json cameraJson(const CameraKeyframes& camera) {
 }
 }  // namespace
 
-void KeyframeStageOptions::check() const {
+void KeyframesStageOptions::check() const {
   selection.check();
   AUV_RECON_CHECK_OPTION(video.png_compression >= 0 && video.png_compression <= 9,
                          video.png_compression, "must be in [0, 9]");
@@ -141,7 +141,7 @@ void KeyframeStageOptions::check() const {
   }
 }
 
-void KeyframeStageOptions::bind(OptionSet& set) {
+void KeyframesStageOptions::bind(OptionSet& set) {
   KeyframeOptions& s = selection;
   set.add("camera", &cameras, "camera id (folder of recordings/); repeatable; all");
   set.add("min_motion", &s.min_motion,
@@ -176,8 +176,7 @@ std::vector<fs::path> listVideos(const fs::path& folder) {
   return listFiles(folder, {".mp4", ".avi", ".mov", ".mkv"});
 }
 
-KeyframeStageResult selectSurveyKeyframes(const Survey& survey,
-                                          const KeyframeStageOptions& options) {
+KeyframesStageResult runKeyframesStage(const Survey& survey, const KeyframesStageOptions& options) {
   options.check();
   const auto start = std::chrono::steady_clock::now();
   Survey::requireExists(survey.recordings(), kStage, "pull");
@@ -200,7 +199,7 @@ KeyframeStageResult selectSurveyKeyframes(const Survey& survey,
     for (const auto& video : videos.back()) total_frames += expectedFrameCount(video);
   }
 
-  KeyframeStageResult result;
+  KeyframesStageResult result;
   std::vector<std::unique_ptr<StagedOutput>> outputs;
   Progress progress("keyframes", "frames", total_frames);
   for (size_t c = 0; c < cameras.size(); ++c) {
@@ -253,6 +252,28 @@ KeyframeStageResult selectSurveyKeyframes(const Survey& survey,
   section["problems"] = result.problems;
   updateReport(survey.report(), kStage, section);
   return result;
+}
+
+StageReport KeyframesStage::runWith(const Survey& survey,
+                                    const KeyframesStageOptions& options) const {
+  const KeyframesStageResult result = runKeyframesStage(survey, options);
+  StageReport report;
+  int keyframes = 0;
+  for (const auto& camera : result.cameras) {
+    std::ostringstream line;
+    line << "keyframes: " << camera.camera << ": " << camera.keyframes << " keyframes of "
+         << camera.frames << " frames (" << camera.videos.size() << " videos), " << camera.rejected
+         << " frames refused (rejected.csv)";
+    report.lines.push_back(line.str());
+    keyframes += camera.keyframes;
+  }
+  report.warnings = result.problems;
+  std::ostringstream done;
+  done << "keyframes: done in " << result.seconds << " s -> " << survey.keyframes().string();
+  report.lines.push_back(done.str());
+  report.summary = std::to_string(keyframes) + " keyframes from " +
+                   std::to_string(result.cameras.size()) + " cameras";
+  return report;
 }
 
 }  // namespace auv::recon::keyframes
