@@ -539,7 +539,7 @@ const char* toString(DdsVendor vendor) {
 
 LaunchFileError::LaunchFileError(std::string file, std::string field, std::string problem, int line,
                                  int column)
-    : std::runtime_error(formatError(file, field, problem, line, column)),
+    : config::ConfigError(formatError(file, field, problem, line, column)),
       file_(std::move(file)),
       field_(std::move(field)),
       problem_(std::move(problem)),
