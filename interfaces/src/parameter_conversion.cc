@@ -51,9 +51,15 @@ std::string rangeText(const Declared& declared, ParameterType type) {
     if (declared.descriptor.min) low = formatDouble(*declared.descriptor.min);
     if (declared.descriptor.max) high = formatDouble(*declared.descriptor.max);
   }
-  if (low && high) return " in [" + *low + ", " + *high + "]";
-  if (low) return " >= " + *low;
-  if (high) return " <= " + *high;
+  // Integer bounds are always inclusive (integerBounds rounds exclusive ones inwards).
+  const bool open_low = !isInteger(type) && declared.descriptor.min_exclusive;
+  const bool open_high = !isInteger(type) && declared.descriptor.max_exclusive;
+  if (low && high) {
+    return std::string(" in ") + (open_low ? "(" : "[") + *low + ", " + *high +
+           (open_high ? ")" : "]");
+  }
+  if (low) return (open_low ? " > " : " >= ") + *low;
+  if (high) return (open_high ? " < " : " <= ") + *high;
   return "";
 }
 
@@ -101,8 +107,14 @@ std::pair<int64_t, int64_t> integerBounds(const Declared& declared) {
   int64_t low = declared.int_min;
   int64_t high = declared.int_max;
   const auto& d = declared.descriptor;
-  if (d.min) low = std::max(low, clampToInt64(std::ceil(*d.min)));
-  if (d.max) high = std::min(high, clampToInt64(std::floor(*d.max)));
+  if (d.min) {
+    const double first = d.min_exclusive ? std::floor(*d.min) + 1 : std::ceil(*d.min);
+    low = std::max(low, clampToInt64(first));
+  }
+  if (d.max) {
+    const double last = d.max_exclusive ? std::ceil(*d.max) - 1 : std::floor(*d.max);
+    high = std::min(high, clampToInt64(last));
+  }
   return {low, high};
 }
 
@@ -293,8 +305,9 @@ bool elementOk(const Declared& declared, int64_t value) {
 
 bool elementOk(const Declared& declared, double value) {
   const auto& d = declared.descriptor;
-  if (d.min && !(value >= *d.min)) return false;  // NaN fails any bound
-  if (d.max && !(value <= *d.max)) return false;
+  // NaN fails any bound.
+  if (d.min && !(d.min_exclusive ? value > *d.min : value >= *d.min)) return false;
+  if (d.max && !(d.max_exclusive ? value < *d.max : value <= *d.max)) return false;
   return true;
 }
 
@@ -360,7 +373,8 @@ void checkDescriptor(const std::string& name, const Declared& declared) {
   if ((d.min || d.max) && !isNumeric(type)) {
     throw ParameterError(prefix + "min/max apply to numbers, but the type is " + toString(type));
   }
-  if (d.min && d.max && *d.min > *d.max) {
+  if (d.min && d.max &&
+      (*d.min > *d.max || (*d.min == *d.max && (d.min_exclusive || d.max_exclusive)))) {
     throw ParameterError(prefix + "min " + formatDouble(*d.min) + " > max " + formatDouble(*d.max));
   }
   if (isInteger(type)) {

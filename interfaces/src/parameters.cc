@@ -559,7 +559,9 @@ std::string Parameters::describe() const {
       }
     } else {
       if (d.min) out << YAML::Key << "min" << YAML::Value << formatDouble(*d.min);
+      if (d.min && d.min_exclusive) out << YAML::Key << "min_exclusive" << YAML::Value << true;
       if (d.max) out << YAML::Key << "max" << YAML::Value << formatDouble(*d.max);
+      if (d.max && d.max_exclusive) out << YAML::Key << "max_exclusive" << YAML::Value << true;
     }
     if (!d.choices.empty()) {
       out << YAML::Key << "choices" << YAML::Value << YAML::Flow << YAML::BeginSeq;

@@ -2,6 +2,7 @@
 // names file and field.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -9,7 +10,9 @@
 #include <string>
 
 #include "auv/config/errors.h"
+#include "auv/config/option_table.h"
 #include "auv/config/yaml_section.h"
+#include "auv/interfaces/option_parameters.h"
 #include "auv/interfaces/parameters.h"
 
 namespace auv::config {
@@ -68,6 +71,62 @@ TEST(YamlSectionTest, FileErrorsNameTheFileAndLine) {
   }
   std::filesystem::remove(file);
   EXPECT_THROW(loadYamlFile(file.string()), ConfigError);  // missing: named, exit code 2
+}
+
+}  // namespace
+}  // namespace auv::config
+
+namespace auv::config {
+namespace {
+
+struct SonarOptions {
+  double prob_hit = 0.7;
+  double range = 20;
+  static const OptionTable<SonarOptions>& table() {
+    static const OptionTable<SonarOptions> kTable = {
+        {"prob_hit", &SonarOptions::prob_hit, "hit probability", "", Range::open(0.5, 1.0)},
+        {"range", &SonarOptions::range, "maximum range", "m", Range::aboveUpTo(0, 100)}};
+    return kTable;
+  }
+};
+
+TEST(OptionTableTest, RangesHaveOpenAndClosedEnds) {
+  EXPECT_FALSE(Range::open(0.5, 1).contains(0.5));
+  EXPECT_TRUE(Range::open(0.5, 1).contains(0.7));
+  EXPECT_FALSE(Range::open(0.5, 1).contains(std::nan("")));
+  EXPECT_TRUE(Range::aboveUpTo(0, 100).contains(100));
+  EXPECT_FALSE(Range::above(0).contains(0));
+  EXPECT_TRUE(Range::any().contains(-1e300));
+  EXPECT_EQ(Range::open(0.5, 1).text(), " in (0.5, 1)");
+  EXPECT_EQ(Range::atLeast(0).text(), " >= 0");
+}
+
+TEST(OptionTableTest, CheckNamesTheFieldAndTheDeclarationsUseTheSameRange) {
+  SonarOptions options;
+  EXPECT_NO_THROW(checkOptions(options, SonarOptions::table(), "sonar."));
+  options.prob_hit = 0.5;  // the open end
+  try {
+    checkOptions(options, SonarOptions::table(), "sonar.");
+    FAIL() << "accepted prob_hit 0.5";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "sonar.prob_hit: expected a finite number in (0.5, 1), got 0.5");
+  }
+  EXPECT_THROW(checkOptions<ConfigError>(options, SonarOptions::table()), ConfigError);
+
+  // The parameters declared from the table refuse what check() refuses, and --help says so.
+  interfaces::Parameters p("sonar");
+  p.setOverride("prob_hit:=0.5");
+  SonarOptions declared;
+  EXPECT_THROW(interfaces::declareOptions(p, "", SonarOptions::table(), declared, true),
+               interfaces::ParameterError);
+  interfaces::Parameters q("sonar");
+  q.setOverride("range:=100");
+  interfaces::declareOptions(q, "", SonarOptions::table(), declared, true);
+  EXPECT_EQ(declared.range, 100);
+  const std::string help = q.describe();
+  EXPECT_NE(help.find("min_exclusive: true"), std::string::npos) << help;
+  EXPECT_EQ(help.find("max_exclusive"), std::string::npos) << help;  // (0, 100]: max allowed
 }
 
 }  // namespace

@@ -93,10 +93,12 @@ inline constexpr char kCommandLineSource[] = "command line (-p)";
 struct ParameterDescriptor {
   std::string description;           // one line: what it does
   std::string unit;                  // SI unit, e.g. "m", "m/s", "rad"; empty if none
-  std::optional<double> min;         // inclusive lower bound for numbers / numeric array elements
-  std::optional<double> max;         // inclusive upper bound for numbers / numeric array elements
+  std::optional<double> min;         // lower bound for numbers / numeric array elements
+  std::optional<double> max;         // upper bound for numbers / numeric array elements
   std::vector<std::string> choices;  // allowed values for strings / string array elements
   bool read_only = false;            // if true, set() rejects runtime changes
+  bool min_exclusive = false;        // min itself is not allowed: (min, ...
+  bool max_exclusive = false;        // max itself is not allowed: ..., max)
 };
 
 namespace detail {

@@ -84,52 +84,62 @@ bool ControllerStatusReport::differsInState(const ControllerStatusReport& other)
          safety_reason != other.safety_reason;
 }
 
+const config::OptionTable<ControllerOptions>& ControllerOptions::table() {
+  using config::Range;
+  using C = ControllerOptions;
+  const Range gain = Range::atLeast(0.0);
+  static const config::OptionTable<C> kTable = {
+      {"heading_kp", &C::heading_kp, "heading PID proportional gain", "N m/rad", gain},
+      {"heading_ki", &C::heading_ki, "heading PID integral gain", "N m/(rad s)", gain},
+      {"heading_kd", &C::heading_kd, "heading PID yaw-rate damping", "N m/(rad/s)", gain},
+      {"heading_integral_limit", &C::heading_integral_limit, "bound of the heading integral term",
+       "N m", gain},
+      {"depth_kp", &C::depth_kp, "depth PI proportional gain", "N/m", gain},
+      {"depth_ki", &C::depth_ki, "depth PI integral gain", "N/(m s)", gain},
+      {"depth_kd", &C::depth_kd, "depth heave-velocity damping", "N/(m/s)", gain},
+      {"depth_integral_limit", &C::depth_integral_limit, "bound of the depth integral term", "N",
+       gain},
+      {"surge_kp", &C::surge_kp, "surge-speed PI proportional gain", "N/(m/s)", gain},
+      {"surge_ki", &C::surge_ki, "surge-speed PI integral gain", "N/m", gain},
+      {"surge_integral_limit", &C::surge_integral_limit, "bound of the surge integral term", "N",
+       gain},
+      {"default_surge_speed", &C::default_surge_speed,
+       "WAYPOINT speed when the command's surge_speed is 0", "m/s", Range::aboveUpTo(0, 5)},
+      {"max_surge_speed", &C::max_surge_speed, "largest commanded surge speed accepted", "m/s",
+       Range::aboveUpTo(0, 5)},
+      {"default_tolerance", &C::default_tolerance,
+       "WAYPOINT tolerance when the command's is 0, and the HOLD radius", "m",
+       Range::aboveUpTo(0, 100)},
+      {"slow_down_radius", &C::slow_down_radius,
+       "horizontal distance to a waypoint where the speed starts ramping down", "m",
+       Range::aboveUpTo(0, 1000)},
+      {"turn_in_place_angle", &C::turn_in_place_angle,
+       "heading error beyond which the vehicle turns on the spot (pi/2: speed * cos(error))", "rad",
+       Range::aboveUpTo(0, M_PI / 2)},
+      {"min_approach_fraction", &C::min_approach_fraction,
+       "floor of the slow-down ramp, as a fraction of the commanded speed", "",
+       Range::aboveUpTo(0, 1)},
+      {"hold_speed", &C::hold_speed, "speed to return to a held position", "m/s",
+       Range::aboveUpTo(0, 5)},
+      {"surface_depth", &C::surface_depth, "SURFACE is reached at or above this depth", "m",
+       Range::closed(0, 100)},
+      {"max_depth", &C::max_depth, "deeper starts the MAX_DEPTH safety manoeuvre", "m",
+       Range::aboveUpTo(0, 10000)},
+      {"min_altitude", &C::min_altitude,
+       "a known altitude below this starts the MIN_ALTITUDE safety manoeuvre", "m",
+       Range::closed(0, 1000)},
+      {"navigation_timeout", &C::navigation_timeout,
+       "without nav/odometry this long starts the NAVIGATION_LOST safety manoeuvre", "s",
+       Range::aboveUpTo(0, 3600)},
+      {"safety_clear_time", &C::safety_clear_time,
+       "a safety condition gone this long ends the manoeuvre (the command is dropped)", "s",
+       Range::closed(0, 3600)},
+  };
+  return kTable;
+}
+
 void ControllerOptions::check() const {
-  struct Bound {
-    const char* name;
-    double value;
-    double min;
-    bool min_exclusive;
-  };
-  const Bound bounds[] = {
-      {"heading_kp", heading_kp, 0.0, false},
-      {"heading_ki", heading_ki, 0.0, false},
-      {"heading_kd", heading_kd, 0.0, false},
-      {"heading_integral_limit", heading_integral_limit, 0.0, false},
-      {"depth_kp", depth_kp, 0.0, false},
-      {"depth_ki", depth_ki, 0.0, false},
-      {"depth_kd", depth_kd, 0.0, false},
-      {"depth_integral_limit", depth_integral_limit, 0.0, false},
-      {"surge_kp", surge_kp, 0.0, false},
-      {"surge_ki", surge_ki, 0.0, false},
-      {"surge_integral_limit", surge_integral_limit, 0.0, false},
-      {"default_surge_speed", default_surge_speed, 0.0, true},
-      {"max_surge_speed", max_surge_speed, 0.0, true},
-      {"default_tolerance", default_tolerance, 0.0, true},
-      {"slow_down_radius", slow_down_radius, 0.0, true},
-      {"min_approach_fraction", min_approach_fraction, 0.0, true},
-      {"hold_speed", hold_speed, 0.0, true},
-      {"surface_depth", surface_depth, 0.0, false},
-      {"max_depth", max_depth, 0.0, true},
-      {"min_altitude", min_altitude, 0.0, false},
-      {"navigation_timeout", navigation_timeout, 0.0, true},
-      {"safety_clear_time", safety_clear_time, 0.0, false},
-  };
-  for (const Bound& b : bounds) {
-    if (!std::isfinite(b.value) || (b.min_exclusive ? b.value <= b.min : b.value < b.min)) {
-      throw ConfigError(std::string("controller.") + b.name + ": expected a finite number " +
-                        (b.min_exclusive ? "> " : ">= ") + number(b.min) + ", got " +
-                        number(b.value));
-    }
-  }
-  if (!(turn_in_place_angle > 0 && turn_in_place_angle <= M_PI / 2)) {
-    throw ConfigError("controller.turn_in_place_angle: expected a number in (0, pi/2] rad, got " +
-                      number(turn_in_place_angle));
-  }
-  if (min_approach_fraction > 1) {
-    throw ConfigError("controller.min_approach_fraction: expected a number <= 1, got " +
-                      number(min_approach_fraction));
-  }
+  config::checkOptions<ConfigError>(*this, table(), "controller.");
   if (default_surge_speed > max_surge_speed) {
     throw ConfigError("controller.default_surge_speed: " + number(default_surge_speed) +
                       " m/s exceeds controller.max_surge_speed " + number(max_surge_speed));

@@ -160,7 +160,11 @@ struct ControllerOptions {
   /// Vehicle model used for feed-forward (drag, buoyancy) and thrust allocation.
   VehicleModel model;
 
-  /// Throws ConfigError naming the field ("controller.depth_kp: ...").
+  /// The numeric fields with meaning, unit and range, declared once: check() and the
+  /// controller component's `controller.*` parameters (so `auv run controller --help`).
+  static const config::OptionTable<ControllerOptions>& table();
+  /// Throws ConfigError naming the field ("controller.depth_kp: ..."): a range of table(),
+  /// default_surge_speed above max_surge_speed, the model's check().
   void check() const;
 };
 

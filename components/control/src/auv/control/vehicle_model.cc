@@ -27,51 +27,49 @@ double integrateVelocity(double v, double force, double mass, double linear, dou
 
 }  // namespace
 
-const std::vector<VehicleModel::Field>& VehicleModel::fields() {
+const config::OptionTable<VehicleModel>& VehicleModel::table() {
+  using config::Range;
   using V = VehicleModel;
-  static const std::vector<Field> list = {
-      {"length", &V::length, 0.0, true, 100.0},
-      {"radius", &V::radius, 0.0, true, 10.0},
-      {"mass", &V::mass, 0.0, true, kInf},
-      {"yaw_inertia", &V::yaw_inertia, 0.0, true, kInf},
-      {"added_mass_surge", &V::added_mass_surge, 0.0, false, kInf},
-      {"added_mass_sway", &V::added_mass_sway, 0.0, false, kInf},
-      {"added_mass_heave", &V::added_mass_heave, 0.0, false, kInf},
-      {"added_inertia_yaw", &V::added_inertia_yaw, 0.0, false, kInf},
-      {"drag_linear_surge", &V::drag_linear_surge, 0.0, false, kInf},
-      {"drag_quadratic_surge", &V::drag_quadratic_surge, 0.0, false, kInf},
-      {"drag_linear_sway", &V::drag_linear_sway, 0.0, false, kInf},
-      {"drag_quadratic_sway", &V::drag_quadratic_sway, 0.0, false, kInf},
-      {"drag_linear_heave", &V::drag_linear_heave, 0.0, false, kInf},
-      {"drag_quadratic_heave", &V::drag_quadratic_heave, 0.0, false, kInf},
-      {"drag_linear_yaw", &V::drag_linear_yaw, 0.0, false, kInf},
-      {"drag_quadratic_yaw", &V::drag_quadratic_yaw, 0.0, false, kInf},
-      {"max_thrust_forward", &V::max_thrust_forward, 0.0, true, kInf},
-      {"max_thrust_reverse", &V::max_thrust_reverse, 0.0, true, kInf},
-      {"thruster_time_constant", &V::thruster_time_constant, 0.0, false, 60.0},
-      {"thruster_spacing", &V::thruster_spacing, 0.0, true, 10.0},
-      {"net_buoyancy", &V::net_buoyancy, -kInf, false, kInf},
-      {"max_surge_speed", &V::max_surge_speed, 0.0, true, kInf},
-      {"max_sway_speed", &V::max_sway_speed, 0.0, true, kInf},
-      {"max_heave_speed", &V::max_heave_speed, 0.0, true, kInf},
-      {"max_yaw_rate", &V::max_yaw_rate, 0.0, true, kInf},
+  const Range positive = Range::above(0.0), non_negative = Range::atLeast(0.0);
+  static const config::OptionTable<V> kTable = {
+      {"length", &V::length, "hull length (collision checks)", "m", Range::aboveUpTo(0, 100)},
+      {"radius", &V::radius, "hull radius (collision checks)", "m", Range::aboveUpTo(0, 10)},
+      {"mass", &V::mass, "rigid-body mass", "kg", positive},
+      {"yaw_inertia", &V::yaw_inertia, "rigid-body moment of inertia about body z", "kg m^2",
+       positive},
+      {"added_mass_surge", &V::added_mass_surge, "added mass in surge", "kg", non_negative},
+      {"added_mass_sway", &V::added_mass_sway, "added mass in sway", "kg", non_negative},
+      {"added_mass_heave", &V::added_mass_heave, "added mass in heave", "kg", non_negative},
+      {"added_inertia_yaw", &V::added_inertia_yaw, "added inertia in yaw", "kg m^2", non_negative},
+      {"drag_linear_surge", &V::drag_linear_surge, "linear surge drag", "N/(m/s)", non_negative},
+      {"drag_quadratic_surge", &V::drag_quadratic_surge, "quadratic surge drag", "N/(m/s)^2",
+       non_negative},
+      {"drag_linear_sway", &V::drag_linear_sway, "linear sway drag", "N/(m/s)", non_negative},
+      {"drag_quadratic_sway", &V::drag_quadratic_sway, "quadratic sway drag", "N/(m/s)^2",
+       non_negative},
+      {"drag_linear_heave", &V::drag_linear_heave, "linear heave drag", "N/(m/s)", non_negative},
+      {"drag_quadratic_heave", &V::drag_quadratic_heave, "quadratic heave drag", "N/(m/s)^2",
+       non_negative},
+      {"drag_linear_yaw", &V::drag_linear_yaw, "linear yaw drag", "N m/(rad/s)", non_negative},
+      {"drag_quadratic_yaw", &V::drag_quadratic_yaw, "quadratic yaw drag", "N m/(rad/s)^2",
+       non_negative},
+      {"max_thrust_forward", &V::max_thrust_forward, "thrust of one thruster at +1", "N", positive},
+      {"max_thrust_reverse", &V::max_thrust_reverse, "thrust of one thruster at -1", "N", positive},
+      {"thruster_time_constant", &V::thruster_time_constant,
+       "first-order thrust response; 0 = instantaneous", "s", Range::closed(0, 60)},
+      {"thruster_spacing", &V::thruster_spacing,
+       "lateral distance between the horizontal thrusters", "m", Range::aboveUpTo(0, 10)},
+      {"net_buoyancy", &V::net_buoyancy, "buoyancy minus weight (> 0 floats)", "N", Range::any()},
+      {"max_surge_speed", &V::max_surge_speed, "hard limit of |surge|", "m/s", positive},
+      {"max_sway_speed", &V::max_sway_speed, "hard limit of |sway|", "m/s", positive},
+      {"max_heave_speed", &V::max_heave_speed, "hard limit of |heave|", "m/s", positive},
+      {"max_yaw_rate", &V::max_yaw_rate, "hard limit of |yaw rate|", "rad/s", positive},
   };
-  return list;
+  return kTable;
 }
 
 void VehicleModel::check() const {
-  for (const Field& f : fields()) {
-    const double value = this->*f.member;
-    const bool below = f.min_exclusive ? value <= f.min : value < f.min;
-    if (!std::isfinite(value) || below || value > f.max) {
-      std::ostringstream out;
-      out << "vehicle." << f.name << ": expected a finite number " << (f.min_exclusive ? ">" : ">=")
-          << " " << f.min;
-      if (f.max < kInf) out << " and <= " << f.max;
-      out << ", got " << value;
-      throw ConfigError(out.str());
-    }
-  }
+  config::checkOptions<ConfigError>(*this, table(), "vehicle.");
   const struct {
     const char* dof;
     double linear, quadratic;

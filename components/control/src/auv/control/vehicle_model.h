@@ -22,6 +22,7 @@
 #include <Eigen/Geometry>
 
 #include "auv/config/errors.h"
+#include "auv/config/option_table.h"
 
 namespace auv::control {
 
@@ -109,16 +110,9 @@ struct VehicleModel {
   double max_heave_speed = 0.6;  ///< m/s, |heave|
   double max_yaw_rate = 0.6;     ///< rad/s, |yaw rate|
 
-  /// One numeric field with its valid range: check() and the simulator's scenario reader share
-  /// this list, so the two cannot drift apart.
-  struct Field {
-    const char* name;
-    double VehicleModel::*member;
-    double min;
-    bool min_exclusive;  ///< true: the value must be > min
-    double max;
-  };
-  static const std::vector<Field>& fields();
+  /// Every field with meaning, unit and range, declared once: check(), the simulator's
+  /// scenario reader and the controller's `controller.model.*` parameters use it.
+  static const config::OptionTable<VehicleModel>& table();
 
   /// Throws ConfigError naming the field ("vehicle.<name>") when a value is non-finite or out
   /// of range.

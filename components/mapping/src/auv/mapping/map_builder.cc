@@ -29,14 +29,30 @@ Eigen::Vector3d beamDirection(double beam_angle_rad) {
   return Eigen::Vector3d(std::cos(beam_angle_rad), std::sin(beam_angle_rad), 0.0);
 }
 
+const config::OptionTable<MapBuilder::Options>& MapBuilder::Options::table() {
+  using config::Range;
+  using O = Options;
+  static const config::OptionTable<O> kTable = {
+      {"resolution", &O::resolution, "map leaf size", "m", Range::closed(0.01, 10.0)},
+      {"prob_hit", &O::prob_hit, "occupancy probability of a cell with a return", "",
+       Range::open(0.5, 1.0)},
+      {"prob_miss", &O::prob_miss, "occupancy probability of a cell a beam passed through", "",
+       Range::open(0.0, 0.5)},
+      {"clamping_min", &O::clamping_min, "lower occupancy probability clamp (<= prob_miss)", "",
+       Range::open(0.0, 0.5)},
+      {"clamping_max", &O::clamping_max, "upper occupancy probability clamp (>= prob_hit)", "",
+       Range::open(0.5, 1.0)},
+      {"occupancy_threshold", &O::occupancy_threshold,
+       "probability above which a cell is occupied (between the clamps)", "",
+       Range::open(0.0, 1.0)},
+  };
+  return kTable;
+}
+
 void MapBuilder::Options::check() const {
-  requireRange(resolution >= 0.01 && resolution <= 10.0, "resolution must be in [0.01, 10] m");
-  requireRange(prob_hit > 0.5 && prob_hit < 1.0, "prob_hit must be in (0.5, 1)");
-  requireRange(prob_miss > 0.0 && prob_miss < 0.5, "prob_miss must be in (0, 0.5)");
-  requireRange(clamping_min > 0.0 && clamping_min <= prob_miss,
-               "clamping_min must be in (0, prob_miss]");
-  requireRange(clamping_max >= prob_hit && clamping_max < 1.0,
-               "clamping_max must be in [prob_hit, 1)");
+  config::checkOptions(*this, table(), "MapBuilder: ");
+  requireRange(clamping_min <= prob_miss, "clamping_min must be in (0, prob_miss]");
+  requireRange(clamping_max >= prob_hit, "clamping_max must be in [prob_hit, 1)");
   requireRange(occupancy_threshold > clamping_min && occupancy_threshold < clamping_max,
                "occupancy_threshold must be in (clamping_min, clamping_max)");
 }

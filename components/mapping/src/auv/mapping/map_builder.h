@@ -32,6 +32,7 @@
 
 #include <octomap/OcTree.h>
 
+#include "auv/config/option_table.h"
 #include "auv/mapping/changed_cells.h"
 
 namespace auv::mapping {
@@ -59,14 +60,15 @@ class MapBuilder {
  public:
   /// Probability defaults are OctoMap's own, so a replica built as a plain OcTree (e.g. from a
   /// FULL update) clamps the same way as the builder.
+  /// Meaning, unit and range of each number: table() (map_builder.cc), declared once.
   struct Options {
-    double resolution = 0.5;  ///< m, leaf size, in [0.01, 10]; 0.5 suits a 20 m sonar.
-    double prob_hit = 0.7;    ///< probability a cell with a return is occupied, in (0.5, 1).
-    double prob_miss = 0.4;   ///< probability a cell a beam passed through is occupied, (0, 0.5).
-    double clamping_min = 0.1192;      ///< lower probability clamp, in (0, prob_miss]; keeps cells
-                                       ///< able to become occupied again after long free evidence.
-    double clamping_max = 0.971;       ///< upper probability clamp, in [prob_hit, 1).
-    double occupancy_threshold = 0.5;  ///< probability above which a cell counts as occupied.
+    double resolution = 0.5;  ///< 0.5 m suits a 20 m sonar.
+    double prob_hit = 0.7;
+    double prob_miss = 0.4;
+    /// Keeps cells able to become occupied again after long free evidence.
+    double clamping_min = 0.1192;
+    double clamping_max = 0.971;
+    double occupancy_threshold = 0.5;
     /// A beam without an echo clears cells only up to the first one the map holds occupied,
     /// that one included (one miss: isolated false returns still fade). Why: a beam grazing a
     /// wall returns too weak an echo to detect, and its single-ray model would otherwise run on
@@ -74,7 +76,13 @@ class MapBuilder {
     /// still clear through occupied cells, which removes stale copies of walls left by
     /// navigation drift.
     bool no_return_stops_at_occupied = true;
-    void check() const;  ///< Throws std::invalid_argument naming the bad field.
+    /// The numeric fields with meaning, unit and range: check() and the mapping component's
+    /// parameters (so `auv run mapping --help`) come from it.
+    static const config::OptionTable<Options>& table();
+    /// Throws std::invalid_argument naming the bad field: a range of table(), or the clamps
+    /// and threshold against the probabilities (clamping_min <= prob_miss, clamping_max >=
+    /// prob_hit, occupancy_threshold between the clamps).
+    void check() const;
   };
 
   MapBuilder() : MapBuilder(Options{}) {}

@@ -1,5 +1,6 @@
 #include "auv/control/components/controller_component.h"
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 #include <string>
@@ -7,6 +8,7 @@
 
 #include "auv/control/components/odometry_conversion.h"
 #include "auv/interfaces/msg_time.h"
+#include "auv/interfaces/option_parameters.h"
 
 namespace auv::control {
 namespace {
@@ -21,95 +23,21 @@ static_assert(static_cast<uint32_t>(SafetyReason::NAVIGATION_LOST) ==
               msg::SAFETY_REASON_NAVIGATION_LOST);
 static_assert(static_cast<uint32_t>(SafetyReason::OTHER) == msg::SAFETY_REASON_OTHER);
 
-constexpr double kBig = 1e6;
-
-// A double parameter bound to a field, declared with its description, unit and range.
-template <class Owner>
-struct DoubleParameter {
-  const char* name;
-  double Owner::*field;
-  const char* description;
-  const char* unit;
-  double min;
-  double max;
-};
-
-const std::vector<DoubleParameter<ControllerOptions>>& controllerParameters() {
-  using C = ControllerOptions;
-  static const std::vector<DoubleParameter<C>> list = {
-      {"heading_kp", &C::heading_kp, "heading PID proportional gain", "N m/rad", 0, kBig},
-      {"heading_ki", &C::heading_ki, "heading PID integral gain", "N m/(rad s)", 0, kBig},
-      {"heading_kd", &C::heading_kd, "heading PID yaw-rate damping", "N m/(rad/s)", 0, kBig},
-      {"heading_integral_limit", &C::heading_integral_limit, "bound of the heading integral term",
-       "N m", 0, kBig},
-      {"depth_kp", &C::depth_kp, "depth PI proportional gain", "N/m", 0, kBig},
-      {"depth_ki", &C::depth_ki, "depth PI integral gain", "N/(m s)", 0, kBig},
-      {"depth_kd", &C::depth_kd, "depth heave-velocity damping", "N/(m/s)", 0, kBig},
-      {"depth_integral_limit", &C::depth_integral_limit, "bound of the depth integral term", "N", 0,
-       kBig},
-      {"surge_kp", &C::surge_kp, "surge-speed PI proportional gain", "N/(m/s)", 0, kBig},
-      {"surge_ki", &C::surge_ki, "surge-speed PI integral gain", "N/m", 0, kBig},
-      {"surge_integral_limit", &C::surge_integral_limit, "bound of the surge integral term", "N", 0,
-       kBig},
-      {"default_surge_speed", &C::default_surge_speed,
-       "WAYPOINT speed when the command's surge_speed is 0", "m/s", 0.01, 5},
-      {"max_surge_speed", &C::max_surge_speed, "largest commanded surge speed accepted", "m/s",
-       0.01, 5},
-      {"default_tolerance", &C::default_tolerance,
-       "WAYPOINT tolerance when the command's is 0, and the HOLD radius", "m", 0.01, 100},
-      {"slow_down_radius", &C::slow_down_radius,
-       "horizontal distance to a waypoint where the speed starts ramping down", "m", 0.01, 1000},
-      {"turn_in_place_angle", &C::turn_in_place_angle,
-       "heading error beyond which the vehicle turns on the spot (pi/2: speed * cos(error))", "rad",
-       0.01, M_PI / 2},
-      {"min_approach_fraction", &C::min_approach_fraction,
-       "floor of the slow-down ramp, as a fraction of the commanded speed", "", 0.01, 1},
-      {"hold_speed", &C::hold_speed, "speed to return to a held position", "m/s", 0.01, 5},
-      {"surface_depth", &C::surface_depth, "SURFACE is reached at or above this depth", "m", 0,
-       100},
-      {"max_depth", &C::max_depth, "deeper starts the MAX_DEPTH safety manoeuvre", "m", 0.1, 10000},
-      {"min_altitude", &C::min_altitude,
-       "a known altitude below this starts the MIN_ALTITUDE safety manoeuvre", "m", 0, 1000},
-      {"navigation_timeout", &C::navigation_timeout,
-       "without nav/odometry this long starts the NAVIGATION_LOST safety manoeuvre", "s", 0.01,
-       3600},
-      {"safety_clear_time", &C::safety_clear_time,
-       "a safety condition gone this long ends the manoeuvre (the command is dropped)", "s", 0,
-       3600},
-  };
-  return list;
-}
-
-// The part of the vehicle model the controller uses (feed-forward and allocation).
-const std::vector<DoubleParameter<VehicleModel>>& modelParameters() {
-  using V = VehicleModel;
-  static const std::vector<DoubleParameter<V>> list = {
-      {"drag_linear_surge", &V::drag_linear_surge, "model: linear surge drag", "N/(m/s)", 0, kBig},
-      {"drag_quadratic_surge", &V::drag_quadratic_surge, "model: quadratic surge drag", "N/(m/s)^2",
-       0, kBig},
-      {"max_thrust_forward", &V::max_thrust_forward, "model: thrust of one thruster at +1", "N",
-       0.01, kBig},
-      {"max_thrust_reverse", &V::max_thrust_reverse, "model: thrust of one thruster at -1", "N",
-       0.01, kBig},
-      {"thruster_spacing", &V::thruster_spacing,
-       "model: lateral distance between the horizontal thrusters", "m", 0.01, 10},
-      {"net_buoyancy", &V::net_buoyancy, "model: buoyancy minus weight (> 0 floats)", "N", -kBig,
-       kBig},
-  };
-  return list;
+// The part of the vehicle model the controller uses (feed-forward and allocation), declared as
+// `controller.model.<name>` with the model's own meaning, unit and range.
+config::OptionTable<VehicleModel> feedForwardModel() {
+  const std::vector<std::string> used = {"drag_linear_surge",  "drag_quadratic_surge",
+                                         "max_thrust_forward", "max_thrust_reverse",
+                                         "thruster_spacing",   "net_buoyancy"};
+  config::OptionTable<VehicleModel> table;
+  for (const auto& option : VehicleModel::table()) {
+    if (std::find(used.begin(), used.end(), option.name) != used.end()) table.push_back(option);
+  }
+  return table;
 }
 
 const char* faultActionName(FaultAction action) {
   return action == FaultAction::STOP ? "stop" : "hold_depth";
-}
-
-template <class Owner>
-void declareAll(interfaces::Parameters& p, const std::string& prefix,
-                const std::vector<DoubleParameter<Owner>>& list, Owner& owner) {
-  for (const auto& d : list) {
-    owner.*d.field = p.declare<double>(prefix + d.name, owner.*d.field,
-                                       {d.description, d.unit, d.min, d.max, {}, false});
-  }
 }
 
 void stamp(msg::Header& header, const interfaces::Clock& clock, const char* frame) {
@@ -133,8 +61,10 @@ void ControllerComponent::configure(interfaces::Node& node) {
                          100.0,
                          {},
                          true});
-  declareAll(p, "controller.", controllerParameters(), options_.controller);
-  declareAll(p, "controller.model.", modelParameters(), options_.controller.model);
+  interfaces::declareOptions(p, "controller.", ControllerOptions::table(), options_.controller,
+                             /*read_only=*/false);
+  interfaces::declareOptions(p, "controller.model.", feedForwardModel(), options_.controller.model,
+                             /*read_only=*/false);
   const std::string fault_action = p.declare<std::string>(
       "controller.fault_action", faultActionName(options_.controller.fault_action),
       {"after a command timeout: hold_depth (horizontal thrusters off, keep depth) or stop (all "

@@ -1,6 +1,7 @@
 #include "auv/mapping/components/mapping_component.h"
 #include "auv/interfaces/msg_eigen.h"
 #include "auv/interfaces/msg_time.h"
+#include "auv/interfaces/option_parameters.h"
 #include "auv/mapping/components/message_conversions.h"
 
 #include <filesystem>
@@ -14,23 +15,8 @@ void MappingComponent::configure(interfaces::Node& node) {
   node_ = &node;
   auto& p = node.parameters();
   auto& m = options_.map;
-  m.resolution =
-      p.declare<double>("resolution", m.resolution, {"map leaf size", "m", 0.01, 10.0, {}, true});
-  m.prob_hit = p.declare<double>(
-      "prob_hit", m.prob_hit,
-      {"occupancy probability of a cell with a return", "", 0.501, 0.999, {}, true});
-  m.prob_miss = p.declare<double>(
-      "prob_miss", m.prob_miss,
-      {"occupancy probability of a cell a beam passed through", "", 0.001, 0.499, {}, true});
-  m.clamping_min = p.declare<double>(
-      "clamping_min", m.clamping_min,
-      {"lower occupancy probability clamp (<= prob_miss)", "", 0.001, 0.499, {}, true});
-  m.clamping_max = p.declare<double>(
-      "clamping_max", m.clamping_max,
-      {"upper occupancy probability clamp (>= prob_hit)", "", 0.501, 0.999, {}, true});
-  m.occupancy_threshold =
-      p.declare<double>("occupancy_threshold", m.occupancy_threshold,
-                        {"probability above which a cell is occupied", "", 0.001, 0.999, {}, true});
+  // Meaning, unit and range from the builder's own table: what check() accepts.
+  interfaces::declareOptions(p, "", mapping::MapBuilder::Options::table(), m, /*read_only=*/true);
   m.no_return_stops_at_occupied =
       p.declare<bool>("no_return_stops_at_occupied", m.no_return_stops_at_occupied,
                       {"a beam without echo clears free space only up to the first occupied cell",
