@@ -407,19 +407,10 @@ TEST(PlanningComponentTest, NewQueryCancelsTheActiveWaypointAsReplaced) {
   });
 }
 
-/// A closed square ring (one cell thick) around `centre`, 6 m inside: unreachable, valid goal.
+/// A map with a closed ring around `centre` (test_maps.h): unreachable, valid goal.
 octomap::OcTree ringAround(const Eigen::Vector3d& centre) {
   octomap::OcTree map(kResolution);
-  const double in = 3.0;
-  const double out = 3.5;
-  const double z0 = kDepth - 1.0;
-  const double z1 = kDepth + 1.0;
-  const double x = centre.x();
-  const double y = centre.y();
-  addOccupiedBox(map, {x - out, y - out, z0}, {x - in, y + out, z1});
-  addOccupiedBox(map, {x + in, y - out, z0}, {x + out, y + out, z1});
-  addOccupiedBox(map, {x - out, y - out, z0}, {x + out, y - in, z1});
-  addOccupiedBox(map, {x - out, y + in, z0}, {x + out, y + out, z1});
+  addRing(map, centre, kDepth);
   return map;
 }
 

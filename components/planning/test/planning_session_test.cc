@@ -18,6 +18,7 @@ namespace auv::planning {
 namespace {
 
 using testing::addOccupiedBox;
+using testing::addRing;
 using testing::kResolution;
 
 #define EXPECT_CONTAINS(text, part) \
@@ -62,20 +63,6 @@ Eigen::AlignedBox3d addColumn(octomap::OcTree& map, const Eigen::Vector3d& at) {
   const Eigen::Vector3d max(x + 0.25, y + 0.25, kDepth + 1.0);
   addOccupiedBox(map, min, max);
   return Eigen::AlignedBox3d(min, max);
-}
-
-/// A closed square ring (one cell thick) around `centre`, 3 m inside: an unreachable goal.
-void addRing(octomap::OcTree& map, const Eigen::Vector3d& centre) {
-  const double in = 3.0;
-  const double out = 3.5;
-  const double z0 = kDepth - 1.0;
-  const double z1 = kDepth + 1.0;
-  const double x = centre.x();
-  const double y = centre.y();
-  addOccupiedBox(map, {x - out, y - out, z0}, {x - in, y + out, z1});
-  addOccupiedBox(map, {x + in, y - out, z0}, {x + out, y + out, z1});
-  addOccupiedBox(map, {x - out, y - out, z0}, {x + out, y - in, z1});
-  addOccupiedBox(map, {x - out, y + in, z0}, {x + out, y + out, z1});
 }
 
 PlanningQuery makeQuery(uint64_t id, const Eigen::Vector3d& start, const Eigen::Vector3d& goal,
@@ -472,7 +459,7 @@ class NoSolutionTest : public PlanningSessionTest {
 
 TEST_F(NoSolutionTest, EnclosedGoalIsCancelledOnceTheBudgetIsSpentThenAnsweredWhenItOpens) {
   const Eigen::Vector3d goal(15.0, 0.0, kDepth);
-  addRing(*map, goal);
+  addRing(*map, goal, kDepth);
   ASSERT_TRUE(start(makeQuery(1, kStart, goal, 1.0)));
   request(0);
   // 8 slices of 1/8 s: exactly the budget, not more.
@@ -515,7 +502,7 @@ TEST_F(PlanningSessionTest, BudgetCountsFromTheLastSolution) {
 
   // The goal is enclosed: every solution goes, the budget runs from the last one.
   auto ring = std::make_unique<octomap::OcTree>(kResolution);
-  addRing(*ring, goal);
+  addRing(*ring, goal, kDepth);
   replaceMap(std::move(ring));
   for (int i = 0; i < 8; ++i) slice(0.125);
   ASSERT_EQ(session.planner()->bestSolution(), nullptr);
@@ -529,7 +516,7 @@ TEST_F(PlanningSessionTest, BudgetCountsFromTheLastSolution) {
   replaceMap(std::make_unique<octomap::OcTree>(kResolution));
   ASSERT_TRUE(solve());
   ring = std::make_unique<octomap::OcTree>(kResolution);
-  addRing(*ring, goal);
+  addRing(*ring, goal, kDepth);
   replaceMap(std::move(ring));
   for (int i = 0; i < 9; ++i) slice(0.125);
   EXPECT_EQ(cancels.size(), 2u);

@@ -27,6 +27,17 @@ inline void addOccupiedBox(octomap::OcTree& tree, const Eigen::Vector3d& min,
   }
 }
 
+/// A closed square ring (one cell thick, 2 m tall) around `centre` at `depth`, 3 m inside: a
+/// goal inside it is valid but unreachable.
+inline void addRing(octomap::OcTree& map, const Eigen::Vector3d& centre, double depth) {
+  const double in = 3.0, out = 3.5, z0 = depth - 1.0, z1 = depth + 1.0;
+  const double x = centre.x(), y = centre.y();
+  addOccupiedBox(map, {x - out, y - out, z0}, {x - in, y + out, z1});
+  addOccupiedBox(map, {x + in, y - out, z0}, {x + out, y + out, z1});
+  addOccupiedBox(map, {x - out, y - out, z0}, {x + out, y - in, z1});
+  addOccupiedBox(map, {x - out, y + in, z0}, {x + out, y + out, z1});
+}
+
 /// A 2-D world (fixed depth 5 m) x in [0, size], y in [-size / 2, size / 2] (size 20 m unless
 /// set before build()), its map and planning space.
 struct FlatWorld {

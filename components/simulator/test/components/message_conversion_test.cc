@@ -53,14 +53,5 @@ TEST(MessageConversion, VelocityIsMeasuredOnlyWithDvlLockTruthOrNoFlagsAtAll) {
   EXPECT_TRUE(toControllerNavigation(unflagged, ok).velocity_measured);
 }
 
-TEST(MessageConversion, UnsetOrientationIsReportedNotTurnedIntoAYaw) {
-  msg::Odometry odometry = toOdometry(cruising(nav_source::kDvlValid));
-  odometry.pose().pose().orientation(msg::Quaternion{});
-  odometry.pose().pose().orientation().w(0.0);
-  bool orientation_ok = true;
-  toControllerNavigation(odometry, orientation_ok);
-  EXPECT_FALSE(orientation_ok);
-}
-
 }  // namespace
 }  // namespace auv::sim
