@@ -235,53 +235,53 @@ VerifiedPair verifyPair(const PairGeometryInput& input, const VerificationOption
   return pair;
 }
 
-MatchStageResult runMatchStage(const Survey& survey, const MatchStageOptions& options) {
-  options.check();
-  const auto start = std::chrono::steady_clock::now();
-  const fs::path features_folder = survey.root() / "features";
-  const FeatureStore store(features_folder);
-  const std::vector<FeatureIndexEntry>& entries = store.images();
-  if (entries.size() < 2) {
-    throw StageError(kStage, features_folder.string() + "/index.csv lists " +
-                                 std::to_string(entries.size()) +
-                                 " image(s): at least 2 are needed");
-  }
+namespace {
 
-  // The vehicle's navigation: the option, else the survey's navigation.tum when it has one.
-  fs::path navigation = options.navigation;
-  if (navigation.empty() && fs::exists(survey.root() / "navigation.tum")) {
-    navigation = survey.root() / "navigation.tum";
+/// The vehicle's navigation: the option, else the survey's navigation.tum when it has one;
+/// `path` is set to the file read (empty: none).
+std::vector<TimedPosition> readNavigation(const Survey& survey, const MatchStageOptions& options,
+                                          fs::path& path) {
+  path = options.navigation;
+  if (path.empty() && fs::exists(survey.root() / "navigation.tum")) {
+    path = survey.root() / "navigation.tum";
   }
-  std::vector<TimedPosition> trajectory;
-  if (!navigation.empty()) {
-    try {
-      trajectory = readTumTrajectory(navigation);
-    } catch (const std::exception& e) {
-      throw StageError(kStage, std::string("navigation: ") + e.what());
-    }
+  if (path.empty()) return {};
+  try {
+    return readTumTrajectory(path);
+  } catch (const std::exception& e) {
+    throw StageError(kStage, std::string("navigation: ") + e.what());
   }
+}
 
-  // Images with their camera order, times and navigation positions; cameras with their
-  // calibration.
+/// The images with their camera order, times and navigation positions, and the cameras with
+/// their calibration.
+struct PlacedImages {
+  std::vector<PairImage> images;
   std::map<std::string, std::unique_ptr<scene::Camera>> cameras;
+  size_t placed = 0;  // images with a navigation position
+};
+
+PlacedImages placeImages(const Survey& survey, const std::vector<FeatureIndexEntry>& entries,
+                         const std::vector<TimedPosition>& trajectory) {
+  PlacedImages out;
+  out.images.resize(entries.size());
   std::map<std::string, std::map<std::string, double>> times;
-  std::vector<PairImage> images(entries.size());
   std::map<std::string, int> next_sequence;
-  size_t images_placed = 0;  // with a navigation position
   for (size_t i = 0; i < entries.size(); ++i) {
     const FeatureIndexEntry& e = entries[i];
-    if (!cameras.count(e.camera)) {
+    if (!out.cameras.count(e.camera)) {
       // Without corrected/<camera>.yaml (uncalibrated images) the pair takes a fundamental
       // matrix instead of an essential one.
       const fs::path yaml = survey.corrected() / (e.camera + ".yaml");
       std::error_code error;
-      cameras[e.camera] = fs::exists(yaml, error)
-                              ? std::make_unique<scene::Camera>(calibration::readUndistortedCamera(
-                                    yaml, static_cast<uint32_t>(cameras.size() + 1), kStage))
-                              : nullptr;
+      out.cameras[e.camera] =
+          fs::exists(yaml, error)
+              ? std::make_unique<scene::Camera>(calibration::readUndistortedCamera(
+                    yaml, static_cast<uint32_t>(out.cameras.size() + 1), kStage))
+              : nullptr;
       times[e.camera] = keyframeTimes(survey.keyframes() / e.camera / "index.csv");
     }
-    PairImage& image = images[i];
+    PairImage& image = out.images[i];
     image.name = e.image;
     image.camera = e.camera;
     image.sequence = next_sequence[e.camera]++;
@@ -290,58 +290,58 @@ MatchStageResult runMatchStage(const Survey& survey, const MatchStageOptions& op
     if (t != times[e.camera].end()) image.time_s = t->second;
     if (!trajectory.empty() && !std::isnan(image.time_s)) {
       image.has_position = positionAt(trajectory, image.time_s, image.position);
-      if (image.has_position) ++images_placed;
+      if (image.has_position) ++out.placed;
     }
   }
-  if (!trajectory.empty()) {
-    std::cout << "match: navigation " << navigation.string() << ": " << images_placed << " of "
-              << images.size() << " keyframes placed; appearance pairs at most "
-              << options.pairs.loop_max_distance_m << " m apart" << std::endl;
-  }
+  return out;
+}
 
-  // Appearance similarity for loop candidates (only where pairs are not exhaustive).
-  cv::Mat similarity;
-  const bool exhaustive = static_cast<int>(entries.size()) <= options.pairs.exhaustive_max_images;
-  if (!exhaustive && options.pairs.loop_top_k > 0) {
-    constexpr int kTrainingRows = 30000;
-    const int per_image = std::max(1, kTrainingRows / static_cast<int>(entries.size()));
-    std::mt19937_64 random(7);
-    cv::Mat training;
-    {
-      Progress progress("match: vocabulary sample", "images", entries.size());
-      for (const FeatureIndexEntry& e : entries) {
-        const ImageFeatures f = store.read(e.image);
-        std::vector<int> rows(f.size());
-        std::iota(rows.begin(), rows.end(), 0);
-        std::shuffle(rows.begin(), rows.end(), random);
-        for (int r = 0; r < std::min<int>(per_image, static_cast<int>(rows.size())); ++r) {
-          training.push_back(f.descriptors.row(rows[r]));
-        }
-        progress.advance();
+/// Appearance similarity of the images for loop candidates: tf-idf histograms over a
+/// vocabulary trained on a sample of the descriptors. Empty when there are too few of them.
+cv::Mat appearanceSimilarity(const FeatureStore& store,
+                             const std::vector<FeatureIndexEntry>& entries,
+                             const MatchStageOptions& options) {
+  constexpr int kTrainingRows = 30000;
+  const int per_image = std::max(1, kTrainingRows / static_cast<int>(entries.size()));
+  std::mt19937_64 random(7);
+  cv::Mat training;
+  {
+    Progress progress("match: vocabulary sample", "images", entries.size());
+    for (const FeatureIndexEntry& e : entries) {
+      const ImageFeatures f = store.read(e.image);
+      std::vector<int> rows(f.size());
+      std::iota(rows.begin(), rows.end(), 0);
+      std::shuffle(rows.begin(), rows.end(), random);
+      for (int r = 0; r < std::min<int>(per_image, static_cast<int>(rows.size())); ++r) {
+        training.push_back(f.descriptors.row(rows[r]));
       }
-    }
-    if (training.rows >= options.pairs.vocabulary_words) {
-      const Vocabulary vocabulary = Vocabulary::train(training, options.pairs.vocabulary_words);
-      std::vector<cv::Mat> histograms(entries.size());
-      Progress progress("match: global descriptors", "images", entries.size());
-      std::atomic<size_t> next{0};
-      auto worker = [&] {
-        for (size_t i = next++; i < entries.size(); i = next++) {
-          histograms[i] = vocabulary.histogram(store.read(entries[i].image).descriptors);
-          progress.advance();
-        }
-      };
-      std::vector<std::thread> pool;
-      for (int t = 1; t < threadCount(options.threads); ++t) pool.emplace_back(worker);
-      worker();
-      for (std::thread& t : pool) t.join();
-      similarity = Vocabulary::similarity(Vocabulary::tfIdf(histograms));
+      progress.advance();
     }
   }
-  const std::vector<CandidatePair> candidates = selectPairs(images, similarity, options.pairs);
+  if (training.rows < options.pairs.vocabulary_words) return cv::Mat();
+  const Vocabulary vocabulary = Vocabulary::train(training, options.pairs.vocabulary_words);
+  std::vector<cv::Mat> histograms(entries.size());
+  Progress progress("match: global descriptors", "images", entries.size());
+  std::atomic<size_t> next{0};
+  auto worker = [&] {
+    for (size_t i = next++; i < entries.size(); i = next++) {
+      histograms[i] = vocabulary.histogram(store.read(entries[i].image).descriptors);
+      progress.advance();
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < threadCount(options.threads); ++t) pool.emplace_back(worker);
+  worker();
+  for (std::thread& t : pool) t.join();
+  return Vocabulary::similarity(Vocabulary::tfIdf(histograms));
+}
 
-  // Match and verify every candidate pair.
-  const int threads = threadCount(options.threads);
+/// Matches and verifies every candidate pair on `threads` threads; the first error ends the
+/// stage.
+std::vector<PairOutcome> matchCandidates(const FeatureStore& store, const PlacedImages& placed,
+                                         const std::vector<CandidatePair>& candidates,
+                                         const MatchStageOptions& options, int threads) {
+  const std::vector<PairImage>& images = placed.images;
   FeatureCache cache(
       store, options.matching,
       static_cast<size_t>(std::max(16, 2 * options.pairs.sequential_window + 4 * threads)));
@@ -359,8 +359,8 @@ MatchStageResult runMatchStage(const Survey& survey, const MatchStageOptions& op
         PairGeometryInput input;
         input.features1 = &f1->features;
         input.features2 = &f2->features;
-        input.camera1 = cameras[images[c.index1].camera].get();
-        input.camera2 = cameras[images[c.index2].camera].get();
+        input.camera1 = placed.cameras.at(images[c.index1].camera).get();
+        input.camera2 = placed.cameras.at(images[c.index2].camera).get();
         input.putative = matchDescriptors(f1->index, f2->index, options.matching);
         PairOutcome& out = outcomes[i];
         out.pair = verifyPair(input, options.verification);
@@ -390,6 +390,40 @@ MatchStageResult runMatchStage(const Survey& survey, const MatchStageOptions& op
   for (std::thread& t : pool) t.join();
   progress.finish();
   if (!first_error.empty()) throw StageError(kStage, first_error);
+  return outcomes;
+}
+
+}  // namespace
+
+MatchStageResult runMatchStage(const Survey& survey, const MatchStageOptions& options) {
+  options.check();
+  const auto start = std::chrono::steady_clock::now();
+  const fs::path features_folder = survey.root() / "features";
+  const FeatureStore store(features_folder);
+  const std::vector<FeatureIndexEntry>& entries = store.images();
+  if (entries.size() < 2) {
+    throw StageError(kStage, features_folder.string() + "/index.csv lists " +
+                                 std::to_string(entries.size()) +
+                                 " image(s): at least 2 are needed");
+  }
+  fs::path navigation;
+  const std::vector<TimedPosition> trajectory = readNavigation(survey, options, navigation);
+  const PlacedImages placed = placeImages(survey, entries, trajectory);
+  const size_t images_placed = placed.placed;
+  if (!trajectory.empty()) {
+    std::cout << "match: navigation " << navigation.string() << ": " << images_placed << " of "
+              << placed.images.size() << " keyframes placed; appearance pairs at most "
+              << options.pairs.loop_max_distance_m << " m apart" << std::endl;
+  }
+  // Appearance similarity for loop candidates (only where pairs are not exhaustive).
+  const bool exhaustive = static_cast<int>(entries.size()) <= options.pairs.exhaustive_max_images;
+  const cv::Mat similarity = !exhaustive && options.pairs.loop_top_k > 0
+                                 ? appearanceSimilarity(store, entries, options)
+                                 : cv::Mat();
+  const std::vector<CandidatePair> candidates =
+      selectPairs(placed.images, similarity, options.pairs);
+  const int threads = threadCount(options.threads);
+  std::vector<PairOutcome> outcomes = matchCandidates(store, placed, candidates, options, threads);
 
   MatchStageResult summary;
   summary.images = entries.size();

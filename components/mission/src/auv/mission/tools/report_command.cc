@@ -189,6 +189,167 @@ struct QueryRecord {
   bool succeeded = false;
 };
 
+/// What the mission log says: the queries in order, the waypoints and how the mission ended.
+struct MissionRecord {
+  std::map<std::string, QueryRecord> queries;  // by query id
+  std::vector<QueryRecord*> ordered;           // by start time
+  std::vector<Eigen::Vector3d> waypoints;
+  std::string final_state = "UNKNOWN", final_message;
+  double start = std::nan(""), end = std::nan("");
+};
+
+/// Reads events.csv and waypoints.csv; a query ends where the next starts, or at the end.
+void readMissionLog(const fs::path& log, const std::vector<Sample>& truth, MissionRecord& m) {
+  for (const auto& row : readTable(log / "events.csv", ',', true)) {
+    if (row.size() < 9) continue;
+    const double t = number(row[0]);
+    const std::string state = row[1].substr(0, row[1].find('/'));
+    const Eigen::Vector3d position(number(row[5]), number(row[6]), number(row[7]));
+    if (std::isnan(m.start)) m.start = t;
+    m.end = t;
+    m.final_state = state;
+    m.final_message = row[8];
+    const std::string query_id = row[3];
+    if (query_id != "0") {
+      QueryRecord& q = m.queries[query_id];
+      if (std::isnan(q.start_t)) {
+        q.start_t = t;
+        q.start = position;
+        q.index = std::stoi(row[2]);
+      }
+    }
+  }
+  for (const auto& row : readTable(log / "waypoints.csv", ',', true)) {
+    if (row.size() >= 6) m.waypoints.push_back({number(row[3]), number(row[4]), number(row[5])});
+  }
+  for (auto& [id, q] : m.queries) m.ordered.push_back(&q);
+  std::sort(m.ordered.begin(), m.ordered.end(),
+            [](const QueryRecord* a, const QueryRecord* b) { return a->start_t < b->start_t; });
+  for (std::size_t i = 0; i < m.ordered.size(); ++i) {
+    QueryRecord& q = *m.ordered[i];
+    q.end_t = i + 1 < m.ordered.size() ? m.ordered[i + 1]->start_t : m.end;
+    q.succeeded = i + 1 < m.ordered.size() || m.final_state == "SUCCEEDED";
+    if (const Sample* s = at(truth, q.end_t)) q.end = s->p;
+    if (const Sample* s = at(truth, q.start_t)) q.start = s->p;
+  }
+}
+
+/// What the simulator's ground truth says of the mission's span.
+struct TruthFacts {
+  std::vector<Eigen::Vector3d> collisions;
+  double min_clearance = std::numeric_limits<double>::infinity();
+  double max_nav_error = 0.0;
+};
+
+TruthFacts readTruthFacts(const fs::path& run, const std::vector<Sample>& truth,
+                          const std::vector<Sample>& estimate, const MissionRecord& m) {
+  TruthFacts facts;
+  for (const auto& row : readTable(run / "ground_truth" / "collisions.csv", ',', true)) {
+    if (row.size() >= 10 && row[9] == "1") {
+      facts.collisions.push_back({number(row[1]), number(row[2]), number(row[3])});
+    }
+  }
+  for (const auto& row : readTable(run / "ground_truth" / "clearance.csv", ',', true)) {
+    if (row.size() >= 2) {
+      const double t = number(row[0]);
+      if (t >= m.start && t <= m.end)
+        facts.min_clearance = std::min(facts.min_clearance, number(row[1]));
+    }
+  }
+  for (const Sample& s : estimate) {
+    if (s.t < m.start || s.t > m.end) continue;
+    if (const Sample* true_sample = at(truth, s.t)) {
+      facts.max_nav_error = std::max(facts.max_nav_error, (true_sample->p - s.p).head<2>().norm());
+    }
+  }
+  return facts;
+}
+
+/// The mapped occupied columns (0.5 m, top-down) of the mission's map.bt, if any.
+std::set<std::pair<int, int>> occupiedColumns(const fs::path& map_file, double column) {
+  std::set<std::pair<int, int>> columns;
+  if (!fs::exists(map_file)) return columns;
+  octomap::OcTree map(0.1);
+  if (!map.readBinary(map_file.string())) return columns;
+  for (auto it = map.begin_leafs(); it != map.end_leafs(); ++it) {
+    if (!map.isNodeOccupied(*it)) continue;
+    columns.insert({static_cast<int>(std::floor(it.getX() / column)),
+                    static_cast<int>(std::floor(it.getY() / column))});
+  }
+  return columns;
+}
+
+/// Planner trees (the last of each query) as thin lines.
+void drawTrees(Figure& figure, const fs::path& log) {
+  for (const auto& entry : fs::directory_iterator(log)) {
+    if (entry.path().filename().string().rfind("tree_", 0) != 0) continue;
+    const auto rows = readTable(entry.path(), ',', true);
+    std::vector<Eigen::Vector3d> nodes;
+    for (const auto& row : rows) nodes.push_back({number(row[2]), number(row[3]), number(row[4])});
+    for (const auto& row : rows) {
+      const int parent = static_cast<int>(number(row[1]));
+      const int index = static_cast<int>(number(row[0]));
+      if (parent >= 0 && parent < static_cast<int>(nodes.size())) {
+        figure.polyline({nodes[parent], nodes[index]}, "#d6e1ef", 0.6);
+      }
+    }
+  }
+}
+
+/// The last planner path of each query.
+void drawPaths(Figure& figure, const fs::path& log) {
+  std::map<std::string, std::vector<Eigen::Vector3d>> paths;
+  std::map<std::string, std::string> last_seq;
+  for (const auto& row : readTable(log / "paths.csv", ',', true)) {
+    if (row.size() < 7) continue;
+    if (last_seq[row[1]] != row[2]) {
+      paths[row[1]].clear();
+      last_seq[row[1]] = row[2];
+    }
+    paths[row[1]].push_back({number(row[4]), number(row[5]), number(row[6])});
+  }
+  for (const auto& [id, path] : paths) figure.polyline(path, "#2e8b57", 1.5, true);
+}
+
+void drawLegend(Figure& figure, const MissionRecord& m, const TruthFacts& facts, double scale) {
+  const double legend = figure.height() + 18;
+  figure.text(10, legend, "true trajectory", "#1f4e9c");
+  figure.text(120, legend, "navigation estimate", "#ff8c00");
+  figure.text(260, legend, "last planner paths", "#2e8b57");
+  figure.text(390, legend, "planner trees", "#7a9cc6");
+  figure.text(490, legend, "mapped occupied (top-down)", "#9a8c7a");
+  figure.text(10, legend + 18,
+              m.final_state + " - collisions: " + std::to_string(facts.collisions.size()) +
+                  " - north up, east right, " + json(1.0 / scale * 100) + " m per 100 px",
+              facts.collisions.empty() ? "#000000" : "#ff0000");
+}
+
+std::string summaryJson(const fs::path& run, const MissionRecord& m, const TruthFacts& facts,
+                        const std::vector<Sample>& truth) {
+  std::ostringstream summary;
+  summary << "{\n  \"run\": " << quote(fs::absolute(run).string()) << ",\n"
+          << "  \"state\": " << quote(m.final_state) << ",\n"
+          << "  \"message\": " << quote(m.final_message) << ",\n"
+          << "  \"duration_s\": " << json(m.end - m.start) << ",\n"
+          << "  \"collisions\": " << facts.collisions.size() << ",\n"
+          << "  \"min_true_clearance_m\": " << json(facts.min_clearance) << ",\n"
+          << "  \"max_navigation_error_m\": " << json(facts.max_nav_error) << ",\n"
+          << "  \"executed_length_m\": " << json(pathLength(truth, m.start, m.end))
+          << ",\n  \"queries\": [";
+  for (std::size_t i = 0; i < m.ordered.size(); ++i) {
+    const QueryRecord& q = *m.ordered[i];
+    summary << (i ? "," : "") << "\n    {\"index\": " << q.index
+            << ", \"succeeded\": " << (q.succeeded ? "true" : "false")
+            << ", \"start_t\": " << json(q.start_t) << ", \"end_t\": " << json(q.end_t)
+            << ", \"start\": [" << json(q.start.x()) << ", " << json(q.start.y()) << ", "
+            << json(q.start.z()) << "], \"end\": [" << json(q.end.x()) << ", " << json(q.end.y())
+            << ", " << json(q.end.z())
+            << "], \"executed_length_m\": " << json(pathLength(truth, q.start_t, q.end_t)) << "}";
+  }
+  summary << "\n  ]\n}\n";
+  return summary.str();
+}
+
 }  // namespace
 
 int reportMain(const std::vector<std::string>& args) {
@@ -214,67 +375,9 @@ int reportMain(const std::vector<std::string>& args) {
   }
   const auto truth = readTum(run / "ground_truth" / "trajectory.tum");
   const auto estimate = readTum(run / "ground_truth" / "navigation.tum");
-
-  // Mission events: query windows, waypoints, final state.
-  std::map<std::string, QueryRecord> queries;  // by query id
-  std::vector<Eigen::Vector3d> waypoints;
-  std::string final_state = "UNKNOWN", final_message;
-  double mission_start = std::nan(""), mission_end = std::nan("");
-  for (const auto& row : readTable(log / "events.csv", ',', true)) {
-    if (row.size() < 9) continue;
-    const double t = number(row[0]);
-    const std::string state = row[1].substr(0, row[1].find('/'));
-    const Eigen::Vector3d position(number(row[5]), number(row[6]), number(row[7]));
-    if (std::isnan(mission_start)) mission_start = t;
-    mission_end = t;
-    final_state = state;
-    final_message = row[8];
-    const std::string query_id = row[3];
-    if (query_id != "0") {
-      QueryRecord& q = queries[query_id];
-      if (std::isnan(q.start_t)) {
-        q.start_t = t;
-        q.start = position;
-        q.index = std::stoi(row[2]);
-      }
-    }
-  }
-  for (const auto& row : readTable(log / "waypoints.csv", ',', true)) {
-    if (row.size() >= 6) waypoints.push_back({number(row[3]), number(row[4]), number(row[5])});
-  }
-  // A query ends where the next starts, or at the mission's end.
-  std::vector<QueryRecord*> ordered;
-  for (auto& [id, q] : queries) ordered.push_back(&q);
-  std::sort(ordered.begin(), ordered.end(),
-            [](const QueryRecord* a, const QueryRecord* b) { return a->start_t < b->start_t; });
-  for (std::size_t i = 0; i < ordered.size(); ++i) {
-    ordered[i]->end_t = i + 1 < ordered.size() ? ordered[i + 1]->start_t : mission_end;
-    ordered[i]->succeeded = i + 1 < ordered.size() || final_state == "SUCCEEDED";
-    if (const Sample* s = at(truth, ordered[i]->end_t)) ordered[i]->end = s->p;
-    if (const Sample* s = at(truth, ordered[i]->start_t)) ordered[i]->start = s->p;
-  }
-
-  std::vector<Eigen::Vector3d> collisions;
-  for (const auto& row : readTable(run / "ground_truth" / "collisions.csv", ',', true)) {
-    if (row.size() >= 10 && row[9] == "1") {
-      collisions.push_back({number(row[1]), number(row[2]), number(row[3])});
-    }
-  }
-  double min_clearance = std::numeric_limits<double>::infinity();
-  for (const auto& row : readTable(run / "ground_truth" / "clearance.csv", ',', true)) {
-    if (row.size() >= 2) {
-      const double t = number(row[0]);
-      if (t >= mission_start && t <= mission_end)
-        min_clearance = std::min(min_clearance, number(row[1]));
-    }
-  }
-  double max_nav_error = 0.0;
-  for (const Sample& s : estimate) {
-    if (s.t < mission_start || s.t > mission_end) continue;
-    if (const Sample* true_sample = at(truth, s.t)) {
-      max_nav_error = std::max(max_nav_error, (true_sample->p - s.p).head<2>().norm());
-    }
-  }
+  MissionRecord mission;
+  readMissionLog(log, truth, mission);
+  const TruthFacts facts = readTruthFacts(run, truth, estimate, mission);
 
   // Figure extent: trajectories and map.
   Eigen::Vector2d lo = Eigen::Vector2d::Constant(1e9), hi = Eigen::Vector2d::Constant(-1e9);
@@ -284,19 +387,8 @@ int reportMain(const std::vector<std::string>& args) {
     hi = hi.cwiseMax(p.head<2>());
   };
   for (const auto& s : truth) grow(s.p);
-  std::unique_ptr<octomap::OcTree> map;
-  std::set<std::pair<int, int>> occupied_columns;
   const double column = 0.5;
-  if (fs::exists(log / "map.bt")) {
-    map = std::make_unique<octomap::OcTree>(0.1);
-    if (map->readBinary((log / "map.bt").string())) {
-      for (auto it = map->begin_leafs(); it != map->end_leafs(); ++it) {
-        if (!map->isNodeOccupied(*it)) continue;
-        occupied_columns.insert({static_cast<int>(std::floor(it.getX() / column)),
-                                 static_cast<int>(std::floor(it.getY() / column))});
-      }
-    }
-  }
+  const std::set<std::pair<int, int>> occupied_columns = occupiedColumns(log / "map.bt", column);
   for (const auto& [i, j] : occupied_columns) grow({(i + 0.5) * column, (j + 0.5) * column, 0});
   if (truth.empty()) {
     std::cerr << "auv mission report: " << (run / "ground_truth" / "trajectory.tum").string()
@@ -310,55 +402,22 @@ int reportMain(const std::vector<std::string>& args) {
   for (const auto& [i, j] : occupied_columns) {
     figure.square({(i + 0.5) * column, (j + 0.5) * column, 0}, column, "#9a8c7a");
   }
-  // Planner trees (last of each query), then paths, then trajectories on top.
-  for (const auto& entry : fs::directory_iterator(log)) {
-    if (entry.path().filename().string().rfind("tree_", 0) != 0) continue;
-    const auto rows = readTable(entry.path(), ',', true);
-    std::vector<Eigen::Vector3d> nodes;
-    for (const auto& row : rows) nodes.push_back({number(row[2]), number(row[3]), number(row[4])});
-    for (const auto& row : rows) {
-      const int parent = static_cast<int>(number(row[1]));
-      const int index = static_cast<int>(number(row[0]));
-      if (parent >= 0 && parent < static_cast<int>(nodes.size())) {
-        figure.polyline({nodes[parent], nodes[index]}, "#d6e1ef", 0.6);
-      }
-    }
-  }
-  std::map<std::string, std::vector<Eigen::Vector3d>> paths;  // the last path of each query
-  std::map<std::string, std::string> last_seq;
-  for (const auto& row : readTable(log / "paths.csv", ',', true)) {
-    if (row.size() < 7) continue;
-    if (last_seq[row[1]] != row[2]) {
-      paths[row[1]].clear();
-      last_seq[row[1]] = row[2];
-    }
-    paths[row[1]].push_back({number(row[4]), number(row[5]), number(row[6])});
-  }
-  for (const auto& [id, path] : paths) {
-    figure.polyline(path, "#2e8b57", 1.5, true);
-  }
+  // Planner trees, then paths, then trajectories on top.
+  drawTrees(figure, log);
+  drawPaths(figure, log);
   std::vector<Eigen::Vector3d> true_line, estimate_line;
   for (const auto& s : truth) true_line.push_back(s.p);
   for (const auto& s : estimate) estimate_line.push_back(s.p);
   figure.polyline(estimate_line, "#ff8c00", 1.5);
   figure.polyline(true_line, "#1f4e9c", 2);
-  for (const auto& w : waypoints) figure.circle(w, 2.0, "#2e8b57", true);
-  for (const auto& c : collisions) figure.circle(c, 6.0, "#ff0000", false);
-  for (const QueryRecord* q : ordered) {
+  for (const auto& w : mission.waypoints) figure.circle(w, 2.0, "#2e8b57", true);
+  for (const auto& c : facts.collisions) figure.circle(c, 6.0, "#ff0000", false);
+  for (const QueryRecord* q : mission.ordered) {
     figure.circle(q->start, 4.0, "#000000", true);
     figure.text(figure.x(q->start) + 5, figure.y(q->start) - 5, "q" + std::to_string(q->index + 1),
                 "#000000");
   }
-  const double legend = figure.height() + 18;
-  figure.text(10, legend, "true trajectory", "#1f4e9c");
-  figure.text(120, legend, "navigation estimate", "#ff8c00");
-  figure.text(260, legend, "last planner paths", "#2e8b57");
-  figure.text(390, legend, "planner trees", "#7a9cc6");
-  figure.text(490, legend, "mapped occupied (top-down)", "#9a8c7a");
-  figure.text(10, legend + 18,
-              final_state + " - collisions: " + std::to_string(collisions.size()) +
-                  " - north up, east right, " + json(1.0 / scale * 100) + " m per 100 px",
-              collisions.empty() ? "#000000" : "#ff0000");
+  drawLegend(figure, mission, facts, scale);
 
   std::error_code error;
   fs::create_directories(out_dir, error);
@@ -367,32 +426,11 @@ int reportMain(const std::vector<std::string>& args) {
               << ".svg/.png\n";
     return 1;
   }
-
-  std::ostringstream summary;
-  summary << "{\n  \"run\": " << quote(fs::absolute(run).string()) << ",\n"
-          << "  \"state\": " << quote(final_state) << ",\n"
-          << "  \"message\": " << quote(final_message) << ",\n"
-          << "  \"duration_s\": " << json(mission_end - mission_start) << ",\n"
-          << "  \"collisions\": " << collisions.size() << ",\n"
-          << "  \"min_true_clearance_m\": " << json(min_clearance) << ",\n"
-          << "  \"max_navigation_error_m\": " << json(max_nav_error) << ",\n"
-          << "  \"executed_length_m\": " << json(pathLength(truth, mission_start, mission_end))
-          << ",\n  \"queries\": [";
-  for (std::size_t i = 0; i < ordered.size(); ++i) {
-    const QueryRecord& q = *ordered[i];
-    summary << (i ? "," : "") << "\n    {\"index\": " << q.index
-            << ", \"succeeded\": " << (q.succeeded ? "true" : "false")
-            << ", \"start_t\": " << json(q.start_t) << ", \"end_t\": " << json(q.end_t)
-            << ", \"start\": [" << json(q.start.x()) << ", " << json(q.start.y()) << ", "
-            << json(q.start.z()) << "], \"end\": [" << json(q.end.x()) << ", " << json(q.end.y())
-            << ", " << json(q.end.z())
-            << "], \"executed_length_m\": " << json(pathLength(truth, q.start_t, q.end_t)) << "}";
-  }
-  summary << "\n  ]\n}\n";
-  std::ofstream(out_dir / "summary.json") << summary.str();
+  const std::string summary = summaryJson(run, mission, facts, truth);
+  std::ofstream(out_dir / "summary.json") << summary;
   std::cout << "figure: " << (out_dir / "report.svg").string() << " (and .png)"
             << "\nsummary: " << (out_dir / "summary.json").string() << "\n"
-            << summary.str();
+            << summary;
   return 0;
 }
 
