@@ -68,28 +68,38 @@ interfaces::ComponentSpec parseSpec(const std::string& item) {
 
 /// `auv run <component>... --help`: every declared parameter of each component with the values
 /// `options` give it. The component is configured on a node of the domain, never activated: it
-/// joins the domain for a moment and publishes nothing.
+/// joins the domain for a moment and publishes nothing. When configure() refuses the values (a
+/// required parameter such as the recorder's root is not given, or a bad -p), the parameters
+/// declared are still listed, then the error, as `auv run` would report it.
 int describeComponents(const std::vector<std::string>& items,
                        const interfaces::NodeOptions& options) {
   auto& registry = interfaces::ComponentRegistry::instance();
-  try {
-    for (const std::string& item : items) {
+  int status = 0;
+  for (const std::string& item : items) {
+    try {
       const interfaces::ComponentSpec spec = parseSpec(item);
       const interfaces::ComponentInfo* info = registry.find(spec.component);
       if (info == nullptr)
         throw CliError("unknown component '" + spec.component + "' (see `auv run --list`)");
       interfaces::Node node(spec.node_name.empty() ? spec.component : spec.node_name, options);
       std::unique_ptr<interfaces::Component> component = info->create();
-      component->configure(node);
+      std::string refused;
+      try {
+        component->configure(node);
+        component->cleanup();
+      } catch (const std::exception& e) {
+        refused = e.what();
+        status = config::exitCodeFor(e);
+      }
       std::cout << "# " << spec.component << ": " << info->description << "\n"
                 << node.parameters().describe() << "\n";
-      component->cleanup();
+      if (!refused.empty()) std::cerr << "auv run: " << refused << std::endl;
+    } catch (const std::exception& e) {
+      std::cerr << "auv run: " << e.what() << std::endl;
+      return config::exitCodeFor(e);
     }
-  } catch (const std::exception& e) {  // as `auv run` reports a bad configuration
-    std::cerr << "auv run: " << e.what() << std::endl;
-    return 1;
   }
-  return 0;
+  return status;
 }
 
 int runMain(const std::vector<std::string>& argv) {
