@@ -68,10 +68,12 @@ interfaces::ComponentSpec parseSpec(const std::string& item) {
 
 /// `auv run <component>... --help`: every declared parameter of each component with the values
 /// `options` give it. The component is configured on a node of the domain, never activated: it
-/// joins the domain for a moment and publishes nothing.
+/// joins the domain for a moment and publishes nothing. A configuration that fails after its
+/// declarations (the recorder without `root`) still prints them, then the error (exit code 1).
 int describeComponents(const std::vector<std::string>& items,
                        const interfaces::NodeOptions& options) {
   auto& registry = interfaces::ComponentRegistry::instance();
+  int status = 0;
   try {
     for (const std::string& item : items) {
       const interfaces::ComponentSpec spec = parseSpec(item);
@@ -80,16 +82,26 @@ int describeComponents(const std::vector<std::string>& items,
         throw CliError("unknown component '" + spec.component + "' (see `auv run --list`)");
       interfaces::Node node(spec.node_name.empty() ? spec.component : spec.node_name, options);
       std::unique_ptr<interfaces::Component> component = info->create();
-      component->configure(node);
+      std::string error;
+      try {
+        component->configure(node);
+      } catch (const std::exception& e) {  // as `auv run` reports a bad configuration
+        error = e.what();
+      }
       std::cout << "# " << spec.component << ": " << info->description << "\n"
                 << node.parameters().describe() << "\n";
+      if (!error.empty()) {
+        std::cerr << "auv run: " << error << std::endl;
+        status = 1;
+        continue;
+      }
       component->cleanup();
     }
-  } catch (const std::exception& e) {  // as `auv run` reports a bad configuration
+  } catch (const std::exception& e) {
     std::cerr << "auv run: " << e.what() << std::endl;
     return 1;
   }
-  return 0;
+  return status;
 }
 
 int runMain(const std::vector<std::string>& argv) {
