@@ -207,8 +207,9 @@ TEST(CliTest, BadInputGivesOneClearLineAndNonZeroExit) {
       {"topic pub 'bad topic' String '{}'", "invalid topic name", 2},
       {"topic echo /nobody --timeout 1", "no publisher on /nobody within 1 s", 1},
       {"topic frobnicate", "unknown command 'topic frobnicate'", 2},
-      {"run no_such_component", "unknown component 'no_such_component'", 1},
-      {"run demo_talker -p rate_hz:=fast", "rate_hz", 1},
+      {"run no_such_component", "unknown component 'no_such_component'", 2},
+      {"run demo_talker -p rate_hz:=fast", "rate_hz", 2},
+      {"run demo_talker -p rate_hz:=0 --help", "rate_hz", 2},
       {"launch /nonexistent/launch.yaml", "/nonexistent/launch.yaml", 2},
   };
   for (const Case& c : cases) {
@@ -229,7 +230,7 @@ TEST(CliTest, RunHelpListsTheComponentsParametersWithTheirValues) {
   EXPECT_NE(r.out.find("value: 5", rate), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("source: command line (-p)", rate), std::string::npos) << r.out;
   const Result bad = run(env("cyclonedds", 180), "run demo_talker -p rate_hz:=fast --help");
-  EXPECT_EQ(bad.exit_code, 1) << bad.out;
+  EXPECT_EQ(bad.exit_code, 2) << bad.out;  // bad input, as `auv run` without --help
   EXPECT_NE(bad.out.find("rate_hz"), std::string::npos) << bad.out;
 }
 

@@ -69,7 +69,8 @@ interfaces::ComponentSpec parseSpec(const std::string& item) {
 /// `auv run <component>... --help`: every declared parameter of each component with the values
 /// `options` give it. The component is configured on a node of the domain, never activated: it
 /// joins the domain for a moment and publishes nothing. A configuration that fails after its
-/// declarations (the recorder without `root`) still prints them, then the error (exit code 1).
+/// declarations (the recorder without `root`) still prints them, then the error; the exit code
+/// is the error's (config::exitCodeFor: 2 for bad input).
 int describeComponents(const std::vector<std::string>& items,
                        const interfaces::NodeOptions& options) {
   auto& registry = interfaces::ComponentRegistry::instance();
@@ -87,19 +88,19 @@ int describeComponents(const std::vector<std::string>& items,
         component->configure(node);
       } catch (const std::exception& e) {  // as `auv run` reports a bad configuration
         error = e.what();
+        status = config::exitCodeFor(e);
       }
       std::cout << "# " << spec.component << ": " << info->description << "\n"
                 << node.parameters().describe() << "\n";
       if (!error.empty()) {
         std::cerr << "auv run: " << error << std::endl;
-        status = 1;
         continue;
       }
       component->cleanup();
     }
   } catch (const std::exception& e) {
     std::cerr << "auv run: " << e.what() << std::endl;
-    return 1;
+    return config::exitCodeFor(e);
   }
   return status;
 }
