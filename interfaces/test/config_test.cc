@@ -8,6 +8,9 @@
 #include <fstream>
 #include <stdexcept>
 #include <string>
+#include <vector>
+
+#include <yaml-cpp/yaml.h>
 
 #include "auv/config/errors.h"
 #include "auv/config/option_table.h"
@@ -124,10 +127,109 @@ TEST(OptionTableTest, CheckNamesTheFieldAndTheDeclarationsUseTheSameRange) {
   q.setOverride("range:=100");
   interfaces::declareOptions(q, "", SonarOptions::table(), declared, true);
   EXPECT_EQ(declared.range, 100);
-  const std::string help = q.describe();
-  const std::string range = help.substr(help.find("range:"));
-  EXPECT_NE(range.find("min_exclusive: true"), std::string::npos) << help;
-  EXPECT_EQ(range.find("max_exclusive"), std::string::npos) << help;  // (0, 100]: max allowed
+  // range is (0, 100]: its min is excluded, its max allowed (prob_hit excludes both ends).
+  const YAML::Node help = YAML::Load(q.describe());
+  EXPECT_TRUE(help["range"]["min_exclusive"].as<bool>());
+  EXPECT_FALSE(help["range"]["max_exclusive"]);
+  EXPECT_TRUE(help["prob_hit"]["max_exclusive"].as<bool>());
+}
+
+// One table of every kind: integers keep their C++ type, bools and strings (with choices) are
+// declared from the same entries.
+struct QueueOptions {
+  double rate = 2.0;
+  int64_t length = 500;
+  std::size_t capacity = 2000;
+  uint32_t chunk = 4096;
+  int retries = 3;
+  bool clear_on_start = true;
+  std::string objective = "visibility";
+  std::string frame = "world";
+  std::vector<std::string> sensors = {"sonar"};
+  static const OptionTable<QueueOptions>& table() {
+    static const OptionTable<QueueOptions> kTable = {
+        {"rate", &QueueOptions::rate, "update rate", "Hz", Range::above(0)},
+        {"length", &QueueOptions::length, "beams kept", "beams", Range::closed(0, 100000)},
+        {"capacity", &QueueOptions::capacity, "poses kept", "poses", Range::closed(2, 1e6)},
+        {"chunk", &QueueOptions::chunk, "chunk cap", "B", Range::closed(4096, 1 << 24)},
+        {"retries", &QueueOptions::retries, "attempts", "", Range::closed(1, 10)},
+        {"clear_on_start", &QueueOptions::clear_on_start, "start empty"},
+        {"objective", &QueueOptions::objective, "cost", "", {}, {"visibility", "path_length"}},
+        {"frame", &QueueOptions::frame, "frame of the map"},
+        {"sensors", &QueueOptions::sensors, "sensors mapped", "", {}, {"sonar", "camera"}}};
+    return kTable;
+  }
+};
+
+TEST(OptionTableTest, IntegersBoolsAndStringsAreCheckedFromTheSameTable) {
+  QueueOptions options;
+  EXPECT_NO_THROW(checkOptions(options, QueueOptions::table(), "queue."));
+  auto message = [](const QueueOptions& o) {
+    try {
+      checkOptions(o, QueueOptions::table(), "queue.");
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  QueueOptions o = options;
+  o.length = -1;
+  EXPECT_EQ(message(o), "queue.length: expected an integer in [0, 100000] beams, got -1");
+  o = options;
+  o.capacity = 1;
+  EXPECT_EQ(message(o), "queue.capacity: expected an integer in [2, 1000000] poses, got 1");
+  o = options;
+  o.retries = 11;
+  EXPECT_EQ(message(o), "queue.retries: expected an integer in [1, 10], got 11");
+  o = options;
+  o.objective = "shortest";
+  EXPECT_EQ(message(o), "queue.objective: expected one of visibility, path_length, got 'shortest'");
+  o = options;
+  o.frame = "anything";  // no choices: any string
+  o.clear_on_start = false;
+  EXPECT_EQ(message(o), "");
+  o.sensors = {"camera", "laser"};
+  EXPECT_EQ(message(o), "queue.sensors: expected each one of sonar, camera, got 'laser'");
+  EXPECT_EQ(QueueOptions::table()[1].member<int64_t>(), &QueueOptions::length);
+}
+
+TEST(OptionTableTest, DeclaredParametersHaveTheMembersTypesRangesAndChoices) {
+  QueueOptions declared;
+  interfaces::Parameters q("queue");
+  q.setOverride("length:=20");
+  q.setOverride("capacity:=30");
+  q.setOverride("chunk:=8192");
+  q.setOverride("clear_on_start:=false");
+  q.setOverride("objective:=path_length");
+  q.setOverride("sensors:=[camera, sonar]");
+  interfaces::declareOptions(q, "", QueueOptions::table(), declared, true);
+  EXPECT_EQ(declared.length, 20);
+  EXPECT_EQ(declared.capacity, 30u);
+  EXPECT_EQ(declared.chunk, 8192u);
+  EXPECT_FALSE(declared.clear_on_start);
+  EXPECT_EQ(declared.objective, "path_length");
+  EXPECT_EQ(declared.sensors, (std::vector<std::string>{"camera", "sonar"}));
+  EXPECT_EQ(q.get<int64_t>("retries"), 3);
+  EXPECT_EQ(q.get<std::string>("frame"), "world");
+  const YAML::Node help = YAML::Load(q.describe());
+  EXPECT_EQ(help["length"]["type"].as<std::string>(), "integer");
+  EXPECT_EQ(help["capacity"]["min"].as<int64_t>(), 2);
+  EXPECT_EQ(help["capacity"]["max"].as<int64_t>(), 1000000);
+  EXPECT_EQ(help["chunk"]["unit"].as<std::string>(), "B");
+  EXPECT_EQ(help["clear_on_start"]["type"].as<std::string>(), "bool");
+  EXPECT_EQ(help["objective"]["choices"].size(), 2u);
+  EXPECT_TRUE(help["frame"]["read_only"].as<bool>());
+
+  // What check() refuses, the declaration refuses: out of range, a wrong choice, a wrong type.
+  for (const char* bad : {"length:=100001", "capacity:=1", "chunk:=-1", "objective:=shortest",
+                          "retries:=1.5", "clear_on_start:=1", "sensors:=[laser]"}) {
+    interfaces::Parameters r("queue");
+    r.setOverride(bad);
+    QueueOptions refused;
+    EXPECT_THROW(interfaces::declareOptions(r, "", QueueOptions::table(), refused, true),
+                 interfaces::ParameterError)
+        << bad;
+  }
 }
 
 }  // namespace

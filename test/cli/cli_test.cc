@@ -210,6 +210,7 @@ TEST(CliTest, BadInputGivesOneClearLineAndNonZeroExit) {
       // Input errors exit 2 whatever the command (docs/architecture.md, errors and exit codes).
       {"run no_such_component", "unknown component 'no_such_component'", 2},
       {"run demo_talker -p rate_hz:=fast", "rate_hz", 2},
+      {"run demo_talker -p rate_hz:=0 --help", "rate_hz", 2},
       {"run recorder", "parameter root: empty", 2},
       {"launch /nonexistent/launch.yaml", "/nonexistent/launch.yaml", 2},
   };
@@ -231,7 +232,7 @@ TEST(CliTest, RunHelpListsTheComponentsParametersWithTheirValues) {
   EXPECT_NE(r.out.find("value: 5", rate), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("source: command line (-p)", rate), std::string::npos) << r.out;
   const Result bad = run(env("cyclonedds", 180), "run demo_talker -p rate_hz:=fast --help");
-  EXPECT_EQ(bad.exit_code, 2) << bad.out;  // an input error
+  EXPECT_EQ(bad.exit_code, 2) << bad.out;  // bad input, as `auv run` without --help
   EXPECT_NE(bad.out.find("rate_hz"), std::string::npos) << bad.out;
 }
 

@@ -4,11 +4,13 @@
 // auv/config/option_table.h). Built-in parameters (use_sim_time, log_level, qos.*) are
 // documented once, in the top-level README.
 #include <gtest/gtest.h>
+#include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <optional>
@@ -118,31 +120,66 @@ bool isBuiltIn(const std::string& name) {
   return name == "use_sim_time" || name == "log_level" || name.rfind("qos.", 0) == 0;
 }
 
-/// "[a, b]", "(a, b)", "(a, b]", ... of a declared parameter; "" without bounds.
-std::string declaredRange(const YAML::Node& p) {
-  if (!p["min"] || !p["max"]) return "";
+std::string formatNumber(double value) {
   std::ostringstream out;
-  out << (p["min_exclusive"] ? "(" : "[") << p["min"].as<double>() << ", " << p["max"].as<double>()
-      << (p["max_exclusive"] ? ")" : "]");
+  out.precision(12);  // 16777216, not 1.67772e+07
+  out << value;
   return out.str();
 }
 
-/// The same of a documented range, with its numbers read as numbers ("1e6" == 1000000).
+/// What a declared parameter accepts, as a README writes it: "[a, b]", "(a, b]", "> a",
+/// "<= b" for numbers (an integer's ends are always inclusive), "one of a, b" for strings with
+/// choices, "" for anything else.
+std::string declaredRange(const YAML::Node& p) {
+  const bool low_open = p["min_exclusive"] && p["min_exclusive"].as<bool>();
+  const bool high_open = p["max_exclusive"] && p["max_exclusive"].as<bool>();
+  if (p["min"] && p["max"]) {
+    return (low_open ? "(" : "[") + formatNumber(p["min"].as<double>()) + ", " +
+           formatNumber(p["max"].as<double>()) + (high_open ? ")" : "]");
+  }
+  if (p["min"]) return (low_open ? "> " : ">= ") + formatNumber(p["min"].as<double>());
+  if (p["max"]) return (high_open ? "< " : "<= ") + formatNumber(p["max"].as<double>());
+  if (p["choices"]) {
+    std::string text = "one of ";
+    for (size_t i = 0; i < p["choices"].size(); ++i) {
+      text += (i ? ", " : "") + p["choices"][i].as<std::string>();
+    }
+    return text;
+  }
+  return "";
+}
+
+/// The same of a documented range, with its numbers read as numbers ("1e6" == 1000000) and
+/// code quotes dropped ("one of `a`, `b`").
 std::string documentedRange(const std::string& cell) {
-  const std::string t = trim(cell);
+  std::string t;
+  for (char c : trim(cell)) {
+    if (c != '`') t += c;
+  }
+  for (const char* op : {">=", "<=", ">", "<"}) {
+    if (t.rfind(op, 0) != 0) continue;
+    const auto value = number(t.substr(std::string(op).size()));
+    return value ? std::string(op) + " " + formatNumber(*value) : t;
+  }
   if (t.size() < 5 || (t.front() != '[' && t.front() != '(')) return t;
   const size_t comma = t.find(',');
+  if (comma == std::string::npos) return t;
   const auto low = number(t.substr(1, comma - 1));
   const auto high = number(t.substr(comma + 1, t.size() - comma - 2));
-  if (comma == std::string::npos || !low || !high) return t;
-  std::ostringstream out;
-  out << t.front() << *low << ", " << *high << t.back();
-  return out.str();
+  if (!low || !high) return t;
+  return t.front() + formatNumber(*low) + ", " + formatNumber(*high) + t.back();
 }
 
 void checkComponent(const std::string& component, const std::string& readme_path) {
   SCOPED_TRACE(component + ": " + readme_path);
-  const std::string help = run(std::string(AUV_EXECUTABLE) + " run " + component + " --help");
+  // In a folder of its own: configuring the simulator writes a run folder (auv_runs/...).
+  const std::filesystem::path folder =
+      std::filesystem::temp_directory_path() /
+      ("auv_parameter_docs_" + component + "_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(folder);
+  const std::string help = run("cd '" + folder.string() + "' && " + AUV_EXECUTABLE + " run " +
+                               component + " --help 2>/dev/null");
+  std::filesystem::remove_all(folder);
   const YAML::Node declared = YAML::Load(help);
   ASSERT_TRUE(declared.IsMap()) << help;
   const std::vector<DocRow> rows = parameterTable(readme_path);
@@ -162,7 +199,7 @@ void checkComponent(const std::string& component, const std::string& readme_path
     if (row.cells.count("unit")) {
       EXPECT_EQ(stripQuotes(row.cells.at("unit")), unit) << where << ": unit of " << name;
     }
-    if (row.cells.count("range") && p["type"].as<std::string>() == "double") {
+    if (row.cells.count("range")) {
       EXPECT_EQ(documentedRange(row.cells.at("range")), declaredRange(p))
           << where << ": range of " << name;
     }
@@ -172,7 +209,7 @@ void checkComponent(const std::string& component, const std::string& readme_path
       const auto value_number = number(p["value"].Scalar());
       if (doc_number && value_number) {
         EXPECT_DOUBLE_EQ(*doc_number, *value_number) << where << ": default of " << name;
-      } else if (doc != "(required)") {
+      } else if (doc.empty() || doc.front() != '(') {  // "(required)", "(the user's cache)"
         EXPECT_EQ(doc, p["value"].Scalar()) << where << ": default of " << name;
       }
     }
@@ -194,9 +231,32 @@ TEST(ParameterDocs, RecorderReadmeMatchesHelp) {
   checkComponent("recorder", std::string(AUV_SOURCE_DIR) + "/components/recorder/README.md");
 }
 
+TEST(ParameterDocs, ControllerReadmeMatchesHelp) {
+  checkComponent("controller", std::string(AUV_SOURCE_DIR) + "/components/control/README.md");
+}
+
+TEST(ParameterDocs, PlanningReadmeMatchesHelp) {
+  checkComponent("planning", std::string(AUV_SOURCE_DIR) + "/components/planning/README.md");
+}
+
+TEST(ParameterDocs, MissionReadmeMatchesHelp) {
+  checkComponent("mission", std::string(AUV_SOURCE_DIR) + "/components/mission/README.md");
+}
+
+TEST(ParameterDocs, SimulatorReadmeMatchesHelp) {
+  checkComponent("simulator", std::string(AUV_SOURCE_DIR) + "/components/simulator/README.md");
+}
+
 // The checker itself: a range or a parameter that differs is found.
 TEST(ParameterDocs, RangesAreComparedAsNumbers) {
-  EXPECT_EQ(documentedRange("[2, 1e6]"), "[2, 1e+06]");
+  EXPECT_EQ(documentedRange("[2, 1e6]"), "[2, 1000000]");
+  EXPECT_EQ(documentedRange("[4096, 16777216]"), "[4096, 16777216]");
+  EXPECT_EQ(documentedRange(">= 0.0"), ">= 0");
+  EXPECT_EQ(documentedRange("one of `stop`, `hold_depth`"), "one of stop, hold_depth");
+  EXPECT_EQ(declaredRange(YAML::Load("{min: 0, min_exclusive: true}")), "> 0");
+  EXPECT_EQ(declaredRange(YAML::Load("{max: 3}")), "<= 3");
+  EXPECT_EQ(declaredRange(YAML::Load("{choices: [stop, hold_depth]}")), "one of stop, hold_depth");
+  EXPECT_EQ(declaredRange(YAML::Load("{type: bool}")), "");
   EXPECT_EQ(documentedRange("(0.5, 1)"), "(0.5, 1)");
   EXPECT_EQ(documentedRange("(0, prob_miss]"), "(0, prob_miss]");  // not numbers: as written
   const YAML::Node open =

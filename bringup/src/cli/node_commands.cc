@@ -68,36 +68,39 @@ interfaces::ComponentSpec parseSpec(const std::string& item) {
 
 /// `auv run <component>... --help`: every declared parameter of each component with the values
 /// `options` give it. The component is configured on a node of the domain, never activated: it
-/// joins the domain for a moment and publishes nothing. When configure() refuses the values (a
-/// required parameter such as the recorder's root is not given, or a bad -p), the parameters
-/// declared are still listed, then the error, as `auv run` would report it.
+/// joins the domain for a moment and publishes nothing. A configuration that fails after its
+/// declarations (the recorder without `root`) still prints them, then the error; the exit code
+/// is the error's (config::exitCodeFor: 2 for bad input).
 int describeComponents(const std::vector<std::string>& items,
                        const interfaces::NodeOptions& options) {
   auto& registry = interfaces::ComponentRegistry::instance();
   int status = 0;
-  for (const std::string& item : items) {
-    try {
+  try {
+    for (const std::string& item : items) {
       const interfaces::ComponentSpec spec = parseSpec(item);
       const interfaces::ComponentInfo* info = registry.find(spec.component);
       if (info == nullptr)
         throw CliError("unknown component '" + spec.component + "' (see `auv run --list`)");
       interfaces::Node node(spec.node_name.empty() ? spec.component : spec.node_name, options);
       std::unique_ptr<interfaces::Component> component = info->create();
-      std::string refused;
+      std::string error;
       try {
         component->configure(node);
-        component->cleanup();
-      } catch (const std::exception& e) {
-        refused = e.what();
+      } catch (const std::exception& e) {  // as `auv run` reports a bad configuration
+        error = e.what();
         status = config::exitCodeFor(e);
       }
       std::cout << "# " << spec.component << ": " << info->description << "\n"
                 << node.parameters().describe() << "\n";
-      if (!refused.empty()) std::cerr << "auv run: " << refused << std::endl;
-    } catch (const std::exception& e) {
-      std::cerr << "auv run: " << e.what() << std::endl;
-      return config::exitCodeFor(e);
+      if (!error.empty()) {
+        std::cerr << "auv run: " << error << std::endl;
+        continue;
+      }
+      component->cleanup();
     }
+  } catch (const std::exception& e) {
+    std::cerr << "auv run: " << e.what() << std::endl;
+    return config::exitCodeFor(e);
   }
   return status;
 }

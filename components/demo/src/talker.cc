@@ -3,21 +3,25 @@
 #include <cmath>
 
 #include "auv/interfaces/msg_time.h"
+#include "auv/interfaces/option_parameters.h"
 
 namespace auv::demo {
 
+const config::OptionTable<Talker::Options>& Talker::Options::table() {
+  using config::Range;
+  static const config::OptionTable<Options> kTable = {
+      {"rate_hz", &Options::rate_hz, "publishing rate", "Hz", Range::closed(1e-3, 1000.0)},
+      {"text", &Options::text, "greeting text"},
+      {"circle_radius", &Options::circle_radius, "radius of the trajectory", "m",
+       Range::closed(0.1, 1000.0)},
+      {"speed", &Options::speed, "speed along the trajectory", "m/s", Range::closed(0.01, 5.0)},
+  };
+  return kTable;
+}
+
 void Talker::configure(interfaces::Node& node) {
   node_ = &node;
-  auto& p = node.parameters();
-  options_.rate_hz = p.declare<double>("rate_hz", options_.rate_hz,
-                                       {"publishing rate", "Hz", 1e-3, 1000.0, {}, false});
-  options_.text =
-      p.declare<std::string>("text", options_.text, {"greeting text", "", {}, {}, {}, false});
-  options_.circle_radius =
-      p.declare<double>("circle_radius", options_.circle_radius,
-                        {"radius of the trajectory", "m", 0.1, 1000.0, {}, false});
-  options_.speed = p.declare<double>("speed", options_.speed,
-                                     {"speed along the trajectory", "m/s", 0.01, 5.0, {}, false});
+  interfaces::declareOptions(node.parameters(), "", Options::table(), options_, false);
   chatter_ = node.createPublisher<msg::String>("chatter", interfaces::commandQos());
   odometry_ = node.createPublisher<msg::Odometry>("nav/odometry", interfaces::stateQos());
   reset_ = node.createService<msg::TriggerRequest, msg::TriggerReply>(
@@ -70,16 +74,22 @@ void Talker::tick() {
   odometry_->publish(odom);
 }
 
+const config::OptionTable<Listener::Options>& Listener::Options::table() {
+  static const config::OptionTable<Options> kTable = {
+      {"log_every", &Options::log_every, "log one message in N", "", config::Range::closed(1, 1e9)},
+  };
+  return kTable;
+}
+
 void Listener::configure(interfaces::Node& node) {
   node_ = &node;
-  log_every_ = node.parameters().declare<int64_t>(
-      "log_every", 1, {"log one message in N", "", 1.0, 1e9, {}, false});
+  interfaces::declareOptions(node.parameters(), "", Options::table(), options_, false);
   status_ = node.createPublisher<msg::MissionStatus>("demo/status", interfaces::latchedStateQos());
   chatter_ = node.createSubscription<msg::String>(
       "chatter", interfaces::commandQos(),
       std::function<void(const msg::String&)>([this](const msg::String& m) {
         ++heard_;
-        if (heard_ % log_every_ == 0) AUV_INFO(node_->logger(), "heard: " << m.data());
+        if (heard_ % options_.log_every == 0) AUV_INFO(node_->logger(), "heard: " << m.data());
         msg::MissionStatus status;
         status.mission_id(node_->name());
         status.message("heard " + std::to_string(heard_) + " messages, last: " + m.data());

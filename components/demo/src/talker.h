@@ -2,6 +2,7 @@
 
 #include <memory>
 
+#include "auv/config/option_table.h"
 #include "auv/interfaces/component.h"
 
 namespace auv::demo {
@@ -11,10 +12,12 @@ namespace auv::demo {
 class Talker : public interfaces::Component {
  public:
   struct Options {
-    double rate_hz = 2.0;        ///< Hz, publishing rate, in (0, 1000].
+    double rate_hz = 2.0;        ///< Hz, publishing rate
     std::string text = "hello";  ///< Greeting put before the count.
-    double circle_radius = 5.0;  ///< m, radius of the published trajectory, > 0.
-    double speed = 0.5;          ///< m/s, speed along the trajectory, > 0.
+    double circle_radius = 5.0;  ///< m, radius of the published trajectory
+    double speed = 0.5;          ///< m/s, speed along the trajectory
+    /// The fields with meaning, unit and range: the parameters come from it.
+    static const config::OptionTable<Options>& table();
   };
 
   void configure(interfaces::Node& node) override;
@@ -39,6 +42,12 @@ class Talker : public interfaces::Component {
 /// `demo/status` (transient local: late joiners see the latest count).
 class Listener : public interfaces::Component {
  public:
+  struct Options {
+    uint64_t log_every = 1;  ///< log one message in this many
+    /// The fields with meaning, unit and range: the parameters come from it.
+    static const config::OptionTable<Options>& table();
+  };
+
   void configure(interfaces::Node& node) override;
   void cleanup() override;
   uint64_t heard() const { return heard_; }
@@ -48,7 +57,7 @@ class Listener : public interfaces::Component {
   std::shared_ptr<interfaces::Subscription<msg::String>> chatter_;
   std::shared_ptr<interfaces::Publisher<msg::MissionStatus>> status_;
   uint64_t heard_ = 0;
-  uint64_t log_every_ = 1;
+  Options options_;
 };
 
 }  // namespace auv::demo

@@ -45,6 +45,8 @@ const config::OptionTable<MapBuilder::Options>& MapBuilder::Options::table() {
       {"occupancy_threshold", &O::occupancy_threshold,
        "probability above which a cell is occupied (between the clamps)", "",
        Range::open(0.0, 1.0)},
+      {"no_return_stops_at_occupied", &O::no_return_stops_at_occupied,
+       "a beam without echo clears free space only up to the first occupied cell"},
   };
   return kTable;
 }

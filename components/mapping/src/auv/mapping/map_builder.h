@@ -76,7 +76,7 @@ class MapBuilder {
     /// still clear through occupied cells, which removes stale copies of walls left by
     /// navigation drift.
     bool no_return_stops_at_occupied = true;
-    /// The numeric fields with meaning, unit and range: check() and the mapping component's
+    /// The fields with meaning, unit and range: check() and the mapping component's
     /// parameters (so `auv run mapping --help`) come from it.
     static const config::OptionTable<Options>& table();
     /// Throws std::invalid_argument naming the bad field: a range of table(), or the clamps

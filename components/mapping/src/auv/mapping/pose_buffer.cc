@@ -21,13 +21,22 @@ std::string toString(PoseLookupStatus status) {
   return "unknown";
 }
 
-void PoseBuffer::Options::check() const {
-  if (capacity < 2) throw std::invalid_argument("PoseBuffer: capacity must be >= 2");
-  if (!(max_gap_s > 0.0)) throw std::invalid_argument("PoseBuffer: max_gap_s must be > 0");
-  if (!(max_extrapolation_s >= 0.0)) {
-    throw std::invalid_argument("PoseBuffer: max_extrapolation_s must be >= 0");
-  }
+const config::OptionTable<PoseBuffer::Options>& PoseBuffer::Options::table() {
+  using config::Range;
+  using O = Options;
+  static const config::OptionTable<O> kTable = {
+      {"pose_buffer_length", &O::capacity, "odometry poses kept for interpolation", "poses",
+       Range::closed(2, 1e6)},
+      {"pose_max_gap", &O::max_gap_s, "largest odometry gap bridged by interpolation", "s",
+       Range::aboveUpTo(0.0, 60.0)},
+      {"pose_max_extrapolation", &O::max_extrapolation_s,
+       "how far past the newest odometry a beam still gets that pose", "s",
+       Range::closed(0.0, 10.0)},
+  };
+  return kTable;
 }
+
+void PoseBuffer::Options::check() const { config::checkOptions(*this, table(), "PoseBuffer: "); }
 
 PoseBuffer::PoseBuffer(const Options& options) : options_(options) { options_.check(); }
 

@@ -9,6 +9,8 @@
 #include <optional>
 #include <string>
 
+#include "auv/config/option_table.h"
+
 namespace auv::mapping {
 
 /// A pose of the body (FRD) in the world (NED): position m, orientation body -> world.
@@ -34,13 +36,16 @@ std::string toString(PoseLookupStatus status);
 class PoseBuffer {
  public:
   struct Options {
-    std::size_t capacity = 2000;  ///< poses kept (oldest dropped), >= 2; 2000 = 40 s at 50 Hz.
-    /// s, largest time between two poses that may be interpolated, > 0; beyond it the vehicle
+    std::size_t capacity = 2000;  ///< poses kept (oldest dropped); 2000 = 40 s at 50 Hz.
+    /// s, largest time between two poses that may be interpolated; beyond it the vehicle
     /// may have moved too far for a straight-line pose to be trusted.
     double max_gap_s = 0.5;
-    /// s, how far past the newest pose a stamp may lie and still get the newest pose (held),
-    /// >= 0; covers beams stamped a little after the last odometry sample.
+    /// s, how far past the newest pose a stamp may lie and still get the newest pose (held);
+    /// covers beams stamped a little after the last odometry sample.
     double max_extrapolation_s = 0.0;
+    /// The fields with meaning, unit and range, named as the mapping component's parameters
+    /// (pose_buffer_length, pose_max_gap, pose_max_extrapolation).
+    static const config::OptionTable<Options>& table();
     void check() const;  ///< Throws std::invalid_argument naming the bad field.
   };
 

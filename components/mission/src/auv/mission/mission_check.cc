@@ -6,6 +6,20 @@
 
 namespace auv::mission {
 
+const config::OptionTable<MissionLimits>& MissionLimits::table() {
+  using config::Range;
+  using O = MissionLimits;
+  static const config::OptionTable<O> kTable = {
+      {"max_depth", &O::max_depth, "deepest goal accepted (the controller's max_depth)", "m",
+       Range::closed(0.1, 11000.0)},
+      {"goal_clearance", &O::goal_clearance,
+       "goals closer than this to a known occupied cell are refused (the planner's hull_radius "
+       "+ safety_margin)",
+       "m", Range::closed(0.0, 100.0)},
+  };
+  return kTable;
+}
+
 double distanceToOccupied(const octomap::OcTree& map, const Eigen::Vector3d& point, double radius) {
   double best = std::numeric_limits<double>::infinity();
   const octomap::point3d lo(point.x() - radius, point.y() - radius, point.z() - radius);

@@ -7,6 +7,7 @@
 
 #include <octomap/OcTree.h>
 
+#include "auv/config/option_table.h"
 #include "auv/mission/mission_plan.h"
 
 namespace auv::mission {
@@ -17,6 +18,9 @@ struct MissionLimits {
   /// m, the planner's clearance (hull radius + safety margin): a goal closer than this to a
   /// known occupied cell cannot be reached.
   double goal_clearance = 1.2;
+  /// The fields with meaning, unit and range (the mission component's parameters of those
+  /// names).
+  static const config::OptionTable<MissionLimits>& table();
 };
 
 /// Throws MissionError naming `source`, the query and the reason when a goal (or the plane of a

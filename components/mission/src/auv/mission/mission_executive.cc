@@ -41,23 +41,36 @@ const char* toString(msg::MissionState state) {
   }
 }
 
-void ExecutiveOptions::check() const {
-  auto positive = [](double value, const char* name) {
-    if (!(value > 0.0) || !std::isfinite(value)) {
-      throw std::invalid_argument(std::string(name) + " must be > 0");
-    }
+const config::OptionTable<ExecutiveOptions>& ExecutiveOptions::table() {
+  using config::Range;
+  using O = ExecutiveOptions;
+  static const config::OptionTable<O> kTable = {
+      {"odometry_timeout", &O::odometry_timeout,
+       "nav/odometry older than this is stale: not ready, or abort to hold while running", "s",
+       Range::above(0)},
+      {"controller_timeout", &O::controller_timeout,
+       "control/status older than this counts as no controller (not ready)", "s", Range::above(0)},
+      {"readiness_timeout", &O::readiness_timeout,
+       "a started mission that is not ready within this long fails", "s", Range::above(0)},
+      {"no_solution_timeout", &O::no_solution_timeout,
+       "waiting this long for a waypoint (the planner finds nothing) aborts to hold", "s",
+       Range::above(0)},
+      {"request_period", &O::request_period,
+       "an unanswered waypoint request is repeated this often", "s", Range::above(0)},
+      {"waypoint_timeout_margin", &O::waypoint_timeout_margin,
+       "controller command timeout = factor x distance / speed + this margin", "s",
+       Range::atLeast(0)},
+      {"request_distance", &O::request_distance,
+       "ask for the next waypoint this close to the current one (0: on arrival)", "m",
+       Range::closed(0.0, 100.0)},
+      {"waypoint_timeout_factor", &O::waypoint_timeout_factor,
+       "controller command timeout = this x distance / speed + margin", "",
+       Range::aboveUpTo(0.0, 100.0)},
   };
-  positive(odometry_timeout, "odometry_timeout");
-  positive(controller_timeout, "controller_timeout");
-  positive(readiness_timeout, "readiness_timeout");
-  positive(no_solution_timeout, "no_solution_timeout");
-  positive(request_period, "request_period");
-  positive(waypoint_timeout_factor, "waypoint_timeout_factor");
-  if (!(request_distance >= 0.0)) throw std::invalid_argument("request_distance must be >= 0");
-  if (!(waypoint_timeout_margin >= 0.0)) {
-    throw std::invalid_argument("waypoint_timeout_margin must be >= 0");
-  }
+  return kTable;
 }
+
+void ExecutiveOptions::check() const { config::checkOptions(*this, table()); }
 
 MissionExecutive::MissionExecutive(const ExecutiveOptions& options) : options_(options) {
   options_.check();

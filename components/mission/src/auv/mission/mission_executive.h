@@ -16,6 +16,7 @@
 
 #include <Eigen/Core>
 
+#include "auv/config/option_table.h"
 #include "auv/mission/mission_plan.h"
 #include "auv/msg/all.h"
 
@@ -39,6 +40,9 @@ struct ExecutiveOptions {
   /// Controller command timeout = factor × distance / speed + waypoint_timeout_margin.
   double waypoint_timeout_factor = 4.0;
   double waypoint_timeout_margin = 30.0;  ///< s
+  /// The fields with meaning, unit and range (the mission component's parameters of those
+  /// names).
+  static const config::OptionTable<ExecutiveOptions>& table();
   /// Throws std::invalid_argument naming the field.
   void check() const;
 };

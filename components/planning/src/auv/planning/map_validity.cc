@@ -11,9 +11,20 @@
 namespace auv::planning {
 namespace ob = ompl::base;
 
+const config::OptionTable<ClearanceOptions>& ClearanceOptions::table() {
+  using config::Range;
+  using O = ClearanceOptions;
+  static const config::OptionTable<O> kTable = {
+      {"hull_radius", &O::hull_radius, "radius of the sphere enclosing the hull", "m",
+       Range::closed(0.0, 20.0)},
+      {"safety_margin", &O::safety_margin, "clearance kept on top of hull_radius", "m",
+       Range::closed(0.0, 20.0)},
+  };
+  return kTable;
+}
+
 void ClearanceOptions::check() const {
-  if (!(hull_radius >= 0.0)) throw PlanningConfigError("clearance: hull_radius must be >= 0");
-  if (!(safety_margin >= 0.0)) throw PlanningConfigError("clearance: safety_margin must be >= 0");
+  config::checkOptions<PlanningConfigError>(*this, table(), "clearance: ");
   if (!std::isfinite(motion_check_step)) {
     throw PlanningConfigError("clearance: motion_check_step must be finite");
   }

@@ -11,6 +11,7 @@
 #include <ompl/base/SpaceInformation.h>
 #include <ompl/base/StateValidityChecker.h>
 
+#include "auv/config/option_table.h"
 #include "auv/planning/distance_field.h"
 
 namespace auv::planning {
@@ -24,6 +25,10 @@ struct ClearanceOptions {
   /// m, motion check step; <= 0 means half the map resolution. Never above half of it.
   double motion_check_step = 0.0;
 
+  /// hull_radius and safety_margin with meaning, unit and range (the planning component's
+  /// parameters of those names); motion_check_step is not a parameter.
+  static const config::OptionTable<ClearanceOptions>& table();
+  /// Throws PlanningConfigError naming the field.
   void check() const;
   double clearance() const { return hull_radius + safety_margin; }
 };

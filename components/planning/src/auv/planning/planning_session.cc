@@ -81,7 +81,46 @@ void setPosition(ob::State* state, const Eigen::Vector3d& position) {
 
 }  // namespace
 
+const config::OptionTable<SessionOptions>& SessionOptions::table() {
+  using config::Range;
+  using O = SessionOptions;
+  static const config::OptionTable<O> kTable = {
+      {"range", &O::range, "RRT* extension length (delta)", "m", Range::closed(0.05, 100.0)},
+      {"goal_bias", &O::goal_bias, "probability of sampling the goal", "", Range::closed(0, 1)},
+      {"narrow_passage_bias", &O::narrow_passage_bias,
+       "share of random states drawn by OMPL's bridge test, which finds narrow passages "
+       "(gaps) that uniform sampling rarely hits; 0 = uniform only (the paper)",
+       "", Range::closed(0, 1)},
+      {"rewire_factor", &O::rewire_factor, "RRT* rewiring radius factor", "",
+       Range::closed(1.0, 10.0)},
+      {"visibility_weight", &O::visibility_weight,
+       "weight w of the Eq. (1) visibility term (0: path length)", "", Range::closed(0, 100)},
+      {"fixed_depth", &O::fixed_depth,
+       "plan in the horizontal plane at the start depth even for 3-D queries"},
+      {"map_resolution", &O::map_resolution,
+       "leaf size map updates must have (others are rejected)", "m", Range::closed(0.01, 10.0)},
+      {"max_distance", &O::max_distance, "distance field clamp (>= 2 d_e keeps Eq. (1) exact)", "m",
+       Range::closed(0.5, 100.0)},
+      {"field_margin", &O::field_margin, "distance field box = query bounds grown by this", "m",
+       Range::closed(0.0, 100.0)},
+      {"iteration_budget", &O::iteration_budget, "length of one planning slice", "s",
+       Range::closed(0.005, 10.0)},
+      {"max_tree_size", &O::max_tree_size,
+       "tree size at which growing pauses until a waypoint prunes it", "nodes",
+       Range::closed(100, 1e7)},
+      {"default_time_budget", &O::default_time_budget,
+       "time to a first solution when a query gives 0 (then NO_SOLUTION cancel)", "s",
+       Range::closed(0.1, 3600.0)},
+      {"waypoint_speed", &O::waypoint_speed, "surge speed asked for towards waypoints", "m/s",
+       Range::closed(0.01, 10.0)},
+      {"waypoint_tolerance", &O::waypoint_tolerance,
+       "distance at which a waypoint counts as reached", "m", Range::closed(0.01, 10.0)},
+  };
+  return kTable;
+}
+
 void SessionOptions::check() const {
+  config::checkOptions<PlanningConfigError>(*this, table());
   clearance.check();
   if (goal_bias + narrow_passage_bias > 1.0) {
     throw PlanningConfigError("goal_bias + narrow_passage_bias must be <= 1 (got " +

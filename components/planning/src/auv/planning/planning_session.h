@@ -15,6 +15,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "auv/config/option_table.h"
 #include "auv/planning/distance_field.h"
 #include "auv/planning/map_validity.h"
 #include "auv/planning/online_rrt_star.h"
@@ -27,38 +28,43 @@ namespace auv::planning {
 
 class ReplicaDistanceField;
 
+/// Ranges, meaning and units: table() (planning_session.cc).
 struct SessionOptions {
-  double range = 2.0;       ///< m, δ: RRT* extension length, in [0.05, 100].
-  double goal_bias = 0.05;  ///< probability of sampling the goal, in [0, 1].
-  /// share of the random states drawn by the bridge test (narrow passages), in [0, 1].
+  double range = 2.0;       ///< m, δ: RRT* extension length.
+  double goal_bias = 0.05;  ///< probability of sampling the goal.
+  /// share of the random states drawn by the bridge test (narrow passages).
   double narrow_passage_bias = 0.1;
-  double rewire_factor = 1.1;      ///< RRT* rewiring radius factor, in [1, 10].
+  double rewire_factor = 1.1;      ///< RRT* rewiring radius factor.
   ClearanceOptions clearance;      ///< hull_radius and safety_margin (m).
-  double visibility_weight = 1.0;  ///< w of the Eq. (1) term, in [0, 100].
+  double visibility_weight = 1.0;  ///< w of the Eq. (1) term.
   /// true: plan in the horizontal plane even when a query asks for 3-D, at the query's
   /// start depth (the paper's 2-D profiler setup).
   bool fixed_depth = false;
   /// m, leaf size of the map (the component rejects map updates of another resolution and
-  /// starts from an empty map of it), in [0.01, 10]; also sets the vehicle -> root check step.
+  /// starts from an empty map of it); also sets the vehicle -> root check step.
   double map_resolution = 0.5;
-  /// m, distances are clamped here (>= 2 d_e keeps Eq. (1) exact), in [0.5, 100].
+  /// m, distances are clamped here (>= 2 d_e keeps Eq. (1) exact).
   double max_distance = 10.0;
-  /// m, the distance field covers the query bounds grown by this margin, in [0, 100].
+  /// m, the distance field covers the query bounds grown by this margin.
   double field_margin = 5.0;
-  double iteration_budget = 0.1;  ///< s, length of one planSlice() growth, in [0.005, 10].
+  double iteration_budget = 0.1;  ///< s, length of one planSlice() growth.
   /// Growing pauses at this many nodes until popWaypoint() or a restart prunes the tree:
   /// pruning and re-indexing cost O(tree size) while the waypoint request waits. A full
   /// tree without a solution is regrown from its root instead (nothing else would prune
-  /// it). In [100, 1e7].
+  /// it).
   std::size_t max_tree_size = 20000;
-  /// s, time budget when a query gives 0, in [0.1, 3600]. A query is cancelled with
+  /// s, time budget when a query gives 0. A query is cancelled with
   /// NO_SOLUTION when its tree has had no solution for this long: since the query started,
   /// since a restart, or since an obstacle removed the last solution.
   double default_time_budget = 10.0;
-  double waypoint_speed = 0.5;      ///< m/s, Waypoint speed, in [0.01, 10].
-  double waypoint_tolerance = 0.5;  ///< m, Waypoint tolerance, in [0.01, 10].
+  double waypoint_speed = 0.5;      ///< m/s, Waypoint speed.
+  double waypoint_tolerance = 0.5;  ///< m, Waypoint tolerance.
 
-  /// Throws PlanningConfigError: the clearance's check, goal_bias + narrow_passage_bias <= 1.
+  /// The fields with meaning, unit and range (the planning component's parameters of those
+  /// names); the clearance's are in ClearanceOptions::table().
+  static const config::OptionTable<SessionOptions>& table();
+  /// Throws PlanningConfigError: a range of table(), the clearance's check,
+  /// goal_bias + narrow_passage_bias <= 1.
   void check() const;
 };
 

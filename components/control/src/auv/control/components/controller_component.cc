@@ -47,20 +47,22 @@ void stamp(msg::Header& header, const interfaces::Clock& clock, const char* fram
 
 }  // namespace
 
+const config::OptionTable<ControllerComponent::Options>& ControllerComponent::Options::table() {
+  using config::Range;
+  static const config::OptionTable<Options> kTable = {
+      {"control_rate", &Options::control_rate,
+       "control steps and control/thrusters messages per second", "Hz", Range::closed(1.0, 1000.0)},
+      {"status_rate", &Options::status_rate,
+       "periodic control/status messages per second (also sent on every change)", "Hz",
+       Range::closed(0.01, 100.0)},
+  };
+  return kTable;
+}
+
 void ControllerComponent::configure(interfaces::Node& node) {
   node_ = &node;
   auto& p = node.parameters();
-  options_.control_rate = p.declare<double>(
-      "control_rate", options_.control_rate,
-      {"control steps and control/thrusters messages per second", "Hz", 1.0, 1000.0, {}, true});
-  options_.status_rate =
-      p.declare<double>("status_rate", options_.status_rate,
-                        {"periodic control/status messages per second (also sent on every change)",
-                         "Hz",
-                         0.01,
-                         100.0,
-                         {},
-                         true});
+  interfaces::declareOptions(p, "", Options::table(), options_, /*read_only=*/true);
   interfaces::declareOptions(p, "controller.", ControllerOptions::table(), options_.controller,
                              /*read_only=*/false);
   interfaces::declareOptions(p, "controller.model.", feedForwardModel(), options_.controller.model,

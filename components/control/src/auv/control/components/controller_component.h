@@ -21,6 +21,9 @@ class ControllerComponent : public interfaces::Component {
     double control_rate = 20.0;    ///< Hz, control steps and `control/thrusters` messages
     double status_rate = 2.0;      ///< Hz, periodic `control/status` (also sent on changes)
     ControllerOptions controller;  ///< parameters `controller.*` (model: `controller.model.*`)
+    /// The component's own fields (the rates) with meaning, unit and range; the controller's
+    /// are in ControllerOptions::table().
+    static const config::OptionTable<Options>& table();
   };
 
   /// Declares and checks the parameters (ParameterError or ConfigError naming the parameter)

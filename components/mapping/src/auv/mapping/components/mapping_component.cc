@@ -11,63 +11,36 @@
 namespace auv::mapping {
 using interfaces::toPoint;
 
+const config::OptionTable<MappingComponent::Options>& MappingComponent::Options::table() {
+  using config::Range;
+  using O = Options;
+  static const config::OptionTable<O> kTable = {
+      {"update_rate", &O::update_rate, "rate of incremental map updates", "Hz",
+       Range::closed(0.01, 100.0)},
+      {"full_map_period", &O::full_map_period, "period of full map updates", "s",
+       Range::closed(0.1, 3600.0)},
+      {"late_joiner_hold", &O::late_joiner_hold,
+       "increments held back after a new map reader appears (see header)", "s",
+       Range::closed(0.0, 60.0)},
+      {"map_id", &O::map_id, "map instance key on map/update"},
+      {"world_frame", &O::world_frame, "map and odometry frame (NED)"},
+      {"map_directory", &O::map_directory, "directory map/save writes into"},
+      {"beam_queue_length", &O::beam_queue_length, "beams kept waiting for newer odometry", "beams",
+       Range::closed(0, 100000)},
+      {"initial_map", &O::initial_map,
+       "a .bt map to start from (map/save's format, same resolution), e.g. an earlier "
+       "mission's at the site; empty: start empty"},
+  };
+  return kTable;
+}
+
 void MappingComponent::configure(interfaces::Node& node) {
   node_ = &node;
+  // Meaning, unit and range from the options' own tables: what their check() accepts.
   auto& p = node.parameters();
-  auto& m = options_.map;
-  // Meaning, unit and range from the builder's own table: what check() accepts.
-  interfaces::declareOptions(p, "", mapping::MapBuilder::Options::table(), m, /*read_only=*/true);
-  m.no_return_stops_at_occupied =
-      p.declare<bool>("no_return_stops_at_occupied", m.no_return_stops_at_occupied,
-                      {"a beam without echo clears free space only up to the first occupied cell",
-                       "",
-                       {},
-                       {},
-                       {},
-                       true});
-  auto& b = options_.poses;
-  b.capacity = static_cast<std::size_t>(
-      p.declare<int64_t>("pose_buffer_length", static_cast<int64_t>(b.capacity),
-                         {"odometry poses kept for interpolation", "", 2.0, 1e6, {}, true}));
-  b.max_gap_s = p.declare<double>(
-      "pose_max_gap", b.max_gap_s,
-      {"largest odometry gap bridged by interpolation", "s", 1e-3, 60.0, {}, true});
-  b.max_extrapolation_s = p.declare<double>(
-      "pose_max_extrapolation", b.max_extrapolation_s,
-      {"how far past the newest odometry a beam still gets that pose", "s", 0.0, 10.0, {}, true});
-  options_.update_rate =
-      p.declare<double>("update_rate", options_.update_rate,
-                        {"rate of incremental map updates", "Hz", 0.01, 100.0, {}, true});
-  options_.full_map_period =
-      p.declare<double>("full_map_period", options_.full_map_period,
-                        {"period of full map updates", "s", 0.1, 3600.0, {}, true});
-  options_.late_joiner_hold =
-      p.declare<double>("late_joiner_hold", options_.late_joiner_hold,
-                        {"increments held back after a new map reader appears (see header)",
-                         "s",
-                         0.0,
-                         60.0,
-                         {},
-                         true});
-  options_.map_id = p.declare<std::string>(
-      "map_id", options_.map_id, {"map instance key on map/update", "", {}, {}, {}, true});
-  options_.world_frame = p.declare<std::string>(
-      "world_frame", options_.world_frame, {"map and odometry frame (NED)", "", {}, {}, {}, true});
-  options_.map_directory =
-      p.declare<std::string>("map_directory", options_.map_directory,
-                             {"directory map/save writes into", "", {}, {}, {}, true});
-  options_.beam_queue_length =
-      p.declare<int64_t>("beam_queue_length", options_.beam_queue_length,
-                         {"beams kept waiting for newer odometry", "", 0.0, 100000.0, {}, true});
-  options_.initial_map = p.declare<std::string>(
-      "initial_map", options_.initial_map,
-      {"a .bt map to start from (map/save's format, same resolution), e.g. an earlier "
-       "mission's at the site; empty: start empty",
-       "",
-       {},
-       {},
-       {},
-       true});
+  interfaces::declareOptions(p, "", MapBuilder::Options::table(), options_.map, true);
+  interfaces::declareOptions(p, "", PoseBuffer::Options::table(), options_.poses, true);
+  interfaces::declareOptions(p, "", Options::table(), options_, /*read_only=*/true);
 
   builder_ = std::make_unique<MapBuilder>(options_.map);  // checks cross-field constraints
   if (!options_.initial_map.empty()) {
@@ -96,32 +69,7 @@ void MappingComponent::configure(interfaces::Node& node) {
 
   save_srv_ = node.createService<msg::SaveMapRequest, msg::SaveMapReply>(
       "map/save", [this](const msg::SaveMapRequest& request, msg::SaveMapReply& reply) {
-        const std::filesystem::path relative(request.file_path());
-        const bool probabilities = request.encoding() == msg::OCTOMAP_ENCODING_FULL;
-        std::filesystem::path name =
-            relative.empty() ? std::filesystem::path("map_" + std::to_string(sequence_number_) +
-                                                     (probabilities ? ".ot" : ".bt"))
-                             : relative;
-        for (const auto& part : name) {
-          if (part == "..") throw std::invalid_argument("file_path must not contain '..'");
-        }
-        if (name.is_absolute()) throw std::invalid_argument("file_path must be relative");
-        const std::filesystem::path full = std::filesystem::path(options_.map_directory) / name;
-        std::error_code error;
-        if (full.has_parent_path()) std::filesystem::create_directories(full.parent_path(), error);
-        std::ofstream file(full, std::ios::binary);
-        const std::string data =
-            probabilities ? builder_->fullWithProbabilities() : builder_->fullBinary();
-        file.write(data.data(), static_cast<std::streamsize>(data.size()));
-        file.close();
-        if (!file) {
-          throw interfaces::ServiceError(msg::REPLY_CODE_IO_ERROR, "cannot write " + full.string());
-        }
-        reply.file_path(name.string());
-        reply.size_bytes(data.size());
-        reply.sequence_number(sequence_number_);
-        AUV_INFO(node_->logger(),
-                 "saved map to " << full.string() << " (" << data.size() << " bytes)");
+        onSave(request, reply);
       });
   clear_srv_ = node.createService<msg::TriggerRequest, msg::TriggerReply>(
       "map/clear", [this](const msg::TriggerRequest&, msg::TriggerReply& reply) {
@@ -137,6 +85,34 @@ void MappingComponent::configure(interfaces::Node& node) {
         full_due_ = true;
         reply.message("full map on the next update");
       });
+}
+
+void MappingComponent::onSave(const msg::SaveMapRequest& request, msg::SaveMapReply& reply) {
+  const std::filesystem::path relative(request.file_path());
+  const bool probabilities = request.encoding() == msg::OCTOMAP_ENCODING_FULL;
+  std::filesystem::path name =
+      relative.empty() ? std::filesystem::path("map_" + std::to_string(sequence_number_) +
+                                               (probabilities ? ".ot" : ".bt"))
+                       : relative;
+  for (const auto& part : name) {
+    if (part == "..") throw std::invalid_argument("file_path must not contain '..'");
+  }
+  if (name.is_absolute()) throw std::invalid_argument("file_path must be relative");
+  const std::filesystem::path full = std::filesystem::path(options_.map_directory) / name;
+  std::error_code error;
+  if (full.has_parent_path()) std::filesystem::create_directories(full.parent_path(), error);
+  std::ofstream file(full, std::ios::binary);
+  const std::string data =
+      probabilities ? builder_->fullWithProbabilities() : builder_->fullBinary();
+  file.write(data.data(), static_cast<std::streamsize>(data.size()));
+  file.close();
+  if (!file) {
+    throw interfaces::ServiceError(msg::REPLY_CODE_IO_ERROR, "cannot write " + full.string());
+  }
+  reply.file_path(name.string());
+  reply.size_bytes(data.size());
+  reply.sequence_number(sequence_number_);
+  AUV_INFO(node_->logger(), "saved map to " << full.string() << " (" << data.size() << " bytes)");
 }
 
 void MappingComponent::activate() {

@@ -30,10 +30,10 @@ class MappingComponent : public interfaces::Component {
   struct Options {
     MapBuilder::Options map;
     PoseBuffer::Options poses;
-    double update_rate = 2.0;       ///< Hz, rate of map/update increments, in [0.01, 100].
-    double full_map_period = 10.0;  ///< s, period of FULL maps, in [0.1, 3600].
+    double update_rate = 2.0;       ///< Hz, rate of map/update increments.
+    double full_map_period = 10.0;  ///< s, period of FULL maps.
     /// s, after a new reader matches, how long the FULL sent for it stays the newest sample of
-    /// the transient-local history (increments wait, changes accumulate), in [0, 60]. Covers
+    /// the transient-local history (increments wait, changes accumulate). Covers
     /// the reader discovering the writer after the writer discovered the reader.
     double late_joiner_hold = 2.0;
     std::string map_id = "octomap";     ///< OctomapUpdate.map_id (DDS key).
@@ -42,8 +42,11 @@ class MappingComponent : public interfaces::Component {
     /// A .bt map to start from (map/save's format, same resolution), e.g. the map of an
     /// earlier mission at the site; empty: start with an empty map. map/clear empties it too.
     std::string initial_map;
-    /// Beams newer than the latest odometry wait for it; at most this many, in [0, 100000].
+    /// Beams newer than the latest odometry wait for it; at most this many.
     int64_t beam_queue_length = 500;
+    /// The component's own fields (rates, names, queue) with meaning, unit and range; the
+    /// map's and the pose buffer's are in their own tables.
+    static const config::OptionTable<Options>& table();
   };
 
   void configure(interfaces::Node& node) override;
@@ -63,6 +66,8 @@ class MappingComponent : public interfaces::Component {
   void onBeam(const msg::SonarBeam& beam);
   void onCloud(const msg::PointCloud& cloud);
   void onOdometry(const msg::Odometry& odometry);
+  /// map/save: writes the map under map_directory (relative names only).
+  void onSave(const msg::SaveMapRequest& request, msg::SaveMapReply& reply);
   /// What a beam waiting for odometry needs (not the message: no copy of its bins).
   struct PendingBeam {
     int64_t stamp_ns = 0;

@@ -3,11 +3,10 @@
 #include <cmath>
 
 #include "auv/interfaces/msg_time.h"
+#include "auv/interfaces/option_parameters.h"
 
 namespace auv::mission {
 namespace {
-
-constexpr double kBig = 1e6;
 
 double yawOf(const msg::Quaternion& q) {
   return std::atan2(2.0 * (q.w() * q.z() + q.x() * q.y()),
@@ -22,84 +21,36 @@ std::function<void(const T&)> bind(void (MissionComponent::*method)(const T&),
 
 }  // namespace
 
+const config::OptionTable<MissionComponent::Options>& MissionComponent::Options::table() {
+  using config::Range;
+  using O = Options;
+  static const config::OptionTable<O> kTable = {
+      {"tick_rate", &O::tick_rate, "readiness and staleness checks per second", "Hz",
+       Range::closed(1.0, 1000.0)},
+      {"status_rate", &O::status_rate,
+       "periodic mission/status messages per second (also sent on every change)", "Hz",
+       Range::closed(0.01, 100.0)},
+      {"map_resolution", &O::map_resolution, "leaf size of the map on map/update", "m",
+       Range::closed(0.01, 10.0)},
+      {"map_id", &O::map_id, "OctomapUpdate.map_id followed"},
+      {"mission_file", &O::mission_file,
+       "mission YAML loaded at configure (started on activate when autostart)"},
+      {"autostart", &O::autostart, "start mission_file when the component activates"},
+      {"log_dir", &O::log_dir,
+       "folder of the mission log read by `auv mission report` (empty: no log)"},
+  };
+  return kTable;
+}
+
 void MissionComponent::configure(interfaces::Node& node) {
   node_ = &node;
   auto& p = node.parameters();
   auto& o = options_;
   auto& e = o.executive;
-  auto seconds = [&](const char* name, double& field, const char* description) {
-    field = p.declare<double>(name, field, {description, "s", 0.01, kBig, {}, false});
-  };
-  seconds("odometry_timeout", e.odometry_timeout,
-          "nav/odometry older than this is stale: not ready, or abort to hold while running");
-  seconds("controller_timeout", e.controller_timeout,
-          "control/status older than this counts as no controller (not ready)");
-  seconds("readiness_timeout", e.readiness_timeout,
-          "a started mission that is not ready within this long fails");
-  seconds("no_solution_timeout", e.no_solution_timeout,
-          "waiting this long for a waypoint (the planner finds nothing) aborts to hold");
-  seconds("request_period", e.request_period,
-          "an unanswered waypoint request is repeated this often");
-  seconds("waypoint_timeout_margin", e.waypoint_timeout_margin,
-          "controller command timeout = factor x distance / speed + this margin");
-  e.request_distance =
-      p.declare<double>("request_distance", e.request_distance,
-                        {"ask for the next waypoint this close to the current one (0: on arrival)",
-                         "m",
-                         0.0,
-                         100.0,
-                         {},
-                         false});
-  e.waypoint_timeout_factor = p.declare<double>(
-      "waypoint_timeout_factor", e.waypoint_timeout_factor,
-      {"controller command timeout = this x distance / speed + margin", "", 1.0, 100.0, {}, false});
-  o.limits.max_depth = p.declare<double>(
-      "max_depth", o.limits.max_depth,
-      {"deepest goal accepted (the controller's max_depth)", "m", 0.1, 11000.0, {}, false});
-  o.limits.goal_clearance = p.declare<double>(
-      "goal_clearance", o.limits.goal_clearance,
-      {"goals closer than this to a known occupied cell are refused (the planner's hull_radius + "
-       "safety_margin)",
-       "m",
-       0.0,
-       100.0,
-       {},
-       false});
-  o.tick_rate =
-      p.declare<double>("tick_rate", o.tick_rate,
-                        {"readiness and staleness checks per second", "Hz", 1.0, 1000.0, {}, true});
-  o.status_rate =
-      p.declare<double>("status_rate", o.status_rate,
-                        {"periodic mission/status messages per second (also sent on every change)",
-                         "Hz",
-                         0.01,
-                         100.0,
-                         {},
-                         true});
-  o.map_resolution =
-      p.declare<double>("map_resolution", o.map_resolution,
-                        {"leaf size of the map on map/update", "m", 0.01, 10.0, {}, true});
-  o.map_id = p.declare<std::string>("map_id", o.map_id,
-                                    {"OctomapUpdate.map_id followed", "", {}, {}, {}, true});
-  o.mission_file = p.declare<std::string>(
-      "mission_file", o.mission_file,
-      {"mission YAML loaded at configure (started on activate when autostart)",
-       "",
-       {},
-       {},
-       {},
-       true});
-  o.autostart =
-      p.declare<bool>("autostart", o.autostart,
-                      {"start mission_file when the component activates", "", {}, {}, {}, true});
-  o.log_dir = p.declare<std::string>(
-      "log_dir", o.log_dir,
-      {"folder of the mission log read by `auv mission report` (empty: no log)",
-       "",
-       {},
-       {},
-       {},
-       true});
+  // Not read-only, as before, although no callback applies a change to a running executive.
+  interfaces::declareOptions(p, "", ExecutiveOptions::table(), e, /*read_only=*/false);
+  interfaces::declareOptions(p, "", MissionLimits::table(), o.limits, /*read_only=*/false);
+  interfaces::declareOptions(p, "", Options::table(), o, /*read_only=*/true);
   executive_ = std::make_unique<MissionExecutive>(e);                               // check()s
   if (!o.mission_file.empty()) configured_plan_ = loadMissionFile(o.mission_file);  // names it
   if (o.autostart && !configured_plan_) {

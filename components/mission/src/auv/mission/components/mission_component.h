@@ -28,7 +28,7 @@ class MissionComponent : public interfaces::Component {
   struct Options {
     ExecutiveOptions executive;      ///< timeouts and waypoint handling (parameters of that name)
     MissionLimits limits;            ///< max_depth, goal_clearance
-    double tick_rate = 10.0;         ///< Hz, readiness / staleness checks, in [1, 1000]
+    double tick_rate = 10.0;         ///< Hz, readiness / staleness checks
     double status_rate = 1.0;        ///< Hz, periodic mission/status (also sent on changes)
     double map_resolution = 0.5;     ///< m, leaf size of the followed map
     std::string map_id = "octomap";  ///< OctomapUpdate.map_id followed
@@ -36,6 +36,9 @@ class MissionComponent : public interfaces::Component {
     bool autostart = false;
     /// Folder of the mission log (MissionLog); empty = no log.
     std::string log_dir;
+    /// The component's own fields with meaning, unit and range; the executive's and the
+    /// limits' are in their own tables.
+    static const config::OptionTable<Options>& table();
   };
 
   void configure(interfaces::Node& node) override;

@@ -1,6 +1,7 @@
 #include "auv/planning/components/planning_component.h"
 #include "auv/interfaces/msg_eigen.h"
 #include "auv/interfaces/msg_time.h"
+#include "auv/interfaces/option_parameters.h"
 
 #include <chrono>
 #include <functional>
@@ -58,87 +59,29 @@ PlanningComponent::PlanningComponent() = default;
 
 PlanningComponent::~PlanningComponent() { deactivate(); }
 
+const config::OptionTable<PlanningComponent::Options>& PlanningComponent::Options::table() {
+  using config::Range;
+  using O = Options;
+  static const config::OptionTable<O> kTable = {
+      {"path_rate", &O::path_rate, "rate of planner/path", "Hz", Range::closed(0.01, 100.0)},
+      {"tree_rate", &O::tree_rate, "rate of planner/tree", "Hz", Range::closed(0.01, 100.0)},
+      {"full_request_period", &O::full_request_period,
+       "period of map/request_full calls while the replica misses an update", "s",
+       Range::closed(0.1, 60.0)},
+      {"map_id", &O::map_id, "map instance followed on map/update"},
+      {"world_frame", &O::world_frame, "frame of published poses (NED)"},
+  };
+  return kTable;
+}
+
 void PlanningComponent::configure(interfaces::Node& node) {
   node_ = &node;
   auto& p = node.parameters();
   auto& o = options_;
-  o.range = p.declare<double>("range", o.range,
-                              {"RRT* extension length (delta)", "m", 0.05, 100.0, {}, true});
-  o.goal_bias = p.declare<double>("goal_bias", o.goal_bias,
-                                  {"probability of sampling the goal", "", 0.0, 1.0, {}, true});
-  o.narrow_passage_bias = p.declare<double>(
-      "narrow_passage_bias", o.narrow_passage_bias,
-      {"share of random states drawn by OMPL's bridge test, which finds narrow passages "
-       "(gaps) that uniform sampling rarely hits; 0 = uniform only (the paper)",
-       "",
-       0.0,
-       1.0,
-       {},
-       true});
-  o.rewire_factor = p.declare<double>("rewire_factor", o.rewire_factor,
-                                      {"RRT* rewiring radius factor", "", 1.0, 10.0, {}, true});
-  o.clearance.hull_radius =
-      p.declare<double>("hull_radius", o.clearance.hull_radius,
-                        {"radius of the sphere enclosing the hull", "m", 0.0, 20.0, {}, true});
-  o.clearance.safety_margin =
-      p.declare<double>("safety_margin", o.clearance.safety_margin,
-                        {"clearance kept on top of hull_radius", "m", 0.0, 20.0, {}, true});
-  o.visibility_weight = p.declare<double>(
-      "visibility_weight", o.visibility_weight,
-      {"weight w of the Eq. (1) visibility term (0: path length)", "", 0.0, 100.0, {}, true});
-  o.fixed_depth =
-      p.declare<bool>("fixed_depth", o.fixed_depth,
-                      {"plan in the horizontal plane at the start depth even for 3-D queries",
-                       "",
-                       {},
-                       {},
-                       {},
-                       true});
-  o.map_resolution = p.declare<double>(
-      "map_resolution", o.map_resolution,
-      {"leaf size map updates must have (others are rejected)", "m", 0.01, 10.0, {}, true});
-  o.max_distance = p.declare<double>(
-      "max_distance", o.max_distance,
-      {"distance field clamp (>= 2 d_e keeps Eq. (1) exact)", "m", 0.5, 100.0, {}, true});
-  o.field_margin = p.declare<double>(
-      "field_margin", o.field_margin,
-      {"distance field box = query bounds grown by this", "m", 0.0, 100.0, {}, true});
-  o.iteration_budget =
-      p.declare<double>("iteration_budget", o.iteration_budget,
-                        {"length of one planning slice", "s", 0.005, 10.0, {}, true});
-  o.max_tree_size = static_cast<std::size_t>(p.declare<int64_t>(
-      "max_tree_size", static_cast<int64_t>(o.max_tree_size),
-      {"tree size at which growing pauses until a waypoint prunes it", "", 100.0, 1e7, {}, true}));
-  o.default_time_budget =
-      p.declare<double>("default_time_budget", o.default_time_budget,
-                        {"time to a first solution when a query gives 0 (then NO_SOLUTION cancel)",
-                         "s",
-                         0.1,
-                         3600.0,
-                         {},
-                         true});
-  o.path_rate = p.declare<double>("path_rate", o.path_rate,
-                                  {"rate of planner/path", "Hz", 0.01, 100.0, {}, true});
-  o.tree_rate = p.declare<double>("tree_rate", o.tree_rate,
-                                  {"rate of planner/tree", "Hz", 0.01, 100.0, {}, true});
-  o.waypoint_speed =
-      p.declare<double>("waypoint_speed", o.waypoint_speed,
-                        {"surge speed asked for towards waypoints", "m/s", 0.01, 10.0, {}, true});
-  o.waypoint_tolerance = p.declare<double>(
-      "waypoint_tolerance", o.waypoint_tolerance,
-      {"distance at which a waypoint counts as reached", "m", 0.01, 10.0, {}, true});
-  o.full_request_period =
-      p.declare<double>("full_request_period", o.full_request_period,
-                        {"period of map/request_full calls while the replica misses an update",
-                         "s",
-                         0.1,
-                         60.0,
-                         {},
-                         true});
-  o.map_id = p.declare<std::string>("map_id", o.map_id,
-                                    {"map instance followed on map/update", "", {}, {}, {}, true});
-  o.world_frame = p.declare<std::string>("world_frame", o.world_frame,
-                                         {"frame of published poses (NED)", "", {}, {}, {}, true});
+  SessionOptions& session = o;
+  interfaces::declareOptions(p, "", SessionOptions::table(), session, /*read_only=*/true);
+  interfaces::declareOptions(p, "", ClearanceOptions::table(), o.clearance, true);
+  interfaces::declareOptions(p, "", Options::table(), o, true);
   session_ = std::make_unique<PlanningSession>(o);  // checks the options
   replica_ = std::make_unique<mapping::MapReplica>(o.map_id, o.map_resolution);
 

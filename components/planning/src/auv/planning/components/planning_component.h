@@ -39,12 +39,15 @@ class PlanningComponent : public interfaces::Component {
  public:
   /// The session's options (range, clearance, time budget, ...) and the wiring's own.
   struct Options : SessionOptions {
-    double path_rate = 2.0;  ///< Hz, rate of planner/path, in [0.01, 100].
-    double tree_rate = 1.0;  ///< Hz, rate of planner/tree, in [0.01, 100].
-    /// s, period of map/request_full calls while the replica misses an update, in [0.1, 60].
+    double path_rate = 2.0;  ///< Hz, rate of planner/path.
+    double tree_rate = 1.0;  ///< Hz, rate of planner/tree.
+    /// s, period of map/request_full calls while the replica misses an update.
     double full_request_period = 1.0;
     std::string map_id = "octomap";     ///< OctomapUpdate.map_id this planner follows.
     std::string world_frame = "world";  ///< frame of the published poses (NED).
+    /// The wiring's own fields with meaning, unit and range; the session's are in
+    /// SessionOptions::table() and ClearanceOptions::table().
+    static const config::OptionTable<Options>& table();
   };
 
   PlanningComponent();

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "auv/interfaces/msg_time.h"
+#include "auv/interfaces/option_parameters.h"
 #include "auv/transfer/bulk_allocator.h"
 #include "auv/transfer/names.h"
 #include "auv/transfer/sha256.h"
@@ -37,17 +38,30 @@ msg::RecordingInfo toRecordingInfo(const Recording& r) {
   return info;
 }
 
+const config::OptionTable<RecorderComponent::Options>& RecorderComponent::Options::table() {
+  using config::Range;
+  using O = Options;
+  static const config::OptionTable<O> kTable = {
+      {"root", &O::root, "recordings root: <root>/<camera>/<name>.mp4 (+ .frames.csv)"},
+      {"vehicle_name", &O::vehicle_name,
+       "prefix of the recorder's DDS names: <vehicle_name>/recorder/..."},
+      {"scan_period", &O::scan_period,
+       "seconds between scans of the root (new and closed files are hashed once)", "s",
+       Range::closed(0.05, 3600.0)},
+      {"max_chunk_bytes", &O::max_chunk_bytes, "cap of one fetch_chunk reply's data", "B",
+       Range::closed(4096, static_cast<double>(transfer::kLargestMaxChunkBytes))},
+      {"extensions", &O::extensions, "file endings of recordings (with the dot)"},
+  };
+  return kTable;
+}
+
 void RecorderComponent::Options::check() const {
+  config::checkOptions(*this, table(), "parameter ");
   if (root.empty()) throw std::invalid_argument("parameter root: empty (the recordings folder)");
   try {
     transfer::checkVehicleName(vehicle_name);
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(std::string("parameter vehicle_name: ") + e.what());
-  }
-  if (max_chunk_bytes < 4096 || max_chunk_bytes > transfer::kLargestMaxChunkBytes) {
-    throw std::invalid_argument("parameter max_chunk_bytes: " + std::to_string(max_chunk_bytes) +
-                                " is outside [4096, " +
-                                std::to_string(transfer::kLargestMaxChunkBytes) + "]");
   }
   CatalogueOptions catalogue{root, extensions};
   try {
@@ -63,30 +77,7 @@ void RecorderComponent::configure(interfaces::Node& node) {
   node_ = &node;
   auto& p = node.parameters();
   auto& o = options_;
-  o.root = p.declare<std::string>(
-      "root", o.root,
-      {"recordings root: <root>/<camera>/<name>.mp4 (+ .frames.csv)", "", {}, {}, {}, true});
-  o.vehicle_name = p.declare<std::string>(
-      "vehicle_name", o.vehicle_name,
-      {"prefix of the recorder's DDS names: <vehicle_name>/recorder/...", "", {}, {}, {}, true});
-  o.scan_period =
-      p.declare<double>("scan_period", o.scan_period,
-                        {"seconds between scans of the root (new and closed files are hashed once)",
-                         "s",
-                         0.05,
-                         3600.0,
-                         {},
-                         true});
-  o.max_chunk_bytes = p.declare<uint32_t>("max_chunk_bytes", o.max_chunk_bytes,
-                                          {"cap of one fetch_chunk reply's data",
-                                           "B",
-                                           4096.0,
-                                           static_cast<double>(transfer::kLargestMaxChunkBytes),
-                                           {},
-                                           true});
-  o.extensions = p.declare<std::vector<std::string>>(
-      "extensions", o.extensions,
-      {"file endings of recordings (with the dot)", "", {}, {}, {}, true});
+  interfaces::declareOptions(p, "", Options::table(), o, /*read_only=*/true);
   o.check();
   transfer::keepChunkBuffersInHeap();  // every chunk served allocates multi-MiB buffers
   // Chunk digests on the max_chunk_bytes grid, the grid a pull asks for by default: serving

@@ -19,6 +19,7 @@
 #include <thread>
 #include <vector>
 
+#include "auv/config/option_table.h"
 #include "auv/interfaces/component.h"
 #include "auv/recorder/catalogue.h"
 #include "auv/transfer/chunk_reader.h"
@@ -36,6 +37,8 @@ class RecorderComponent : public interfaces::Component {
     double scan_period = 2.0;          ///< s between catalogue scans
     uint32_t max_chunk_bytes = 1u << 20;
     std::vector<std::string> extensions = {".mp4"};
+    /// The fields with meaning, unit and range: check() and the parameters come from it.
+    static const config::OptionTable<Options>& table();
     /// Throws std::invalid_argument naming the parameter.
     void check() const;
   };

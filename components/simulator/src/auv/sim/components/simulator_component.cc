@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "auv/interfaces/option_parameters.h"
 #include "auv/sim/components/message_conversion.h"
 #include "auv/sim/worldgen/world_generator.h"
 
@@ -47,75 +48,48 @@ void writeRunScenario(const Scenario& scenario, const std::string& run_dir) {
 
 }  // namespace
 
+const config::OptionTable<SimulatorComponent::Options>& SimulatorComponent::Options::table() {
+  using config::Range;
+  using O = Options;
+  static const config::OptionTable<O> kTable = {
+      {"world", &O::world, "world name (" + joinWorldNames() + ") or the path of a scenario .yaml"},
+      {"seed", &O::seed, "seed of world generation and sensor noise", "", Range::closed(0, 1e15)},
+      {"world_cache", &O::world_cache, "folder of generated worlds"},
+      {"real_time_factor", &O::real_time_factor,
+       "simulated seconds per wall-clock second; 0 = as fast as possible", "",
+       Range::closed(0.0, 1000.0)},
+      {"physics_rate", &O::physics_rate, "physics and clock rate", "Hz",
+       Range::closed(10.0, 1000.0)},
+      {"odometry_rate", &O::odometry_rate,
+       "rate of sim/ground_truth (nav/odometry follows navigation.output_rate)", "Hz",
+       Range::closed(0.1, 1000.0)},
+      {"trajectory_rate", &O::trajectory_rate,
+       "rows per second of ground_truth/trajectory.tum (the cameras render from it)", "Hz",
+       Range::closed(1.0, 1000.0)},
+      {"thruster_timeout", &O::thruster_timeout,
+       "thrusters stop when no setpoint arrived for this long", "s", Range::closed(0.01, 60.0)},
+      {"collision_repeat", &O::collision_repeat,
+       "period of repeated collision events while a contact lasts", "s",
+       Range::closed(0.01, 3600.0)},
+      {"duration", &O::duration, "simulated time after which the simulation stops; 0 = unlimited",
+       "s", Range::closed(0.0, 1e7)},
+      {"run_dir", &O::run_dir,
+       "folder for ground truth and videos; auto = auv_runs/<scenario>-<date-time>"},
+      {"mission_objective",
+       &O::mission_objective,
+       "objective of <run>/mission.yaml: visibility (Eq. 1 + length) or path_length",
+       "",
+       {},
+       {"visibility", "path_length"}},
+  };
+  return kTable;
+}
+
 void SimulatorComponent::configure(interfaces::Node& node) {
   node_ = &node;
   auto& p = node.parameters();
-  using D = interfaces::ParameterDescriptor;
-  options_.world = p.declare<std::string>(
-      "world", options_.world,
-      D{"world name (" + joinWorldNames() + ") or the path of a scenario .yaml",
-        "",
-        {},
-        {},
-        {},
-        true});
-  options_.seed =
-      p.declare<int64_t>("seed", options_.seed,
-                         D{"seed of world generation and sensor noise", "", 0.0, 1e15, {}, true});
-  options_.world_cache = p.declare<std::string>(
-      "world_cache", defaultWorldCache(), D{"folder of generated worlds", "", {}, {}, {}, true});
-  options_.real_time_factor =
-      p.declare<double>("real_time_factor", options_.real_time_factor,
-                        D{"simulated seconds per wall-clock second; 0 = as fast as possible",
-                          "",
-                          0.0,
-                          1000.0,
-                          {},
-                          true});
-  options_.physics_rate =
-      p.declare<double>("physics_rate", options_.physics_rate,
-                        D{"physics and clock rate", "Hz", 10.0, 1000.0, {}, true});
-  options_.odometry_rate =
-      p.declare<double>("odometry_rate", options_.odometry_rate,
-                        D{"rate of sim/ground_truth (nav/odometry follows navigation.output_rate)",
-                          "Hz",
-                          0.1,
-                          1000.0,
-                          {},
-                          true});
-  options_.trajectory_rate = p.declare<double>(
-      "trajectory_rate", options_.trajectory_rate,
-      D{"rows per second of ground_truth/trajectory.tum (the cameras render from it)",
-        "Hz",
-        1.0,
-        1000.0,
-        {},
-        true});
-  options_.thruster_timeout = p.declare<double>(
-      "thruster_timeout", options_.thruster_timeout,
-      D{"thrusters stop when no setpoint arrived for this long", "s", 0.01, 60.0, {}, true});
-  options_.collision_repeat = p.declare<double>(
-      "collision_repeat", options_.collision_repeat,
-      D{"period of repeated collision events while a contact lasts", "s", 0.01, 3600.0, {}, true});
-  options_.duration = p.declare<double>(
-      "duration", options_.duration,
-      D{"simulated time after which the simulation stops; 0 = unlimited", "s", 0.0, 1e7, {}, true});
-  options_.run_dir = p.declare<std::string>(
-      "run_dir", "auto",
-      D{"folder for ground truth and videos; auto = auv_runs/<scenario>-<date-time>",
-        "",
-        {},
-        {},
-        {},
-        true});
-  mission_objective_ = p.declare<std::string>(
-      "mission_objective", "visibility",
-      D{"objective of <run>/mission.yaml: visibility (Eq. 1 + length) or path_length",
-        "",
-        {},
-        {},
-        {"visibility", "path_length"},
-        true});
+  if (options_.world_cache.empty()) options_.world_cache = defaultWorldCache();
+  interfaces::declareOptions(p, "", Options::table(), options_, /*read_only=*/true);
   if (p.get<bool>("use_sim_time")) {
     throw ConfigError("simulator: use_sim_time must be false: the simulator is the clock");
   }
@@ -159,7 +133,7 @@ void SimulatorComponent::configure(interfaces::Node& node) {
   writeRunScenario(scenario_, options_.run_dir);
   // The world's inspection mission, ready for `auv mission start <run>/mission.yaml`.
   MissionExportOptions mission;
-  mission.objective = mission_objective_;
+  mission.objective = options_.mission_objective;
   writeMissionFile((fs::path(options_.run_dir) / "mission.yaml").string(),
                    missionYaml(scenario_, *mesh_, mission));
 

@@ -11,6 +11,7 @@
 #include <optional>
 #include <thread>
 
+#include "auv/config/option_table.h"
 #include "auv/interfaces/component.h"
 #include "auv/sim/components/ground_truth_log.h"
 #include "auv/sim/raycast/ray_caster.h"
@@ -27,7 +28,7 @@ class SimulatorComponent : public interfaces::Component {
   struct Options {
     std::string world = "canyon";   ///< world name (generated on demand) or scenario .yaml path
     int64_t seed = 1;               ///< world generation and sensor noise
-    std::string world_cache;        ///< where generated worlds are kept (default: user cache)
+    std::string world_cache;        ///< where generated worlds are kept (empty: user cache)
     double real_time_factor = 1.0;  ///< sim seconds per wall second; 0 = as fast as possible
     double physics_rate = 50.0;     ///< Hz (simulation time)
     double odometry_rate = 10.0;    ///< Hz, nav/odometry and sim/ground_truth
@@ -35,7 +36,13 @@ class SimulatorComponent : public interfaces::Component {
     double thruster_timeout = 1.0;  ///< s, thrusters stop when setpoints stop arriving
     double collision_repeat = 1.0;  ///< s, period of repeated events while a contact lasts
     double duration = 0.0;          ///< s of simulation time before stopping; 0 = unlimited
-    std::string run_dir;            ///< run folder for ground truth (and the cameras' videos)
+    /// run folder for ground truth (and the cameras' videos); "auto" (or empty):
+    /// auv_runs/<scenario>-<date-time>, replaced by that folder in configure().
+    std::string run_dir = "auto";
+    /// objective of the mission file written into the run folder
+    std::string mission_objective = "visibility";
+    /// The fields with meaning, unit and range: the component's parameters come from it.
+    static const config::OptionTable<Options>& table();
   };
 
   void configure(interfaces::Node& node) override;
@@ -80,7 +87,6 @@ class SimulatorComponent : public interfaces::Component {
   double roughness_ = 0.0;
   double next_odometry_ = 0.0, next_trajectory_ = 0.0;
   double next_clearance_ = 0.0;
-  std::string mission_objective_;  // of the mission file written into the run folder
   bool in_contact_ = false;
   double last_collision_event_ = -1e9;
   std::atomic<uint64_t> collisions_{0};

@@ -11,7 +11,7 @@ VehicleModel readVehicleModel(const YamlSection& section) {
   for (const auto& option : VehicleModel::table()) {
     known.push_back(option.name);
     // Exclusive bounds are left to check() below.
-    section.read(option.name, model.*option.field, option.range.min, option.range.max);
+    section.read(option.name, model.*option.member<double>(), option.range.min, option.range.max);
   }
   section.rejectUnknownKeys(known);
   try {
