@@ -4,7 +4,6 @@
 #include "parameter_conversion.h"
 
 #include <algorithm>
-#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <limits>
@@ -17,6 +16,8 @@
 #include <vector>
 
 #include <yaml-cpp/yaml.h>
+
+#include "auv/config/yaml_scalars.h"
 
 namespace auv::interfaces::detail {
 namespace {
@@ -119,109 +120,12 @@ std::pair<int64_t, int64_t> integerBounds(const Declared& declared) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Scalar text conversion (YAML 1.2 core schema, strict).
+// Scalar text conversion: the one YAML 1.2 core-schema rule of auv/config/yaml_scalars.h.
 
 namespace {
 
-bool isPlainScalar(const YAML::Node& node) { return node.IsScalar() && node.Tag() == "?"; }
-
-std::optional<bool> parseBool(const std::string& text) {
-  if (text == "true" || text == "True" || text == "TRUE") return true;
-  if (text == "false" || text == "False" || text == "FALSE") return false;
-  return std::nullopt;
-}
-
-std::optional<int64_t> parseInteger(const std::string& text) {
-  if (text.empty()) return std::nullopt;
-  const char* begin = text.data();
-  const char* end = text.data() + text.size();
-  bool negative = false;
-  if (*begin == '+' || *begin == '-') {
-    negative = *begin == '-';
-    ++begin;
-  }
-  int base = 10;
-  if (end - begin > 2 && begin[0] == '0' && (begin[1] == 'x' || begin[1] == 'o')) {
-    base = begin[1] == 'x' ? 16 : 8;
-    if (negative || text[0] == '+') return std::nullopt;  // YAML 1.2: unsigned hex and octal
-    begin += 2;
-  }
-  if (begin == end) return std::nullopt;
-  // from_chars accepts a leading '-' only; parse the magnitude as unsigned to reach INT64_MIN.
-  uint64_t magnitude = 0;
-  const auto result = std::from_chars(begin, end, magnitude, base);
-  if (result.ec != std::errc() || result.ptr != end) return std::nullopt;
-  if (negative) {
-    if (magnitude > static_cast<uint64_t>(kInt64Max) + 1) return std::nullopt;
-    return static_cast<int64_t>(0 - magnitude);
-  }
-  if (magnitude > static_cast<uint64_t>(kInt64Max)) return std::nullopt;
-  return static_cast<int64_t>(magnitude);
-}
-
-std::optional<double> parseDouble(const std::string& text) {
-  if (text == ".inf" || text == ".Inf" || text == ".INF" || text == "+.inf" || text == "+.Inf" ||
-      text == "+.INF") {
-    return std::numeric_limits<double>::infinity();
-  }
-  if (text == "-.inf" || text == "-.Inf" || text == "-.INF") {
-    return -std::numeric_limits<double>::infinity();
-  }
-  if (text == ".nan" || text == ".NaN" || text == ".NAN") {
-    return std::numeric_limits<double>::quiet_NaN();
-  }
-  if (const auto integer = parseInteger(text)) return static_cast<double>(*integer);
-  // YAML 1.2 core float: [-+]?(\.[0-9]+|[0-9]+(\.[0-9]*)?)([eE][-+]?[0-9]+)?
-  size_t i = 0;
-  if (i < text.size() && (text[i] == '+' || text[i] == '-')) ++i;
-  size_t digits = 0;
-  while (i < text.size() && std::isdigit(static_cast<unsigned char>(text[i]))) ++i, ++digits;
-  if (i < text.size() && text[i] == '.') {
-    ++i;
-    while (i < text.size() && std::isdigit(static_cast<unsigned char>(text[i]))) ++i, ++digits;
-  }
-  if (digits == 0) return std::nullopt;
-  if (i < text.size() && (text[i] == 'e' || text[i] == 'E')) {
-    ++i;
-    if (i < text.size() && (text[i] == '+' || text[i] == '-')) ++i;
-    size_t exponent_digits = 0;
-    while (i < text.size() && std::isdigit(static_cast<unsigned char>(text[i]))) {
-      ++i;
-      ++exponent_digits;
-    }
-    if (exponent_digits == 0) return std::nullopt;
-  }
-  if (i != text.size()) return std::nullopt;
-  // from_chars rejects a leading '+'; the grammar above already validated the text.
-  const char* begin = text.data() + (text[0] == '+' ? 1 : 0);
-  double value = 0.0;
-  const auto result = std::from_chars(begin, text.data() + text.size(), value);
-  if (result.ec != std::errc() || result.ptr != text.data() + text.size()) return std::nullopt;
-  return value;
-}
-
-// How a YAML node reads in a message: 'abc', "5" (a quoted string), null (empty value), ...
-std::string nodeText(const YAML::Node& node) {
-  switch (node.Type()) {
-    case YAML::NodeType::Null:
-      return "null";
-    case YAML::NodeType::Scalar:
-      return isPlainScalar(node) ? node.Scalar() : "\"" + node.Scalar() + "\"";
-    case YAML::NodeType::Sequence: {
-      std::string text = "[";
-      for (size_t i = 0; i < node.size(); ++i) {
-        if (i > 0) text += ", ";
-        text += nodeText(node[i]);
-      }
-      return text + "]";
-    }
-    case YAML::NodeType::Map:
-      return "{...}";
-    case YAML::NodeType::Undefined:
-      break;
-  }
-  return "?";
-}
+using config::isPlainScalar;
+using config::nodeText;
 
 // Converts one YAML scalar node to `Stored`; numbers and booleans must be plain (unquoted).
 template <class Stored>
@@ -232,11 +136,11 @@ std::optional<Stored> scalarFromNode(const YAML::Node& node) {
   } else {
     if (!isPlainScalar(node)) return std::nullopt;
     if constexpr (std::is_same_v<Stored, bool>) {
-      return parseBool(node.Scalar());
+      return config::parseBool(node.Scalar());
     } else if constexpr (std::is_same_v<Stored, int64_t>) {
-      return parseInteger(node.Scalar());
+      return config::parseInteger(node.Scalar());
     } else {
-      return parseDouble(node.Scalar());
+      return config::parseNumber(node.Scalar());
     }
   }
 }
@@ -263,13 +167,6 @@ Conversion convertNode(const YAML::Node& node, bool array) {
 }
 
 }  // namespace
-
-std::string nodeDisplay(const YAML::Node& node) {
-  if (node.IsNull()) return "null (empty value)";
-  if (node.IsMap()) return "a map";
-  if (node.IsScalar() && !isPlainScalar(node)) return nodeText(node) + " (a quoted string)";
-  return "'" + nodeText(node) + "'";
-}
 
 Conversion convertNode(const YAML::Node& node, ParameterType type) {
   switch (type) {

@@ -72,9 +72,6 @@ std::string formatList(const std::vector<T>& values) {
 /// Effective inclusive bounds of an integer parameter: C++ type range and descriptor together.
 std::pair<int64_t, int64_t> integerBounds(const Declared& declared);
 
-/// How a YAML node reads as the "got" part of a message: 'abc', "5" (a quoted string), a map, ...
-std::string nodeDisplay(const YAML::Node& node);
-
 /// Result of converting a YAML node: the value, or the violation.
 struct Conversion {
   std::optional<ParameterValue> value;

@@ -1,6 +1,7 @@
 #include "auv/interfaces/parameters.h"
 
 #include "auv/config/spelling.h"
+#include "auv/config/yaml_scalars.h"
 
 #include "parameter_conversion.h"
 
@@ -34,6 +35,8 @@ static_assert(
     "ParameterType must follow the order of the ParameterValue alternatives");
 
 // Value conversion and constraint checks (parameter_conversion.h).
+using config::describeNode;
+using config::markText;
 using detail::checkConstraints;
 using detail::checkDescriptor;
 using detail::coerce;
@@ -48,7 +51,6 @@ using detail::integerBounds;
 using detail::isInteger;
 using detail::kInt64Max;
 using detail::kInt64Min;
-using detail::nodeDisplay;
 using detail::Violation;
 
 namespace {
@@ -74,17 +76,8 @@ std::string lastComponent(const std::string& name) {
 // Closest declared name to `name`, if any is close enough to be a likely typo.
 std::optional<std::string> closestName(const std::string& name,
                                        const std::vector<std::string>& declared) {
-  const size_t threshold = std::max<size_t>(2, name.size() / 3);
-  std::optional<std::string> best;
-  size_t best_distance = threshold + 1;
-  for (const auto& candidate : declared) {
-    const size_t distance = config::editDistance(name, candidate);
-    if (distance < best_distance) {
-      best_distance = distance;
-      best = candidate;
-    }
-  }
-  if (best) return best;
+  const std::string best = config::closestMatch(name, declared);
+  if (!best.empty()) return best;
   // Same leaf name under another prefix (e.g. "range" vs "planner.range").
   for (const auto& candidate : declared) {
     if (lastComponent(candidate) == lastComponent(name)) return candidate;
@@ -101,11 +94,6 @@ std::string trim(const std::string& text) {
   if (begin == std::string::npos) return "";
   const size_t end = text.find_last_not_of(" \t");
   return text.substr(begin, end - begin + 1);
-}
-
-std::string markText(const YAML::Mark& mark) {
-  if (mark.is_null()) return "";
-  return ":" + std::to_string(mark.line + 1) + ":" + std::to_string(mark.column + 1);
 }
 
 std::string nodeKindText(const YAML::Node& node) {
@@ -410,7 +398,7 @@ ParameterValue Parameters::declareValue(const std::string& name, ParameterValue 
     }
     if (violation) {
       throw ParameterError("parameter '" + name + "' in " + o->source + ": " +
-                           expectedGot(declared, nodeDisplay(o->value), *violation));
+                           expectedGot(declared, describeNode(o->value), *violation));
     }
     declared.value = *conversion.value;
     declared.source = o->source;
@@ -514,7 +502,7 @@ Parameters::SetResult Parameters::setFromYaml(const std::string& name,
   const Conversion conversion = convertNode(node, typeOf(declared.value));
   if (!conversion.value) {
     return {false, "parameter '" + name +
-                       "': " + expectedGot(declared, nodeDisplay(node), conversion.violation)};
+                       "': " + expectedGot(declared, describeNode(node), conversion.violation)};
   }
   return set(name, *conversion.value);
 }

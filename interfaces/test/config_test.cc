@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -14,6 +15,8 @@
 
 #include "auv/config/errors.h"
 #include "auv/config/option_table.h"
+#include "auv/config/spelling.h"
+#include "auv/config/yaml_scalars.h"
 #include "auv/config/yaml_section.h"
 #include "auv/interfaces/option_parameters.h"
 #include "auv/interfaces/parameters.h"
@@ -31,8 +34,9 @@ TEST(ExitCodeRule, InputErrorsAreTwoAndFailuresOne) {
 }
 
 TEST(YamlSectionTest, ReadsStrictlyAndNamesFileAndField) {
-  const YamlSection root(YAML::Load("sonar: {range: far, beams: 0x10, on: yes, step: 2}"), "",
-                         "site.yaml");
+  const YamlSection root(
+      YAML::Load("sonar: {range: far, beams: 0x10, on: yes, step: 2, count: \"5\", big: 1_000}"),
+      "", "site.yaml");
   const YamlSection sonar = root.child("sonar");
   double range = 0;
   try {
@@ -42,13 +46,23 @@ TEST(YamlSectionTest, ReadsStrictlyAndNamesFileAndField) {
     EXPECT_NE(std::string(e.what()).find("site.yaml: sonar.range"), std::string::npos) << e.what();
   }
   int beams = 0;
-  EXPECT_THROW(sonar.read("beams", beams), ConfigError);  // YAML 1.2: no hex
+  sonar.read("beams", beams);  // YAML 1.2 core: 0x10 is the integer 16 (as in parameter files)
+  EXPECT_EQ(beams, 16);
   bool on = false;
   EXPECT_THROW(sonar.read("on", on), ConfigError);  // YAML 1.2: yes is not a boolean
   double step = 0;
   EXPECT_THROW(sonar.read("step", step, 0.0, 1.0), ConfigError);  // out of range
+  int count = 0;
   try {
-    sonar.rejectUnknownKeys({"range", "beams", "on", "stop"});
+    sonar.read("count", count);  // a quoted scalar is a string
+    FAIL() << "accepted \"5\"";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "site.yaml: sonar.count: expected an integer, got \"5\" (a quoted string)");
+  }
+  EXPECT_THROW(sonar.read("big", count), ConfigError);  // YAML 1.1 digit separators
+  try {
+    sonar.rejectUnknownKeys({"range", "beams", "on", "stop", "count", "big"});
     FAIL() << "accepted 'step'";
   } catch (const ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("did you mean 'stop'"), std::string::npos) << e.what();
@@ -56,6 +70,85 @@ TEST(YamlSectionTest, ReadsStrictlyAndNamesFileAndField) {
   double absent = 7;
   sonar.read("absent", absent);
   EXPECT_EQ(absent, 7);  // defaults stay
+}
+
+TEST(YamlSectionTest, ListElementsAreNamedAndKeysAreChecked) {
+  const YamlSection root(YAML::Load("a: [1, two, 3]\nb: 1\nb: 2\n"), "", "f.yaml");
+  Eigen::Vector3d point;
+  try {
+    root.read("a", point);
+    FAIL() << "accepted 'two'";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()), "f.yaml: a[1]: expected a finite number, got 'two'");
+  }
+  try {
+    root.rejectUnknownKeys({"a", "b"});
+    FAIL() << "accepted a duplicate key";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()), "f.yaml: b: duplicate key");
+  }
+}
+
+// The one scalar rule: YamlSection (scenarios, missions), parameter files and the reconstruction
+// options agree on every spelling, because they call the same functions.
+TEST(ScalarRuleTest, Yaml12CoreSchemaEverywhere) {
+  EXPECT_EQ(parseBool("True"), true);
+  EXPECT_EQ(parseBool("FALSE"), false);
+  for (const char* word : {"yes", "no", "on", "off", "y", "n", "1", "0", "tRUE", ""}) {
+    EXPECT_FALSE(parseBool(word)) << word;
+  }
+  EXPECT_EQ(parseInteger("0x1F"), 31);
+  EXPECT_EQ(parseInteger("0o17"), 15);
+  EXPECT_EQ(parseInteger("-9223372036854775808"), std::numeric_limits<int64_t>::min());
+  for (const char* text : {"1_000", "0b101", "-0x10", "1e3", "1.0", "0x", "9223372036854775808"}) {
+    EXPECT_FALSE(parseInteger(text)) << text;
+  }
+  EXPECT_EQ(parseNumber("2.5E+2"), 250.0);
+  EXPECT_EQ(parseNumber(".5"), 0.5);
+  EXPECT_EQ(parseNumber("0x10"), 16.0);
+  EXPECT_EQ(parseNumber("-.inf"), -std::numeric_limits<double>::infinity());
+  for (const char* text : {"inf", "nan", "1,5", "0x1p3", " 1", "1 ", "1:30", "e5", "."}) {
+    EXPECT_FALSE(parseNumber(text)) << text;
+  }
+
+  // The same text through a YamlSection and a parameter file: accepted or refused alike.
+  for (const std::string text :
+       {"3", "0x10", "0o7", "+2.5", "1e3", "1_000", "yes", "\"4\"", ".nan", "inf", "true", "010"}) {
+    SCOPED_TRACE(text);
+    const YamlSection section(YAML::Load("x: " + text), "", "f.yaml");
+    double from_section = 0;
+    bool section_ok = true;
+    try {
+      section.read("x", from_section);
+    } catch (const ConfigError&) {
+      section_ok = false;
+    }
+    interfaces::Parameters p("n");
+    p.loadYaml("n: {x: " + text + "}\n", "p.yaml");
+    double from_parameters = 0;
+    bool parameters_ok = true;
+    try {
+      from_parameters = p.declare("x", 0.0);
+    } catch (const interfaces::ParameterError&) {
+      parameters_ok = false;
+    }
+    if (text == ".nan") {  // a number for both; YamlSection refuses it as not finite
+      EXPECT_FALSE(section_ok);
+      EXPECT_TRUE(parameters_ok);
+      continue;
+    }
+    EXPECT_EQ(section_ok, parameters_ok);
+    if (section_ok && parameters_ok) EXPECT_EQ(from_section, from_parameters);
+  }
+}
+
+TEST(SpellingTest, OneSuggestionRule) {
+  EXPECT_EQ(editDistance("rnage", "range"), 1u);
+  EXPECT_EQ(closestMatch("rnage", {"range", "rate"}), "range");
+  EXPECT_EQ(closestMatch("xyz", {"range", "rate"}), "");  // too far: no suggestion
+  EXPECT_EQ(suggestionDistance("ab"), 2u);
+  EXPECT_EQ(suggestionDistance("goal_tolerence"), 4u);
+  EXPECT_EQ(closestMatch("goal_tolerence", {"goal", "goal_tolerance"}), "goal_tolerance");
 }
 
 TEST(YamlSectionTest, FileErrorsNameTheFileAndLine) {
@@ -69,9 +162,17 @@ TEST(YamlSectionTest, FileErrorsNameTheFileAndLine) {
     loadYamlFile(file.string());
     FAIL() << "read a broken file";
   } catch (const ConfigError& e) {
-    const std::string what = e.what();
-    EXPECT_NE(what.find(file.string() + ": line"), std::string::npos) << what;
+    const std::string what = e.what();  // file:line:column, as parameter and launch files
+    EXPECT_EQ(what.rfind(file.string() + ":", 0), 0u) << what;
+    EXPECT_NE(what.find(": malformed YAML: "), std::string::npos) << what;
+    EXPECT_EQ(what.find(file.string() + ": line"), std::string::npos) << what;
   }
+  {
+    std::ofstream out(file);  // empty
+  }
+  EXPECT_THROW(loadYamlFile(file.string()), ConfigError);
+  EXPECT_FALSE(loadYamlFile(file.string(), true).has("a"));  // allowed: no settings
+  EXPECT_THROW(loadYamlText("- a\n", "list.yaml"), ConfigError);
   std::filesystem::remove(file);
   EXPECT_THROW(loadYamlFile(file.string()), ConfigError);  // missing: named, exit code 2
 }

@@ -17,13 +17,9 @@ std::string declaredList(const std::vector<LaunchArgument>& declared) {
 }
 
 std::string closest(const std::string& name, const std::vector<LaunchArgument>& declared) {
-  std::string best;
-  size_t best_distance = 3;
-  for (const LaunchArgument& a : declared) {
-    const size_t d = config::editDistance(name, a.name);
-    if (d < best_distance) best_distance = d, best = a.name;
-  }
-  return best;
+  std::vector<std::string> names;
+  for (const LaunchArgument& a : declared) names.push_back(a.name);
+  return config::closestMatch(name, names);
 }
 
 /// The value of $(env name [default]): the variable when set and not empty, else the default.

@@ -7,11 +7,14 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <utility>
 
 #include "auv/config/spelling.h"
+#include "auv/config/yaml_scalars.h"
 #include "launch_names.h"
 
 namespace auv::bringup {
@@ -195,42 +198,31 @@ class Parser {
     return node.Scalar();
   }
 
+  // Numbers and booleans by the one scalar rule of every reader (auv/config/yaml_scalars.h).
   double parseSeconds(const YAML::Node& node, const std::string& field) const {
-    const std::string expected = "a duration in seconds >= 0";
-    if (!node.IsScalar()) fail(field, "expected " + expected + ", got " + describe(node), node);
-    double value = 0.0;
-    try {
-      value = node.as<double>();
-    } catch (const YAML::Exception&) {
-      fail(field, "expected " + expected + ", got " + describe(node), node);
+    const std::optional<double> value =
+        config::isPlainScalar(node) ? config::parseNumber(node.Scalar()) : std::nullopt;
+    if (!value || !std::isfinite(*value) || *value < 0.0) {
+      fail(field, "expected a duration in seconds >= 0, got " + describe(node), node);
     }
-    if (!std::isfinite(value) || value < 0.0) {
-      fail(field, "expected " + expected + ", got " + describe(node), node);
-    }
-    return value;
+    return *value;
   }
 
   int parseCount(const YAML::Node& node, const std::string& field) const {
-    const std::string expected = "a non-negative integer";
-    if (!node.IsScalar()) fail(field, "expected " + expected + ", got " + describe(node), node);
-    int value = -1;
-    try {
-      value = node.as<int>();
-    } catch (const YAML::Exception&) {
-      fail(field, "expected " + expected + ", got " + describe(node), node);
+    const std::optional<int64_t> value =
+        config::isPlainScalar(node) ? config::parseInteger(node.Scalar()) : std::nullopt;
+    if (!value || *value < 0 || *value > std::numeric_limits<int>::max()) {
+      fail(field, "expected a non-negative integer, got " + describe(node), node);
     }
-    if (value < 0) fail(field, "expected " + expected + ", got " + describe(node), node);
-    return value;
+    return static_cast<int>(*value);
   }
 
-  // Strict YAML 1.2 core booleans, like the parameter files: yes/no/on/off/1/0 are errors.
+  // Strict YAML 1.2 core booleans, like every reader: yes/no/on/off/1/0 are errors.
   bool parseBool(const YAML::Node& node, const std::string& field) const {
-    if (node.IsScalar() && node.Tag() == "?") {
-      const std::string& text = node.Scalar();
-      if (text == "true" || text == "True" || text == "TRUE") return true;
-      if (text == "false" || text == "False" || text == "FALSE") return false;
-    }
-    fail(field, "expected true or false, got " + describe(node), node);
+    const std::optional<bool> value =
+        config::isPlainScalar(node) ? config::parseBool(node.Scalar()) : std::nullopt;
+    if (!value) fail(field, "expected true or false, got " + describe(node), node);
+    return *value;
   }
 
   // Matches a scalar against the spellings of an enum; suggests the closest on a typo.

@@ -154,7 +154,8 @@ TEST(MissionPlanTest, MalformedYamlNamesTheLine) {
   const std::string error =
       errorOf("mission:\n  name: m\n  queries:\n    - goal: [1, 2, 3]\n   bad_indent: x\n");
   EXPECT_CONTAINS(error, "test.yaml");
-  EXPECT_CONTAINS(error, "malformed YAML at line 5");
+  EXPECT_CONTAINS(error, "test.yaml:5:");  // file:line:column, as every reader
+  EXPECT_CONTAINS(error, "malformed YAML");
 }
 
 TEST(MissionPlanTest, MissingMissionSection) {
@@ -166,14 +167,39 @@ TEST(MissionPlanTest, MissingMissionSection) {
 TEST(MissionPlanTest, UnknownFieldListsTheKnownOnes) {
   const std::string error = errorOf(oneQuery("      goal_tol: 2\n"));
   EXPECT_CONTAINS(error, "queries[0]");
-  EXPECT_CONTAINS(error, "unknown field 'goal_tol'");
+  EXPECT_CONTAINS(error, "queries[0].goal_tol: unknown setting");
   EXPECT_CONTAINS(error, "known:");
   EXPECT_CONTAINS(error, "goal_tolerance");
   EXPECT_CONTAINS(error, "admissible_range");
 
   const std::string top = errorOf("mission:\n  querys: []\n");
-  EXPECT_CONTAINS(top, "unknown field 'querys'");
+  EXPECT_CONTAINS(top, "test.yaml: mission.querys: unknown setting");
   EXPECT_CONTAINS(top, "queries");
+}
+
+TEST(MissionPlanTest, UnknownFieldSuggestsTheClosestOne) {
+  const std::string error = errorOf(oneQuery("      goal_tolerence: 2\n"));
+  EXPECT_CONTAINS(error, "test.yaml: mission.queries[0].goal_tolerence: unknown setting");
+  EXPECT_CONTAINS(error, "did you mean 'goal_tolerance'?");
+  EXPECT_CONTAINS(error, "known: name, goal, goal_tolerance");
+  EXPECT_CONTAINS(errorOf("mission:\n  defults: {}\n  queries: []\n"), "did you mean 'defaults'?");
+}
+
+TEST(MissionPlanTest, ScalarsFollowYaml12) {
+  // YAML 1.1 booleans are not booleans (the rule of every reader: auv/config/yaml_scalars.h).
+  for (const std::string word : {"yes", "no", "on", "off", "y", "1"}) {
+    SCOPED_TRACE(word);
+    const std::string error = errorOf(oneQuery("      fixed_depth: " + word + "\n"));
+    EXPECT_CONTAINS(error, "test.yaml: mission.queries[0].fixed_depth");
+    EXPECT_CONTAINS(error, "expected a boolean (true or false), got '" + word + "'");
+  }
+  EXPECT_CONTAINS(errorOf(oneQuery("      goal_tolerance: \"2\"\n")), "(a quoted string)");
+  EXPECT_CONTAINS(errorOf(oneQuery("      time_budget: 1_000\n")), "got '1_000'");
+  EXPECT_CONTAINS(errorOf(oneQuery("      time_budget: .inf\n")), "expected a finite number");
+  const MissionPlan plan =
+      parseMission(oneQuery("      fixed_depth: True\n      time_budget: 0x10\n"), "test.yaml");
+  EXPECT_TRUE(plan.queries[0].fixed_depth);
+  EXPECT_EQ(plan.queries[0].time_budget, 16.0);  // YAML 1.2 hex integer
 }
 
 TEST(MissionPlanTest, GoalMustBeNorthEastDown) {
@@ -182,7 +208,7 @@ TEST(MissionPlanTest, GoalMustBeNorthEastDown) {
   EXPECT_CONTAINS(two, "[north, east, down]");
   const std::string text = errorOf("mission:\n  queries:\n    - goal: [1, two, 3]\n");
   EXPECT_CONTAINS(text, "queries[0].goal[1]");
-  EXPECT_CONTAINS(text, "not a valid number");
+  EXPECT_CONTAINS(text, "expected a finite number, got 'two'");
   const std::string none = errorOf("mission:\n  queries:\n    - name: a\n");
   EXPECT_CONTAINS(none, "queries[0]");
   EXPECT_CONTAINS(none, "no goal");
@@ -236,7 +262,8 @@ TEST(MissionPlanTest, EmptyQueries) {
 TEST(MissionPlanTest, OtherFieldsAreCheckedToo) {
   EXPECT_CONTAINS(errorOf(oneQuery("      time_budget: -2\n")), "time_budget");
   EXPECT_CONTAINS(errorOf(oneQuery("      expected_distance: -1\n")), "expected_distance");
-  EXPECT_CONTAINS(errorOf(oneQuery("      fixed_depth: maybe\n")), "not a valid boolean");
+  EXPECT_CONTAINS(errorOf(oneQuery("      fixed_depth: maybe\n")),
+                  "expected a boolean (true or false), got 'maybe'");
   EXPECT_CONTAINS(errorOf(oneQuery("      fixed_depth: true\n      depth: -3\n")), "depth");
   EXPECT_CONTAINS(errorOf("mission:\n  queries:\n    - goal: [5, 5, -1]\n"
                           "      bounds: {min: [0, 0, -5], max: [10, 10, 10]}\n"),

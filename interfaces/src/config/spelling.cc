@@ -22,3 +22,24 @@ size_t editDistance(const std::string& a, const std::string& b) {
 }
 
 }  // namespace auv::config
+
+namespace auv::config {
+
+size_t suggestionDistance(const std::string& word) { return std::max<size_t>(2, word.size() / 3); }
+
+std::string closestMatch(const std::string& word, const std::vector<std::string>& candidates,
+                         size_t max_distance) {
+  std::string best;
+  size_t best_distance = max_distance + 1;
+  for (const std::string& candidate : candidates) {
+    const size_t distance = editDistance(word, candidate);
+    if (distance < best_distance) best_distance = distance, best = candidate;
+  }
+  return best;
+}
+
+std::string closestMatch(const std::string& word, const std::vector<std::string>& candidates) {
+  return closestMatch(word, candidates, suggestionDistance(word));
+}
+
+}  // namespace auv::config

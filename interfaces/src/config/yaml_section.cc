@@ -1,33 +1,22 @@
 #include "auv/config/yaml_section.h"
 
-#include <cerrno>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
 
 #include "auv/config/spelling.h"
+#include "auv/config/yaml_scalars.h"
 
 namespace auv::config {
 namespace {
 
-std::string describe(const YAML::Node& node) {
-  if (node.IsScalar()) return "'" + node.Scalar() + "'";
-  if (node.IsSequence()) return "a sequence";
-  if (node.IsMap()) return "a map";
-  return "nothing";
-}
+std::string describe(const YAML::Node& node) { return describeNode(node); }
 
-// Strict YAML 1.2 core-schema numbers: yaml-cpp would also accept e.g. "0x10" for double
-// and "1e3" for int inconsistently, so parse the text ourselves.
-bool parseDouble(const std::string& text, double& value) {
-  if (text == ".inf" || text == "+.inf")
-    return value = std::numeric_limits<double>::infinity(), true;
-  if (text == "-.inf") return value = -std::numeric_limits<double>::infinity(), true;
-  if (text == ".nan") return value = std::numeric_limits<double>::quiet_NaN(), true;
-  if (text.empty()) return false;
-  char* end = nullptr;
-  value = std::strtod(text.c_str(), &end);
-  return end && *end == '\0' && text.find_first_of("xXpP") == std::string::npos;
+/// The number of a plain scalar by the one rule (yaml_scalars.h), or nullopt.
+std::optional<double> plainNumber(const YAML::Node& node) {
+  if (!isPlainScalar(node)) return std::nullopt;
+  return parseNumber(node.Scalar());
 }
 
 std::string rangeText(std::optional<double> min, std::optional<double> max) {
@@ -96,10 +85,11 @@ void YamlSection::read(const std::string& key, double& value, std::optional<doub
                        std::optional<double> max) const {
   if (!has(key)) return;
   const YAML::Node node = scalar(key, "a number");
-  double parsed = 0;
-  if (!parseDouble(node.Scalar(), parsed) || !std::isfinite(parsed)) {
+  const std::optional<double> number = plainNumber(node);
+  if (!number || !std::isfinite(*number)) {
     fail(key, "expected a finite number" + rangeText(min, max) + ", got " + describe(node));
   }
+  const double parsed = *number;
   if ((min && parsed < *min) || (max && parsed > *max)) {
     fail(key, "expected a number" + rangeText(min, max) + ", got " + node.Scalar());
   }
@@ -117,10 +107,8 @@ void YamlSection::read(const std::string& key, int& value, std::optional<int> mi
                        std::optional<int> max) const {
   if (!has(key)) return;
   const YAML::Node node = scalar(key, "an integer");
-  const std::string& text = node.Scalar();
-  char* end = nullptr;
-  errno = 0;
-  const long parsed = std::strtol(text.c_str(), &end, 10);
+  const std::optional<int64_t> parsed =
+      isPlainScalar(node) ? parseInteger(node.Scalar()) : std::nullopt;
   std::string range;
   if (min && max)
     range = " in [" + std::to_string(*min) + ", " + std::to_string(*max) + "]";
@@ -128,27 +116,23 @@ void YamlSection::read(const std::string& key, int& value, std::optional<int> mi
     range = " >= " + std::to_string(*min);
   else if (max)
     range = " <= " + std::to_string(*max);
-  if (text.empty() || *end != '\0' || errno == ERANGE || parsed < std::numeric_limits<int>::min() ||
-      parsed > std::numeric_limits<int>::max()) {
+  const int64_t number = parsed.value_or(0);
+  if (!parsed || number < std::numeric_limits<int>::min() ||
+      number > std::numeric_limits<int>::max()) {
     fail(key, "expected an integer" + range + ", got " + describe(node));
   }
-  if ((min && parsed < *min) || (max && parsed > *max)) {
-    fail(key, "expected an integer" + range + ", got " + text);
+  if ((min && number < *min) || (max && number > *max)) {
+    fail(key, "expected an integer" + range + ", got " + node.Scalar());
   }
-  value = static_cast<int>(parsed);
+  value = static_cast<int>(number);
 }
 
 void YamlSection::read(const std::string& key, bool& value) const {
   if (!has(key)) return;
-  const YAML::Node node = scalar(key, "true or false");
-  const std::string& t = node.Scalar();
-  if (t == "true" || t == "True" || t == "TRUE") {
-    value = true;
-  } else if (t == "false" || t == "False" || t == "FALSE") {
-    value = false;
-  } else {
-    fail(key, "expected true or false, got " + describe(node));
-  }
+  const YAML::Node node = scalar(key, "a boolean (true or false)");
+  const std::optional<bool> parsed = isPlainScalar(node) ? parseBool(node.Scalar()) : std::nullopt;
+  if (!parsed) fail(key, "expected a boolean (true or false), got " + describe(node));
+  value = *parsed;
 }
 
 void YamlSection::read(const std::string& key, std::string& value) const {
@@ -164,9 +148,10 @@ void YamlSection::read(const std::string& key, Eigen::Vector3d& value, std::opti
   if (v.size() != 3) {
     fail(key, "expected 3 numbers [a, b, c], got " + std::to_string(v.size()));
   }
-  for (double x : v) {
-    if ((min && x < *min) || (max && x > *max)) {
-      fail(key, "every element must be a number" + rangeText(min, max));
+  for (size_t i = 0; i < v.size(); ++i) {
+    if ((min && v[i] < *min) || (max && v[i] > *max)) {
+      fail(key + "[" + std::to_string(i) + "]",
+           "expected a number" + rangeText(min, max) + ", got " + nodeText(node_[key][i]));
     }
   }
   value = Eigen::Vector3d(v[0], v[1], v[2]);
@@ -178,11 +163,12 @@ void YamlSection::read(const std::string& key, std::vector<double>& value) const
   if (!list.IsSequence()) fail(key, "expected a list of numbers, got " + describe(list));
   std::vector<double> out;
   for (size_t i = 0; i < list.size(); ++i) {
-    double x = 0;
-    if (!list[i].IsScalar() || !parseDouble(list[i].Scalar(), x) || !std::isfinite(x)) {
-      fail(key, "element " + std::to_string(i) + " is not a finite number: " + describe(list[i]));
+    const std::optional<double> x = plainNumber(list[i]);
+    if (!x || !std::isfinite(*x)) {
+      fail(key + "[" + std::to_string(i) + "]",
+           "expected a finite number, got " + describe(list[i]));
     }
-    out.push_back(x);
+    out.push_back(*x);
   }
   value = std::move(out);
 }
@@ -204,36 +190,63 @@ void requireOption(bool ok, const std::string& field, const std::string& what, d
 
 void YamlSection::rejectUnknownKeys(const std::vector<std::string>& known) const {
   if (!node_.IsMap()) return;
+  std::vector<std::string> seen;
   for (const auto& entry : node_) {
-    const std::string key = entry.first.as<std::string>();
-    bool found = false;
-    std::string best;
-    size_t best_distance = 3;  // suggest only close spellings
-    for (const std::string& k : known) {
-      if (k == key) found = true;
-      const size_t d = editDistance(k, key);
-      if (d < best_distance) best_distance = d, best = k;
+    if (!entry.first.IsScalar()) {
+      throw ConfigError(file_ + markText(entry.first.Mark()) + ": " +
+                        (path_.empty() ? "the file" : path_) + ": keys must be plain names, got " +
+                        describe(entry.first));
     }
-    if (found) continue;
-    std::string message = "unknown setting";
-    if (!best.empty()) message += " (did you mean '" + best + "'?)";
-    std::string list;
-    for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
-    fail(key, message + "; known: " + list);
+    const std::string& key = entry.first.Scalar();
+    if (std::find(seen.begin(), seen.end(), key) != seen.end()) fail(key, "duplicate key");
+    seen.push_back(key);
+    if (std::find(known.begin(), known.end(), key) == known.end()) unknownKey(key, known);
   }
 }
 
-YamlSection loadYamlFile(const std::string& file) {
+void YamlSection::unknownKey(const std::string& key, const std::vector<std::string>& known) const {
+  std::string message = "unknown setting";
+  const std::string best = closestMatch(key, known);
+  if (!best.empty()) message += " (did you mean '" + best + "'?)";
+  std::string list;
+  for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
+  fail(key, message + "; known: " + list);
+}
+
+namespace {
+
+YamlSection rootSection(const YAML::Node& root, const std::string& source, bool allow_empty) {
+  if (allow_empty && (!root.IsDefined() || root.IsNull()))
+    return YamlSection(YAML::Node(), "", source);
+  if (!root.IsMap()) {
+    throw ConfigError(source + markText(root.Mark()) +
+                      ": expected a map of settings at the top level, got " + describe(root));
+  }
+  return YamlSection(root, "", source);
+}
+
+}  // namespace
+
+YamlSection loadYamlText(const std::string& text, const std::string& source, bool allow_empty) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(source + markText(e.mark) + ": malformed YAML: " + e.msg);
+  }
+  return rootSection(root, source, allow_empty);
+}
+
+YamlSection loadYamlFile(const std::string& file, bool allow_empty) {
   YAML::Node root;
   try {
     root = YAML::LoadFile(file);
   } catch (const YAML::BadFile&) {
     throw ConfigError(file + ": cannot open the file");
   } catch (const YAML::Exception& e) {
-    throw ConfigError(file + ": line " + std::to_string(e.mark.line + 1) + ": " + e.msg);
+    throw ConfigError(file + markText(e.mark) + ": malformed YAML: " + e.msg);
   }
-  if (!root.IsMap()) throw ConfigError(file + ": expected a map of settings at the top level");
-  return YamlSection(root, "", file);
+  return rootSection(root, file, allow_empty);
 }
 
 }  // namespace auv::config

@@ -170,14 +170,55 @@ TEST(OptionSet, BadValuesNameTheFlagOrTheFileAndKey) {
   EXPECT_EQ(message({"--method"}), "--method: missing value");
   const fs::path config = dir.path / "bad.yaml";
   std::ofstream(config) << "keyframes:\n  min_motion: 3\n";
-  EXPECT_NE(message({"--config", config.string()})
-                .find(config.string() + ": keyframes.min_motion: unknown option"),
-            std::string::npos);
+  const std::string unknown = message({"--config", config.string()});
+  EXPECT_NE(unknown.find(config.string() + ": keyframes.min_motion: unknown setting"),
+            std::string::npos)
+      << unknown;
+  EXPECT_NE(unknown.find("did you mean 'min_motion_px'?"), std::string::npos) << unknown;
+  EXPECT_NE(unknown.find("known: min_motion_px, pyramid_levels"), std::string::npos) << unknown;
   std::ofstream(config) << "keyframes:\n  pyramid_levels: 2.5\n";
   EXPECT_EQ(message({"--config", config.string()}),
             config.string() + ": keyframes.pyramid_levels: expected an integer, got '2.5'");
   EXPECT_EQ(message({"--config", (dir.path / "missing.yaml").string()}),
-            "--config: " + (dir.path / "missing.yaml").string() + ": cannot read");
+            "--config: " + (dir.path / "missing.yaml").string() + ": cannot open the file");
+  std::ofstream(config) << "keyframes:\n  min_motion_px: [1\n";
+  EXPECT_EQ(message({"--config", config.string()}).rfind("--config: " + config.string() + ":", 0),
+            0u);
+}
+
+// Flags and the file follow the one scalar rule of every reader (YAML 1.2 core schema).
+TEST(OptionSet, ValuesFollowYaml12) {
+  TempDir dir;
+  ToyOptions o;
+  auto message = [&](const std::vector<std::string>& args) {
+    OptionSet set = bind(o);
+    try {
+      set.parse(args);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const fs::path config = dir.path / "recon.yaml";
+  std::ofstream(config) << "keyframes:\n  adaptive: yes\n";
+  EXPECT_EQ(
+      message({"--config", config.string()}),
+      config.string() + ": keyframes.adaptive: expected a boolean (true or false), got 'yes'");
+  std::ofstream(config) << "keyframes:\n  min_motion_px: \"12\"\n";
+  EXPECT_EQ(message({"--config", config.string()}),
+            config.string() +
+                ": keyframes.min_motion_px: expected a number, got \"12\" (a quoted string)");
+  EXPECT_EQ(message({"--adaptive=on"}), "--adaptive: expected a boolean (true or false), got 'on'");
+  EXPECT_EQ(message({"--min-motion-px", "0x1p3"}),
+            "--min-motion-px: expected a number, got '0x1p3'");
+  std::ofstream(config) << "keyframes:\n  max-features: 0x20\n  method: 5\n  adaptive: True\n";
+  ASSERT_EQ(message({"--config", config.string(), "--pyramid-levels", "+4"}), "no error");
+  EXPECT_EQ(o.max_features, 32u);  // either spelling of a key; a YAML 1.2 hex integer
+  EXPECT_EQ(o.method, "5");        // strings take any scalar
+  EXPECT_TRUE(o.adaptive);
+  EXPECT_EQ(o.pyramid_levels, 4);
+  std::ofstream(config) << "";
+  EXPECT_EQ(message({"--config", config.string()}), "no error");  // an empty file sets nothing
 }
 
 TEST(OptionCheck, NamesTheFieldAndItsValue) {

@@ -202,6 +202,7 @@ TEST(Pipeline, BadConfigSectionsAreRefusedBeforeAnyStageRuns) {
   EXPECT_NE(what.find("lk_window"), std::string::npos) << what;
   what = refusal("sfm:\n  threads: 2\nsfn:\n  threads: 2\n");  // a typo of a stage
   EXPECT_NE(what.find("section 'sfn'"), std::string::npos) << what;
+  EXPECT_NE(what.find("did you mean 'sfm'?"), std::string::npos) << what;
   what = refusal("- keyframes\n- dense\n");
   EXPECT_NE(what.find("map"), std::string::npos) << what;
 

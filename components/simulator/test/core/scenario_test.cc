@@ -99,7 +99,10 @@ TEST_F(ScenarioTest, ErrorsNameTheFileAndField) {
                 .find("did you mean 'visibility'"),
             std::string::npos);
   EXPECT_NE(errorOf("world: [1, 2]\n").find("world: expected a map"), std::string::npos);
-  EXPECT_NE(errorOf("world: {mesh: block.ply\n").find("scenario.yaml: line"), std::string::npos);
+  // file:line:column, as parameter and launch files
+  const std::string syntax = errorOf("world: {mesh: block.ply\n");
+  EXPECT_NE(syntax.find("scenario.yaml:2:"), std::string::npos) << syntax;
+  EXPECT_NE(syntax.find(": malformed YAML: "), std::string::npos) << syntax;
 }
 
 }  // namespace

@@ -2,7 +2,8 @@
 // Strict reading of one YAML mapping of a file (a scenario, a mission, options), so that a bad
 // value names the file and the field ("canyon.yaml: sonar.range: expected a number > 0, got
 // 'far'") and a misspelt key is an error with a suggestion instead of a silently ignored
-// setting. YAML 1.2 core-schema scalars only: "0x10" is not a number, "yes" is not a boolean.
+// setting. Scalars follow the one rule of yaml_scalars.h (the YAML 1.2 core schema: "yes" is not
+// a boolean, "1_000" not a number, a quoted "5" is a string).
 
 #include <optional>
 #include <string>
@@ -45,8 +46,12 @@ class YamlSection {
   void readDegrees(const std::string& key, double& radians, std::optional<double> min_deg = {},
                    std::optional<double> max_deg = {}) const;
 
-  /// Throws ConfigError for any key not in `known`, suggesting the closest known key.
+  /// Throws ConfigError for any key not in `known` (suggesting the closest known key, listing
+  /// them all), for a key given twice and for a key that is not a plain name.
   void rejectUnknownKeys(const std::vector<std::string>& known) const;
+  /// Throws the "unknown setting" error of rejectUnknownKeys for `key` (for readers that match
+  /// keys themselves, e.g. accepting another spelling).
+  [[noreturn]] void unknownKey(const std::string& key, const std::vector<std::string>& known) const;
 
   /// "file: path.key" for messages.
   std::string where(const std::string& key) const;
@@ -68,7 +73,12 @@ class YamlSection {
 /// check(): `field` is the dotted name, e.g. "sonar.max_range").
 void requireOption(bool ok, const std::string& field, const std::string& what, double value);
 
-/// Loads a YAML file whose root is a map; errors (missing file, syntax with line) name it.
-YamlSection loadYamlFile(const std::string& file);
+/// Loads a YAML file whose root is a map; errors name the file ("<file>: cannot open the file",
+/// "<file>:<line>:<column>: malformed YAML: ..."). An empty file is an empty root section when
+/// `allow_empty`, else an error.
+YamlSection loadYamlFile(const std::string& file, bool allow_empty = false);
+/// The same for YAML text held in memory; `source` names it in messages.
+YamlSection loadYamlText(const std::string& text, const std::string& source,
+                         bool allow_empty = false);
 
 }  // namespace auv::config

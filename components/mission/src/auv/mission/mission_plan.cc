@@ -1,100 +1,112 @@
 #include "auv/mission/mission_plan.h"
 
 #include <cmath>
-#include <fstream>
 #include <limits>
-#include <set>
 #include <sstream>
 
 #include <yaml-cpp/yaml.h>
 
+#include "auv/config/yaml_section.h"
+
 namespace auv::mission {
 namespace {
 
-const std::set<std::string> kQueryKeys = {"name",
-                                          "goal",
-                                          "goal_tolerance",
-                                          "time_budget",
-                                          "objective",
-                                          "expected_distance",
-                                          "admissible_range",
-                                          "bounds",
-                                          "fixed_depth",
-                                          "depth"};
+using config::YamlSection;
 
-std::string where(const std::string& source, const std::string& context, const std::string& key) {
-  return source + ": " + context + (key.empty() ? "" : "." + key);
-}
+const std::vector<std::string> kQueryKeys = {"name",
+                                             "goal",
+                                             "goal_tolerance",
+                                             "time_budget",
+                                             "objective",
+                                             "expected_distance",
+                                             "admissible_range",
+                                             "bounds",
+                                             "fixed_depth",
+                                             "depth"};
 
-void rejectUnknownKeys(const YAML::Node& node, const std::set<std::string>& allowed,
-                       const std::string& context) {
-  for (const auto& entry : node) {
-    const std::string key = entry.first.as<std::string>();
-    if (allowed.count(key) == 0) {
-      std::string list;
-      for (const auto& name : allowed) list += (list.empty() ? "" : ", ") + name;
-      throw MissionError(context + ": unknown field '" + key + "' (known: " + list + ")");
-    }
-  }
-}
-
-template <class T>
-T read(const YAML::Node& node, const std::string& context) {
-  try {
-    return node.as<T>();
-  } catch (const YAML::Exception&) {
-    throw MissionError(context + ": '" + YAML::Dump(node) + "' is not a valid " +
-                       (std::is_same_v<T, bool>     ? "boolean"
-                        : std::is_same_v<T, double> ? "number"
-                                                    : "string"));
-  }
-}
-
-Eigen::Vector3d readPoint(const YAML::Node& node, const std::string& context) {
+/// A point [north, east, down] in metres under `key`, when present.
+void readPoint(const YamlSection& section, const std::string& key, Eigen::Vector3d& point) {
+  if (!section.has(key)) return;
+  const YAML::Node node = section.node()[key];
   if (!node.IsSequence() || node.size() != 3) {
-    throw MissionError(context + ": expected [north, east, down] in metres");
+    section.fail(key, "expected [north, east, down] in metres");
   }
-  return {read<double>(node[0], context + "[0]"), read<double>(node[1], context + "[1]"),
-          read<double>(node[2], context + "[2]")};
+  section.read(key, point);
 }
 
-/// Fields of `node` override those of `query` (defaults, then the query's own).
-void readQueryFields(const YAML::Node& node, const std::string& context, MissionQuery& query) {
-  if (!node.IsMap()) throw MissionError(context + ": expected a map of fields");
-  rejectUnknownKeys(node, kQueryKeys, context);
-  auto field = [&](const char* key) { return context + "." + key; };
-  if (node["name"]) query.name = read<std::string>(node["name"], field("name"));
-  if (node["goal"]) query.goal = readPoint(node["goal"], field("goal"));
-  if (node["goal_tolerance"]) {
-    query.goal_tolerance = read<double>(node["goal_tolerance"], field("goal_tolerance"));
-  }
-  if (node["time_budget"])
-    query.time_budget = read<double>(node["time_budget"], field("time_budget"));
-  if (node["objective"]) {
-    const std::string objective = read<std::string>(node["objective"], field("objective"));
+/// Fields of `section` override those of `query` (defaults, then the query's own).
+void readQueryFields(const YamlSection& section, MissionQuery& query) {
+  section.rejectUnknownKeys(kQueryKeys);
+  section.read("name", query.name);
+  readPoint(section, "goal", query.goal);
+  section.read("goal_tolerance", query.goal_tolerance);
+  section.read("time_budget", query.time_budget);
+  if (section.has("objective")) {
+    std::string objective;
+    section.read("objective", objective);
     if (objective != "visibility" && objective != "path_length") {
-      throw MissionError(field("objective") + ": '" + objective +
-                         "' is not one of visibility, path_length");
+      section.fail("objective", "'" + objective + "' is not one of visibility, path_length");
     }
     query.visibility_objective = objective == "visibility";
   }
-  if (node["expected_distance"]) {
-    query.expected_distance = read<double>(node["expected_distance"], field("expected_distance"));
-  }
-  if (node["admissible_range"]) {
-    query.admissible_range = read<double>(node["admissible_range"], field("admissible_range"));
-  }
-  if (node["bounds"]) {
-    const YAML::Node bounds = node["bounds"];
+  section.read("expected_distance", query.expected_distance);
+  section.read("admissible_range", query.admissible_range);
+  if (section.has("bounds")) {
+    const YAML::Node bounds = section.node()["bounds"];
     if (!bounds.IsMap() || !bounds["min"] || !bounds["max"] || bounds.size() != 2) {
-      throw MissionError(field("bounds") + ": expected {min: [n, e, d], max: [n, e, d]}");
+      section.fail("bounds", "expected {min: [n, e, d], max: [n, e, d]}");
     }
-    query.bounds_min = readPoint(bounds["min"], field("bounds") + ".min");
-    query.bounds_max = readPoint(bounds["max"], field("bounds") + ".max");
+    readPoint(section.child("bounds"), "min", query.bounds_min);
+    readPoint(section.child("bounds"), "max", query.bounds_max);
   }
-  if (node["fixed_depth"])
-    query.fixed_depth = read<bool>(node["fixed_depth"], field("fixed_depth"));
-  if (node["depth"]) query.depth = read<double>(node["depth"], field("depth"));
+  section.read("fixed_depth", query.fixed_depth);
+  if (section.has("depth")) {
+    double depth = 0.0;
+    section.read("depth", depth);
+    query.depth = depth;
+  }
+}
+
+/// The mission of a file's root section (the shared strict reader: ConfigError on bad input).
+MissionPlan readMission(const YamlSection& root) {
+  const std::string& source = root.file();
+  if (!root.has("mission")) {
+    throw MissionError(source + ": expected a top-level 'mission:' section");
+  }
+  const YamlSection mission = root.child("mission");
+  mission.rejectUnknownKeys({"name", "defaults", "queries"});
+  MissionPlan plan;
+  plan.name = "mission";
+  mission.read("name", plan.name);
+  MissionQuery defaults;
+  readQueryFields(mission.child("defaults"), defaults);
+  const YAML::Node queries = mission.node()["queries"];
+  if (!queries || !queries.IsSequence() || queries.size() == 0) {
+    mission.fail("queries", "expected a non-empty list");
+  }
+  const std::vector<YamlSection> sections = mission.childList("queries");
+  for (std::size_t i = 0; i < sections.size(); ++i) {
+    MissionQuery query = defaults;
+    query.name = "query " + std::to_string(i + 1);
+    if (!sections[i].has("goal"))
+      throw MissionError(source + ": " + sections[i].path() + ": no goal");
+    readQueryFields(sections[i], query);
+    checkQuery(query, source);
+    plan.queries.push_back(query);
+  }
+  return plan;
+}
+
+/// Runs `read`, reporting the shared reader's ConfigError as the MissionError callers catch.
+template <class Read>
+MissionPlan asMissionError(Read read) {
+  try {
+    return read();
+  } catch (const MissionError&) {
+    throw;
+  } catch (const config::ConfigError& error) {
+    throw MissionError(error.what());
+  }
 }
 
 /// `text` as a double-quoted YAML scalar (names may hold '#', ': ', quotes, backslashes).
@@ -158,47 +170,11 @@ void checkQuery(const MissionQuery& q, const std::string& source) {
 }
 
 MissionPlan parseMission(const std::string& yaml_text, const std::string& source) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(yaml_text);
-  } catch (const YAML::Exception& error) {
-    throw MissionError(source + ": malformed YAML at line " + std::to_string(error.mark.line + 1) +
-                       ": " + error.msg);
-  }
-  if (!root.IsMap() || !root["mission"]) {
-    throw MissionError(source + ": expected a top-level 'mission:' section");
-  }
-  const YAML::Node mission = root["mission"];
-  rejectUnknownKeys(mission, {"name", "defaults", "queries"}, source + ": mission");
-  MissionPlan plan;
-  plan.name = mission["name"] ? read<std::string>(mission["name"], where(source, "mission", "name"))
-                              : "mission";
-  MissionQuery defaults;
-  if (mission["defaults"]) {
-    readQueryFields(mission["defaults"], where(source, "mission", "defaults"), defaults);
-  }
-  const YAML::Node queries = mission["queries"];
-  if (!queries || !queries.IsSequence() || queries.size() == 0) {
-    throw MissionError(where(source, "mission", "queries") + ": expected a non-empty list");
-  }
-  for (std::size_t i = 0; i < queries.size(); ++i) {
-    MissionQuery query = defaults;
-    query.name = "query " + std::to_string(i + 1);
-    const std::string context = where(source, "mission", "queries[" + std::to_string(i) + "]");
-    if (queries[i].IsMap() && !queries[i]["goal"]) throw MissionError(context + ": no goal");
-    readQueryFields(queries[i], context, query);
-    checkQuery(query, source);
-    plan.queries.push_back(query);
-  }
-  return plan;
+  return asMissionError([&] { return readMission(config::loadYamlText(yaml_text, source)); });
 }
 
 MissionPlan loadMissionFile(const std::string& path) {
-  std::ifstream file(path);
-  if (!file) throw MissionError(path + ": cannot read the mission file");
-  std::stringstream text;
-  text << file.rdbuf();
-  return parseMission(text.str(), path);
+  return asMissionError([&] { return readMission(config::loadYamlFile(path)); });
 }
 
 std::string toYaml(const MissionPlan& plan) {

@@ -2,12 +2,13 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "auv/config/yaml_scalars.h"
+
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
-#include <cstdlib>
 #include <iostream>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -26,64 +27,83 @@ std::string canonical(std::string name) {
   return name;
 }
 
-[[noreturn]] void bad(const std::string& where, const std::string& text, const char* expected) {
-  throw std::invalid_argument(where + ": expected " + expected + ", got '" + text + "'");
+[[noreturn]] void bad(const std::string& where, const std::string& got, const char* expected) {
+  throw std::invalid_argument(where + ": expected " + expected + ", got " + got);
 }
 
+// A flag's text or a YAML scalar to T by the one scalar rule of every reader (YAML 1.2 core
+// schema, auv/config/yaml_scalars.h: `yes`, `1_000` and `0x1p3` are not values); `got` is the
+// value as messages show it.
 template <class T>
-T parseValue(const std::string& where, const std::string& text);
+T parseValue(const std::string& where, const std::string& text, const std::string& got);
 
 template <>
-double parseValue<double>(const std::string& where, const std::string& text) {
-  char* end = nullptr;
-  errno = 0;
-  const double v = std::strtod(text.c_str(), &end);
-  if (text.empty() || *end != '\0' || errno == ERANGE || !std::isfinite(v)) {
-    bad(where, text, "a number");
-  }
-  return v;
+double parseValue<double>(const std::string& where, const std::string& text,
+                          const std::string& got) {
+  const std::optional<double> v = config::parseNumber(text);
+  if (!v || !std::isfinite(*v)) bad(where, got, "a number");
+  return *v;
 }
 template <>
-float parseValue<float>(const std::string& where, const std::string& text) {
-  return static_cast<float>(parseValue<double>(where, text));
+float parseValue<float>(const std::string& where, const std::string& text, const std::string& got) {
+  return static_cast<float>(parseValue<double>(where, text, got));
 }
 template <>
-int64_t parseValue<int64_t>(const std::string& where, const std::string& text) {
-  char* end = nullptr;
-  errno = 0;
-  const long long v = std::strtoll(text.c_str(), &end, 10);
-  if (text.empty() || *end != '\0' || errno == ERANGE) bad(where, text, "an integer");
-  return v;
+int64_t parseValue<int64_t>(const std::string& where, const std::string& text,
+                            const std::string& got) {
+  const std::optional<int64_t> v = config::parseInteger(text);
+  if (!v) bad(where, got, "an integer");
+  return *v;
 }
 template <>
-int parseValue<int>(const std::string& where, const std::string& text) {
-  const int64_t v = parseValue<int64_t>(where, text);
+int parseValue<int>(const std::string& where, const std::string& text, const std::string& got) {
+  const int64_t v = parseValue<int64_t>(where, text, got);
   if (v < std::numeric_limits<int>::min() || v > std::numeric_limits<int>::max()) {
-    bad(where, text, "an integer in the int range");
+    bad(where, got, "an integer in the int range");
   }
   return static_cast<int>(v);
 }
 template <>
-uint64_t parseValue<uint64_t>(const std::string& where, const std::string& text) {
-  const int64_t v = parseValue<int64_t>(where, text);
-  if (v < 0) bad(where, text, "a non-negative integer");
+uint64_t parseValue<uint64_t>(const std::string& where, const std::string& text,
+                              const std::string& got) {
+  const int64_t v = parseValue<int64_t>(where, text, got);
+  if (v < 0) bad(where, got, "a non-negative integer");
   return static_cast<uint64_t>(v);
 }
 template <>
-unsigned parseValue<unsigned>(const std::string& where, const std::string& text) {
-  const uint64_t v = parseValue<uint64_t>(where, text);
-  if (v > std::numeric_limits<unsigned>::max()) bad(where, text, "a smaller integer");
+unsigned parseValue<unsigned>(const std::string& where, const std::string& text,
+                              const std::string& got) {
+  const uint64_t v = parseValue<uint64_t>(where, text, got);
+  if (v > std::numeric_limits<unsigned>::max()) bad(where, got, "a smaller integer");
   return static_cast<unsigned>(v);
 }
 template <>
-bool parseValue<bool>(const std::string& where, const std::string& text) {
-  if (text == "true" || text == "1" || text == "yes" || text == "on") return true;
-  if (text == "false" || text == "0" || text == "no" || text == "off") return false;
-  bad(where, text, "true or false");
+bool parseValue<bool>(const std::string& where, const std::string& text, const std::string& got) {
+  const std::optional<bool> v = config::parseBool(text);
+  if (!v) bad(where, got, "a boolean (true or false)");
+  return *v;
 }
 template <>
-std::string parseValue<std::string>(const std::string&, const std::string& text) {
+std::string parseValue<std::string>(const std::string&, const std::string& text,
+                                    const std::string&) {
   return text;
+}
+
+/// A flag's value as messages show it: 'fast'.
+std::string flagText(const std::string& text) { return "'" + text + "'"; }
+
+/// A YAML value to T: numbers and booleans must be plain scalars (a quoted "5" is a string).
+template <class T>
+T yamlValue(const YAML::Node& node, const std::string& where) {
+  if (!node.IsScalar())
+    throw std::invalid_argument(where + ": expected a single value, got " +
+                                config::describeNode(node));
+  if constexpr (!std::is_same_v<T, std::string>) {
+    if (!config::isPlainScalar(node)) {
+      return parseValue<T>(where, "", config::describeNode(node));  // refused, named as quoted
+    }
+  }
+  return parseValue<T>(where, node.Scalar(), config::describeNode(node));
 }
 
 template <class T>
@@ -103,11 +123,6 @@ const char* typeName() {
   if constexpr (std::is_floating_point_v<T>) return "number";
   if constexpr (std::is_integral_v<T>) return "integer";
   return "text";
-}
-
-std::string scalarText(const YAML::Node& node, const std::string& where) {
-  if (!node.IsScalar()) throw std::invalid_argument(where + ": expected a single value");
-  return node.Scalar();
 }
 
 }  // namespace
@@ -133,9 +148,9 @@ void OptionSet::add(const std::string& name, T* value, const std::string& help) 
     e.set_yaml = [value](const YAML::Node& node, const std::string& where) {
       value->clear();
       if (node.IsSequence()) {
-        for (const auto& item : node) value->push_back(scalarText(item, where));
+        for (const auto& item : node) value->push_back(yamlValue<std::string>(item, where));
       } else {
-        value->push_back(scalarText(node, where));
+        value->push_back(yamlValue<std::string>(node, where));
       }
     };
   } else {
@@ -144,10 +159,10 @@ void OptionSet::add(const std::string& name, T* value, const std::string& help) 
     e.default_text = showDefault(*value);
     e.is_flag = std::is_same_v<T, bool>;
     e.set = [value, name](const std::string& text) {
-      *value = static_cast<T>(parseValue<Parsed>(flagName(name), text));
+      *value = static_cast<T>(parseValue<Parsed>(flagName(name), text, flagText(text)));
     };
     e.set_yaml = [value](const YAML::Node& node, const std::string& where) {
-      *value = static_cast<T>(parseValue<Parsed>(where, scalarText(node, where)));
+      *value = static_cast<T>(yamlValue<Parsed>(node, where));
     };
   }
   entries_.push_back(std::move(e));
@@ -246,33 +261,32 @@ bool OptionSet::parse(const std::vector<std::string>& args) {
 }
 
 void OptionSet::applyConfigFile(const std::filesystem::path& file) {
-  YAML::Node root;
+  // OptionSet's errors are std::invalid_argument (exit code 2, like config::ConfigError).
+  const config::YamlSection root = [&] {
+    try {
+      // The shared strict loader ("<file>:<line>:<column>: malformed YAML: ..."); an empty
+      // file sets nothing.
+      return config::loadYamlFile(file.string(), true);
+    } catch (const config::ConfigError& e) {
+      throw std::invalid_argument(std::string("--config: ") + e.what());
+    }
+  }();
   try {
-    root = YAML::LoadFile(file.string());
-  } catch (const YAML::BadFile&) {
-    throw std::invalid_argument("--config: " + file.string() + ": cannot read");
-  } catch (const YAML::Exception& e) {
-    throw std::invalid_argument("--config: " + file.string() + ": " + e.what());
+    applyYaml(root.child(section_));
+  } catch (const config::ConfigError& e) {
+    throw std::invalid_argument(e.what());
   }
-  if (!root || root.IsNull()) return;
-  if (!root.IsMap()) {
-    throw std::invalid_argument(file.string() + ": expected a map of stage sections");
-  }
-  if (root[section_]) applyYaml(root[section_], file.string() + ": " + section_);
 }
 
-void OptionSet::applyYaml(const YAML::Node& section, const std::string& where) {
-  if (section.IsNull()) return;
-  if (!section.IsMap()) throw std::invalid_argument(where + ": expected a map of options");
-  for (const auto& item : section) {
-    const std::string key = item.first.as<std::string>();
-    Entry* e = find(key);
-    if (e == nullptr) {
-      std::string known;
-      for (const auto& entry : entries_) known += (known.empty() ? "" : ", ") + entry.name;
-      throw std::invalid_argument(where + "." + key + ": unknown option (known: " + known + ")");
-    }
-    e->set_yaml(item.second, where + "." + key);
+void OptionSet::applyYaml(const config::YamlSection& section) {
+  std::vector<std::string> names;
+  for (const auto& entry : entries_) names.push_back(entry.name);
+  if (!section.node().IsMap()) return;  // absent or empty section: nothing
+  for (const auto& item : section.node()) {
+    const std::string key = item.first.IsScalar() ? item.first.Scalar() : "";
+    Entry* e = find(key);  // either spelling: min_motion_px or min-motion-px
+    if (e == nullptr) section.unknownKey(key, names);
+    e->set_yaml(item.second, section.where(key));
   }
 }
 

@@ -7,16 +7,16 @@
 //   set.parse(args);   // --min-motion-px 40, --config recon.yaml (section `keyframes:`)
 //
 // Flags are the names with '-' for '_' (both spellings accepted). Values are checked for type
-// here and for range by the stage's Options::check(); errors name the flag or the file and key.
+// here, by the one scalar rule of every reader (YAML 1.2 core schema, for flags and the file
+// alike: auv/config/yaml_scalars.h), and for range by the stage's Options::check(); errors name
+// the flag or the file and key.
 
 #include <filesystem>
 #include <functional>
 #include <string>
 #include <vector>
 
-namespace YAML {
-class Node;
-}
+#include "auv/config/yaml_section.h"
 
 namespace auv::recon {
 
@@ -40,10 +40,13 @@ class OptionSet {
   /// std::invalid_argument naming the flag, file or key.
   bool parse(const std::vector<std::string>& args);
 
-  /// Applies the `section_` key of a YAML file (absent section: nothing). Unknown keys are
-  /// errors naming the file and the key.
+  /// Applies the `section_` key of a YAML file (absent section: nothing), read with the shared
+  /// strict reader (auv/config/yaml_section.h): values by the one YAML 1.2 scalar rule, unknown
+  /// keys named with the file and a did-you-mean. Throws std::invalid_argument (exit code 2).
   void applyConfigFile(const std::filesystem::path& file);
-  void applyYaml(const YAML::Node& section, const std::string& where);
+  /// Applies one section of options (a map; absent or empty: nothing). Throws
+  /// std::invalid_argument or config::ConfigError (both exit code 2) naming file and key.
+  void applyYaml(const config::YamlSection& section);
 
   /// Options and positionals with help and defaults.
   std::string help() const;
@@ -54,7 +57,7 @@ class OptionSet {
     std::string name, help, default_text, type;
     bool is_flag = false, repeatable = false;
     std::function<void(const std::string&)> set;                          // from text
-    std::function<void(const YAML::Node&, const std::string&)> set_yaml;  // from YAML
+    std::function<void(const YAML::Node&, const std::string&)> set_yaml;  // from YAML, where
   };
   struct Positional {
     std::string name, help;

@@ -7,6 +7,8 @@
 #include <memory>
 #include <ostream>
 
+#include "auv/config/spelling.h"
+#include "auv/config/yaml_section.h"
 #include "auv/recon/common/option_set.h"
 #include "auv/recon/common/stage_error.h"
 #include "auv/recon/pipeline/stages.h"
@@ -145,22 +147,25 @@ ConfiguredStage configured(const Stage& stage, const std::string& config) {
 /// a typo such as `sfn:` would otherwise leave the stage on its defaults without a word.
 void checkConfigSections(const std::string& config) {
   if (config.empty()) return;
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(config);
-  } catch (const YAML::Exception& e) {
-    throw std::invalid_argument("--config: " + config + ": " + e.what());
-  }
-  if (!root || root.IsNull()) return;
-  if (!root.IsMap()) throw std::invalid_argument(config + ": expected a map of stage sections");
+  const config::YamlSection root = [&] {
+    try {
+      return config::loadYamlFile(config, true);  // the shared strict loader; empty: no sections
+    } catch (const config::ConfigError& e) {
+      throw std::invalid_argument(std::string("--config: ") + e.what());
+    }
+  }();
+  if (!root.node().IsMap()) return;
   const std::vector<std::string> others = otherSections();
-  for (const auto& entry : root) {
-    const std::string section = entry.first.as<std::string>();
-    if (stageIndex(section) < stageNames().size()) continue;
-    if (std::find(others.begin(), others.end(), section) != others.end()) continue;
-    throw std::invalid_argument(config + ": section '" + section +
-                                "': unknown (stages: " + joined(stageNames(), ", ") + "; also " +
-                                joined(others, ", ") + ")");
+  std::vector<std::string> known = stageNames();
+  known.insert(known.end(), others.begin(), others.end());
+  for (const auto& entry : root.node()) {
+    const std::string section = entry.first.IsScalar() ? entry.first.Scalar() : "";
+    if (std::find(known.begin(), known.end(), section) != known.end()) continue;
+    const std::string hint = config::closestMatch(section, known);
+    throw std::invalid_argument(config + ": section '" + section + "': unknown" +
+                                (hint.empty() ? "" : " (did you mean '" + hint + "'?)") +
+                                "; stages: " + joined(stageNames(), ", ") + "; also " +
+                                joined(others, ", "));
   }
 }
 

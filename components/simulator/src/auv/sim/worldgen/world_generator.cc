@@ -54,12 +54,7 @@ std::string joined(const std::vector<std::string>& names) {
 
 [[noreturn]] void unknownWorld(const std::string& name) {
   std::string message = "unknown world '" + name + "'";
-  std::string closest;
-  size_t best = 4;  // suggest only near misses
-  for (const std::string& known : availableWorlds()) {
-    const size_t d = config::editDistance(name, known);
-    if (d < best) best = d, closest = known;
-  }
+  const std::string closest = config::closestMatch(name, availableWorlds());
   if (!closest.empty()) message += " (did you mean '" + closest + "'?)";
   message += "; known worlds: " + joined(availableWorlds()) + ", or a scenario .yaml file";
   throw ConfigError(message);
