@@ -4,6 +4,7 @@
 // the outer rock back towards the start; traverse again to close the imaging loop.
 #include <algorithm>
 #include <cmath>
+#include <functional>
 
 #include "auv/sim/worldgen/noise.h"
 #include "auv/sim/worldgen/world_builders.h"
@@ -12,6 +13,30 @@ namespace auv::sim::worldgen {
 
 using Eigen::Vector2f;
 using Eigen::Vector3d;
+
+namespace {
+
+/// The reference routes of the three queries (mesh frame): along the canyon's centre line,
+/// round the outer rock's north end (at `outside`'s y), and back through the canyon.
+std::vector<std::vector<Vector3d>> referenceRoutes(const Vector3d& start,
+                                                   const Vector3d& canyon_end,
+                                                   const Vector3d& outside, float half,
+                                                   const std::function<float(float)>& centreY) {
+  const double z = start.z(), outside_y = outside.y();
+  std::vector<Vector3d> through_canyon;
+  for (float x = -half - 4.0f; x <= half + 4.0f; x += 1.0f)
+    through_canyon.emplace_back(x, centreY(x), z);
+  std::vector<Vector3d> route1{start};
+  route1.insert(route1.end(), through_canyon.begin(), through_canyon.end());
+  route1.push_back(canyon_end);
+  const std::vector<Vector3d> route2{canyon_end, Vector3d(half + 13.0f, outside_y, z), outside};
+  std::vector<Vector3d> route3{outside, Vector3d(start.x(), outside_y, z), start};
+  route3.insert(route3.end(), through_canyon.begin(), through_canyon.end());
+  route3.push_back(canyon_end);
+  return {route1, route2, route3};
+}
+
+}  // namespace
 
 GeneratedWorld buildCanyon(const WorldGenOptions& options) {
   const DetailScale scale(options.detail);
@@ -141,17 +166,9 @@ GeneratedWorld buildCanyon(const WorldGenOptions& options) {
                    meshQuery("circumnavigate_outer_rock", outside, 2.0),
                    meshQuery("traverse_again", canyon_end, 2.0)};
 
-  // Reference routes: along the canyon's centre line, and round the outer rock's north end.
-  std::vector<Vector3d> through_canyon;
-  for (float x = -half - 4.0f; x <= half + 4.0f; x += 1.0f)
-    through_canyon.emplace_back(x, centreY(x), z);
-  std::vector<Vector3d> route1{start};
-  route1.insert(route1.end(), through_canyon.begin(), through_canyon.end());
-  route1.push_back(canyon_end);
-  const std::vector<Vector3d> route2{canyon_end, Vector3d(half + 13.0f, outside_y, z), outside};
-  std::vector<Vector3d> route3{outside, Vector3d(start.x(), outside_y, z), start};
-  route3.insert(route3.end(), through_canyon.begin(), through_canyon.end());
-  route3.push_back(canyon_end);
+  const std::vector<std::vector<Vector3d>> routes =
+      referenceRoutes(start, canyon_end, outside, half, centreY);
+  const std::vector<Vector3d>&route1 = routes[0], &route2 = routes[1], &route3 = routes[2];
   world.layout.routes = {meshRoute(route1), meshRoute(route2), meshRoute(route3)};
   for (float x = -half + 1.0f; x <= half - 1.0f; x += 1.0f)
     world.layout.canyon_axis.push_back(meshToNed(Vector3d(x, centreY(x), z)));
