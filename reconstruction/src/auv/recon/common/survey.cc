@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cctype>
+#include <fstream>
+#include <limits>
+#include <string>
 
 #include "auv/recon/common/stage_error.h"
 
@@ -52,6 +55,32 @@ std::vector<fs::path> listFiles(const fs::path& folder,
   }
   std::sort(files.begin(), files.end());
   return files;
+}
+
+bool recordedSimSpan(const Survey& survey, double& first, double& last) {
+  first = std::numeric_limits<double>::infinity();
+  last = -first;
+  std::error_code error;
+  if (!fs::is_directory(survey.recordings(), error)) return false;
+  for (const auto& entry : fs::recursive_directory_iterator(survey.recordings(), error)) {
+    const std::string name = entry.path().filename().string();
+    if (name.size() < 11 || name.substr(name.size() - 11) != ".frames.csv") continue;
+    std::ifstream in(entry.path());
+    std::string line;
+    std::getline(in, line);  // header frame,camera_time_s,sim_time_s
+    while (std::getline(in, line)) {
+      const size_t comma = line.rfind(',');
+      if (comma == std::string::npos || comma + 1 >= line.size()) continue;
+      try {
+        const double t = std::stod(line.substr(comma + 1));
+        first = std::min(first, t);
+        last = std::max(last, t);
+      } catch (const std::exception&) {
+        // an empty sim_time_s: a real camera's sidecar
+      }
+    }
+  }
+  return first <= last;
 }
 
 }  // namespace auv::recon

@@ -51,6 +51,10 @@ class Survey {
   std::filesystem::path root_;
 };
 
+/// Simulation times covered by the survey's recordings (sim_time_s of the frame sidecars);
+/// false when there are none (a real camera's sidecars leave sim_time_s empty).
+bool recordedSimSpan(const Survey& survey, double& first, double& last);
+
 /// Files of `folder` with one of `extensions` (lower case, with the dot), sorted by name.
 std::vector<std::filesystem::path> listFiles(const std::filesystem::path& folder,
                                              const std::vector<std::string>& extensions);

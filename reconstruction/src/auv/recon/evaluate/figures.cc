@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <iomanip>
 #include <limits>
 #include <numeric>
@@ -56,33 +55,6 @@ std::string metres(double value) {
   std::ostringstream out;
   out << value << " m";
   return out.str();
-}
-
-/// Simulation times covered by the survey's recordings (frame sidecars); false when none.
-bool recordedSpan(const Survey& survey, double& first, double& last) {
-  first = std::numeric_limits<double>::infinity();
-  last = -first;
-  std::error_code error;
-  if (!fs::is_directory(survey.recordings(), error)) return false;
-  for (const auto& entry : fs::recursive_directory_iterator(survey.recordings(), error)) {
-    const std::string name = entry.path().filename().string();
-    if (name.size() < 11 || name.substr(name.size() - 11) != ".frames.csv") continue;
-    std::ifstream in(entry.path());
-    std::string line;
-    std::getline(in, line);  // header frame,camera_time_s,sim_time_s
-    while (std::getline(in, line)) {
-      const size_t comma = line.rfind(',');
-      if (comma == std::string::npos || comma + 1 >= line.size()) continue;
-      try {
-        const double t = std::stod(line.substr(comma + 1));
-        first = std::min(first, t);
-        last = std::max(last, t);
-      } catch (const std::exception&) {
-        // an empty sim_time_s: a real camera's sidecar
-      }
-    }
-  }
-  return first <= last;
 }
 
 /// A rotation that takes the cloud's axis of least spread to z (top-down without truth).
@@ -522,7 +494,7 @@ FiguresStageResult writeFigures(const Survey& survey, const fs::path& ground_tru
     std::vector<StampedPose> navigation = truth->navigationTrajectory();
     std::vector<StampedPose> true_path = truth->trueTrajectory();
     double first = 0, last = 0;
-    if (recordedSpan(survey, first, last)) {
+    if (recordedSimSpan(survey, first, last)) {
       auto clip = [&](std::vector<StampedPose>& poses) {
         poses.erase(std::remove_if(poses.begin(), poses.end(),
                                    [&](const StampedPose& p) {
