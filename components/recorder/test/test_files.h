@@ -1,49 +1,19 @@
 #pragma once
-// Temporary recordings roots for the recorder's tests.
+// Temporary recordings roots for the recorder's tests, on the transfer protocol's test files.
 
-#include <unistd.h>
-
-#include <chrono>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <random>
+#include <iterator>
 #include <string>
-#include <vector>
+
+#include "auv/transfer/testing/temp_files.h"
 
 namespace auv::recorder::testing {
 
-/// A fresh folder under the system temp dir, removed with the object.
-class TempDir {
- public:
-  explicit TempDir(const std::string& tag) {
-    path_ = std::filesystem::temp_directory_path() /
-            ("auv_recorder_" + tag + "_" + std::to_string(::getpid()) + "_" +
-             std::to_string(std::chrono::steady_clock::now().time_since_epoch().count()));
-    std::filesystem::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ignored;
-    std::filesystem::remove_all(path_, ignored);
-  }
-  const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
-};
-
-/// `size` incompressible bytes from `seed`.
-inline std::string randomBytes(size_t size, uint32_t seed) {
-  std::mt19937 generator(seed);
-  std::string bytes(size, '\0');
-  for (auto& b : bytes) b = static_cast<char>(generator() & 0xFF);
-  return bytes;
-}
-
-inline void writeFile(const std::filesystem::path& path, const std::string& content) {
-  std::filesystem::create_directories(path.parent_path());
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out << content;
-}
+using transfer::testing::randomBytes;
+using transfer::testing::TempDir;
+using transfer::testing::writeFile;
 
 inline std::string readFile(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);

@@ -4,7 +4,7 @@
 
 #include <gtest/gtest.h>
 
-#include "test_files.h"
+#include "auv/transfer/testing/temp_files.h"
 
 namespace auv::transfer {
 namespace {

@@ -6,7 +6,7 @@
 
 #include <algorithm>
 
-#include "test_files.h"
+#include "auv/transfer/testing/temp_files.h"
 
 namespace auv::transfer {
 namespace {

@@ -1,5 +1,6 @@
 #pragma once
-// Temporary folders and files for the transfer protocol's tests.
+// Temporary folders and files for the tests of the transfer protocol and its users (the
+// recorder); installed so that other packages' tests need no copy.
 
 #include <unistd.h>
 
