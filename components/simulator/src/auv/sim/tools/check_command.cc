@@ -6,6 +6,7 @@
 #include "auv/config/errors.h"
 #include "auv/sim/raycast/ray_caster.h"
 #include "auv/sim/tools/commands.h"
+#include "auv/sim/vehicle/vehicle.h"
 #include "auv/sim/world/hull_contact.h"
 #include "auv/sim/world/scenario.h"
 
@@ -36,7 +37,12 @@ int checkMain(const std::vector<std::string>& args) {
                 << report.bounds.max().transpose() << "] m\n"
                 << "  water attenuation (1/m) R G B = " << scenario.water.attenuation.transpose()
                 << "\n";
+      // The vehicle: read as the simulator reads it (a misspelt key is an error here too) and
+      // its hull, not a default one, checked against the world at the start.
+      const VehicleModel vehicle = readVehicleModel(scenario.root.child("vehicle"));
       HullShape hull;
+      hull.length = vehicle.length;
+      hull.radius = vehicle.radius;
       Eigen::Isometry3d start = Eigen::Isometry3d::Identity();
       start.translation() = scenario.start_position;
       start.linear() = Eigen::AngleAxisd(scenario.start_yaw, Eigen::Vector3d::UnitZ()).matrix();
