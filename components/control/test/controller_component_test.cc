@@ -1,15 +1,19 @@
 // The `controller` component on real DDS: a harness node plays the navigation and the mission
 // handler (and the simulator's clock). Cyclone DDS and Fast DDS, also mixed. One DDS domain per
-// test that exchanges data (230-232; with the default port mapping 232 is the highest domain id
-// either vendor accepts). The parameter test sends nothing and shares 230.
+// test that exchanges data (230-232, and 3 for the map test: with the default port mapping 232 is
+// the highest domain id either vendor accepts). The parameter test sends nothing and shares 230.
 #include "auv/control/components/controller_component.h"
 
 #include <gtest/gtest.h>
 
 #include <chrono>
 #include <cmath>
+#include <limits>
+#include <sstream>
 #include <string>
 #include <vector>
+
+#include <octomap/OcTree.h>
 
 #include "auv/interfaces/executor.h"
 
@@ -31,6 +35,7 @@ class Harness {
     commands_ =
         node_.createPublisher<msg::ControllerCommand>("control/waypoint", interfaces::commandQos());
     clock_ = node_.createPublisher<msg::Clock>("clock", interfaces::clockQos());
+    map_ = node_.createPublisher<msg::OctomapUpdate>("map/update", interfaces::mapQos());
     thrusters_ = node_.createSubscription<msg::ThrusterSetpoints>(
         "control/thrusters", interfaces::sensorDataQos(),
         std::function<void(const msg::ThrusterSetpoints&)>([this](const msg::ThrusterSetpoints& m) {
@@ -64,8 +69,25 @@ class Harness {
     odom.pose().pose().position().y(position.y());
     odom.pose().pose().position().z(position.z());
     odom.pose().pose().orientation().w(1.0);
-    odom.altitude(-1.0);
+    odom.altitude(altitude);
     odometry_->publish(odom);
+  }
+
+  /// Publishes `tree` as the mapping component's FULL map update `sequence` (OctoMap binary).
+  void publishMap(const octomap::OcTree& tree, uint64_t sequence) {
+    std::ostringstream stream;
+    tree.writeBinaryConst(stream);
+    const std::string data = stream.str();
+    msg::OctomapUpdate update;
+    update.header().frame_id("world");
+    update.map_id("octomap");
+    update.sequence_number(sequence);
+    update.kind(msg::OCTOMAP_UPDATE_FULL);
+    update.encoding(msg::OCTOMAP_ENCODING_BINARY);
+    update.tree_type(tree.getTreeType());
+    update.resolution(tree.getResolution());
+    update.data(std::vector<uint8_t>(data.begin(), data.end()));
+    map_->publish(update);
   }
 
   void send(uint64_t id, msg::ControlMode mode, const Eigen::Vector3d& target, double speed = 0.8,
@@ -102,6 +124,7 @@ class Harness {
   }
 
   Eigen::Vector3d position{0, 0, 2};
+  double altitude = -1.0;  // m, as the DVL reports it; < 0 = no bottom lock
   bool publish_odometry = true;
   msg::ThrusterSetpoints thrust;
   int thrust_count = 0;
@@ -114,6 +137,7 @@ class Harness {
   std::shared_ptr<interfaces::Publisher<msg::Odometry>> odometry_;
   std::shared_ptr<interfaces::Publisher<msg::ControllerCommand>> commands_;
   std::shared_ptr<interfaces::Publisher<msg::Clock>> clock_;
+  std::shared_ptr<interfaces::Publisher<msg::OctomapUpdate>> map_;
   std::shared_ptr<interfaces::Subscription<msg::ThrusterSetpoints>> thrusters_;
   std::shared_ptr<interfaces::Subscription<msg::ControllerStatus>> status_;
   std::shared_ptr<interfaces::Subscription<msg::LogEntry>> log_;
@@ -227,6 +251,65 @@ TEST(ControllerComponentTest, WaypointDrivesTheThrustersAndLostNavigationRaisesT
   rig.harness.publish_odometry = true;
   ASSERT_TRUE(rig.spinUntil([&] { return !rig.harness.status.safety_maneuver(); }));
   EXPECT_EQ(rig.harness.status.state(), msg::CONTROLLER_STATE_IDLE);
+}
+
+// A roof of rock: occupied cells at depth 2-2.5 m over x in [-10, 10], y in [-3, 3].
+octomap::OcTree ceiling() {
+  octomap::OcTree tree(0.5);
+  for (double x = -10; x <= 10; x += 0.5) {
+    for (double y = -3; y <= 3; y += 0.5)
+      tree.updateNode(octomap::point3d(x + 0.25, y + 0.25, 2.25), true);
+  }
+  return tree;
+}
+
+TEST(ControllerComponentTest, OverheadClearanceSeesRockAboveNotBesideNorUnknown) {
+  const octomap::OcTree roof = ceiling();
+  // Under the roof: from 5 m up to its deep face at 2.5 m.
+  EXPECT_NEAR(ControllerComponent::overheadClearance(roof, {0, 0, 5}, 1.0), 2.5, 1e-6);
+  // Beyond its edge by more than the radius: open (unknown counts as open).
+  EXPECT_TRUE(std::isinf(ControllerComponent::overheadClearance(roof, {12.5, 0, 5}, 1.0)));
+  // Above the roof, the rock is below: open.
+  EXPECT_TRUE(std::isinf(ControllerComponent::overheadClearance(roof, {0, 0, 1.5}, 1.0)));
+  // A wall 1.5 m beside the vehicle, up to the surface: beside, not above.
+  octomap::OcTree wall(0.5);
+  for (double z = 0; z < 8; z += 0.5) wall.updateNode(octomap::point3d(0.25, 1.75, z + 0.25), true);
+  EXPECT_TRUE(std::isinf(ControllerComponent::overheadClearance(wall, {0.25, 0.25, 5}, 1.0)));
+  EXPECT_NEAR(ControllerComponent::overheadClearance(wall, {0.25, 0.25, 5}, 1.6), 0.0, 1e-6);
+  EXPECT_TRUE(
+      std::isinf(ControllerComponent::overheadClearance(octomap::OcTree(0.5), {0, 0, 5}, 1.0)));
+}
+
+TEST(ControllerComponentTest, MapWithACeilingMakesTheManoeuvreBackAwayInsteadOfAscending) {
+  Rig rig(Vendor::CYCLONEDDS, Vendor::FASTDDS, 3);
+  rig.harness.position = {0, 0, 5};
+  rig.waitReady();
+  rig.harness.publishMap(ceiling(), 1);
+  // The vehicle comes 5 m north under the roof: the controller keeps its trail.
+  for (double x = 0.5; x <= 5.0; x += 0.5) {
+    rig.harness.position.x() = x;
+    const int count = rig.harness.status_count;
+    ASSERT_TRUE(rig.spinUntil([&] { return rig.harness.status_count >= count + 1; }));
+  }
+  // Then the DVL sees rock 0.5 m below: MIN_ALTITUDE with rock 2.5 m above.
+  rig.harness.altitude = 0.5;
+  ASSERT_TRUE(rig.spinUntil([&] {
+    return rig.harness.status.safety_text().find("backing away: rock 2.5 m above") !=
+           std::string::npos;
+  })) << rig.harness.status.safety_text();
+  EXPECT_EQ(rig.harness.status.safety_reason(), msg::SAFETY_REASON_MIN_ALTITUDE);
+  ASSERT_TRUE(rig.freshThrust());
+  // Reversing south along the trail (heading north), never full up into the roof.
+  EXPECT_LT(rig.harness.thrust.port(), -0.05);
+  EXPECT_LT(rig.harness.thrust.starboard(), -0.05);
+  EXPECT_GT(rig.harness.thrust.vertical(), -0.5);
+  // Out from under the roof (the map says open above): it ascends.
+  rig.harness.position.x() = 13.0;
+  ASSERT_TRUE(rig.spinUntil([&] {
+    return rig.harness.status.safety_text().find("; ascending") != std::string::npos;
+  })) << rig.harness.status.safety_text();
+  ASSERT_TRUE(rig.freshThrust());
+  EXPECT_EQ(rig.harness.thrust.vertical(), -1.0);
 }
 
 TEST(ControllerComponentTest, MalformedCommandsAreLoggedAndTheActiveOneKept) {

@@ -134,6 +134,23 @@ const config::OptionTable<ControllerOptions>& ControllerOptions::table() {
       {"safety_clear_time", &C::safety_clear_time,
        "a safety condition gone this long ends the manoeuvre (the command is dropped)", "s",
        Range::closed(0, 3600)},
+      {"breadcrumb_spacing", &C::breadcrumb_spacing,
+       "distance between the recent positions kept to back away along from rock above", "m",
+       Range::aboveUpTo(0, 100)},
+      {"breadcrumb_length", &C::breadcrumb_length,
+       "length of the trail of recent positions kept to back away along", "m",
+       Range::closed(0, 10000)},
+      {"retreat_speed", &C::retreat_speed,
+       "reversing speed when a safety manoeuvre backs away from rock above", "m/s",
+       Range::aboveUpTo(0, 5)},
+      {"overhead_margin", &C::overhead_margin,
+       "distance kept below known rock when the MAX_DEPTH manoeuvre rises under it", "m",
+       Range::closed(0, 100)},
+      {"altitude_time_constant", &C::altitude_time_constant,
+       "low-pass time constant of the altitude mode's depth target (DVL noise)", "s",
+       Range::closed(0, 600)},
+      {"altitude_max_rate", &C::altitude_max_rate,
+       "fastest descent of the altitude mode's depth target", "m/s", Range::aboveUpTo(0, 10)},
   };
   return kTable;
 }
@@ -173,6 +190,7 @@ bool LowLevelController::setNavigation(const ControllerNavigation& navigation, d
   }
   navigation_ = navigation;
   navigation_time_ = now;
+  if (!status_.safety_maneuver) recordBreadcrumb(navigation.position);
   status_.depth = navigation.position.z();
   status_.altitude = navigation.altitude;
   return true;
@@ -191,7 +209,8 @@ std::optional<std::string> LowLevelController::validate(const ControlCommand& co
                                                    {"depth", command.depth},
                                                    {"surge_speed", command.surge_speed},
                                                    {"tolerance", command.tolerance},
-                                                   {"timeout", command.timeout}};
+                                                   {"timeout", command.timeout},
+                                                   {"altitude", command.altitude}};
   for (const auto& [name, value] : values) {
     if (!std::isfinite(value))
       return prefix + name + ": not a finite number (" + number(value) + ")";
@@ -201,6 +220,9 @@ std::optional<std::string> LowLevelController::validate(const ControlCommand& co
   }
   if (command.timeout < 0)
     return prefix + "timeout: must be >= 0 s, got " + number(command.timeout);
+  if (command.altitude < 0) {
+    return prefix + "altitude: must be >= 0 m (0 = depth mode), got " + number(command.altitude);
+  }
   const double max_depth = options_.max_depth;
   const double max_speed = options_.max_surge_speed;
   if (command.mode == ControlMode::WAYPOINT) {
@@ -258,6 +280,7 @@ CommandResult LowLevelController::setCommand(const ControlCommand& command, doub
   status_.distance_to_target = -1.0;
   hold_pending_ = false;
   returning_ = false;
+  altitude_depth_.reset();
   resetIntegrals(false);  // the depth integral estimates the buoyancy error: keep it
 
   switch (command_.mode) {
@@ -298,62 +321,13 @@ void LowLevelController::startHolding(const Eigen::Vector3d& point, double radiu
   hold_pending_ = false;
 }
 
-void LowLevelController::updateSafety(double now) {
-  SafetyReason reason = SafetyReason::NONE;
-  std::string text;
-  if (!navigation_ || now - navigation_time_ > options_.navigation_timeout) {
-    const double since = now - (navigation_ ? navigation_time_ : *first_update_);
-    if (since > options_.navigation_timeout) {
-      reason = SafetyReason::NAVIGATION_LOST;
-      text = (navigation_ ? "no navigation for " : "no valid navigation received in ") +
-             number(since) + " s (navigation_timeout " + number(options_.navigation_timeout) +
-             " s)";
-    }
-  }
-  if (reason == SafetyReason::NONE && navigation_) {
-    const double depth = navigation_->position.z();
-    const double altitude = navigation_->altitude;
-    if (depth > options_.max_depth) {
-      reason = SafetyReason::MAX_DEPTH;
-      text = "depth " + number(depth) + " m > max_depth " + number(options_.max_depth) + " m";
-    } else if (altitude >= 0 && altitude < options_.min_altitude) {
-      reason = SafetyReason::MIN_ALTITUDE;
-      text = "altitude " + number(altitude) + " m < min_altitude " + number(options_.min_altitude) +
-             " m";
-    }
-  }
-
-  if (reason != SafetyReason::NONE) {
-    condition_seen_ = now;
-    status_.safety_maneuver = true;
-    status_.state = ControllerState::SAFETY_MANEUVER;
-    status_.safety_reason = reason;
-    status_.safety_text = text;
-    status_.reached = false;
-    status_.distance_to_target = -1.0;
-    return;
-  }
-  if (status_.safety_maneuver && now - *condition_seen_ >= options_.safety_clear_time) {
-    // Over: drop the interrupted command, the mission handler decides what comes next.
-    status_.safety_maneuver = false;
-    status_.safety_reason = SafetyReason::NONE;
-    status_.safety_text.clear();
-    status_.state = ControllerState::IDLE;
-    command_ = ControlCommand();
-    resetIntegrals(true);
-  }
-}
-
 ThrusterCommand LowLevelController::update(double now) {
   if (!first_update_) first_update_ = now;
   const double dt = last_update_ ? std::clamp(now - *last_update_, 0.0, kMaxControlStep) : 0.0;
   last_update_ = now;
 
   updateSafety(now);
-  if (status_.safety_maneuver) {
-    resetIntegrals(false);
-    return {0.0, 0.0, -1.0};  // horizontal off, full up: the surface is the safe place
-  }
+  if (status_.safety_maneuver) return safetyManoeuvre(dt);
   const bool running =
       status_.state == ControllerState::ACTIVE || status_.state == ControllerState::HOLDING;
   if (running && command_.timeout > 0 && !status_.reached &&
@@ -378,22 +352,42 @@ ThrusterCommand LowLevelController::update(double now) {
         if (navigation_->position.z() <= options_.surface_depth) status_.reached = true;
         return {0.0, 0.0, status_.reached ? 0.0 : -1.0};  // buoyancy keeps it up there
       }
-      return regulate(guidance(), dt);
+      return regulate(guidance(dt), dt);
     default:
       return {};
   }
 }
 
-LowLevelController::Targets LowLevelController::guidance() {
+double LowLevelController::depthTarget(double commanded, double dt) {
+  if (command_.altitude <= 0) return commanded;
+  const ControllerNavigation& nav = *navigation_;
+  // Without bottom lock before any target: the current depth, unless deeper than commanded.
+  if (!altitude_depth_) altitude_depth_ = std::min(nav.position.z(), commanded);
+  if (nav.altitude >= 0) {
+    const double wanted =
+        std::clamp(nav.position.z() + nav.altitude - command_.altitude, 0.0, commanded);
+    const double alpha =
+        options_.altitude_time_constant > 0 ? dt / (options_.altitude_time_constant + dt) : 1.0;
+    // Rising to a seabed that comes up is never held back; descending is rate-limited.
+    const double step = alpha * (wanted - *altitude_depth_);
+    altitude_depth_ = *altitude_depth_ + std::min(step, options_.altitude_max_rate * dt);
+  }
+  altitude_depth_ = std::min(*altitude_depth_, commanded);
+  return *altitude_depth_;
+}
+
+LowLevelController::Targets LowLevelController::guidance(double dt) {
   const ControllerNavigation& nav = *navigation_;
   switch (command_.mode) {
     case ControlMode::HOLD:
       if (hold_pending_) startHolding(nav.position, options_.default_tolerance, nav.yaw);
       return holdTargets();
     case ControlMode::SETPOINT:
-      return {command_.heading, command_.depth, command_.surge_speed};
+      return {command_.heading, depthTarget(command_.depth, dt), command_.surge_speed};
     case ControlMode::WAYPOINT: {
-      const Eigen::Vector3d target = command_.position;
+      // In altitude mode the target's depth is the altitude's (reached in 3-D at that depth).
+      Eigen::Vector3d target = command_.position;
+      if (status_.state != ControllerState::HOLDING) target.z() = depthTarget(target.z(), dt);
       const double distance = (target - nav.position).norm();
       status_.distance_to_target = distance;
       if (status_.state == ControllerState::HOLDING) return holdTargets();

@@ -14,13 +14,35 @@
 // moment has priority over surge when the horizontal pair saturates, so the vehicle turns first and
 // then accelerates.
 //
-// Safety manoeuvres (state SAFETY_MANEUVER, thrusters: vertical full up, horizontal off):
-// navigation older than navigation_timeout (NAVIGATION_LOST), depth > max_depth (MAX_DEPTH),
-// known altitude < min_altitude (MIN_ALTITUDE), in that priority. The manoeuvre ends once no
-// condition has held for safety_clear_time; the interrupted command is then dropped (state
-// IDLE): the mission handler decides what comes next. Commands are refused meanwhile.
+// Safety manoeuvres (state SAFETY_MANEUVER): navigation older than navigation_timeout
+// (NAVIGATION_LOST), depth > max_depth (MAX_DEPTH), known altitude < min_altitude
+// (MIN_ALTITUDE), in that priority. What the vehicle does depends on the water above it, as the
+// overhead probe (setOverheadProbe; the component reads it from the map) reports it:
+//   open above (no known rock up to the surface; unknown counts as open, the paper's assumption,
+//   and no probe means open): vertical full up, horizontal off (ascend, as always);
+//   rock above: never up into it.
+//     MIN_ALTITUDE  hold depth and back away (reversing) along the breadcrumb trail of the
+//                   vehicle's recent positions until the water above is open, then ascend; at
+//                   the end of the trail, hold position and depth.
+//     MAX_DEPTH     rise to a little above max_depth, but keep overhead_margin below the rock.
+//     NAVIGATION_LOST  no position to follow a trail with: horizontal off, the vertical thruster
+//                   only balances the buoyancy (holds depth without a depth loop).
+// status.safety_text says the condition and the action ("...; backing away: rock 1.2 m above").
+// The manoeuvre ends once no condition has held for safety_clear_time; the interrupted command is
+// then dropped (state IDLE; under rock HOLDING where it is instead, since thrusters off would let
+// the buoyancy lift it into the rock): the mission handler decides what comes next. Commands are
+// refused meanwhile.
+//
+// Altitude mode (command altitude > 0, WAYPOINT and SETPOINT, COLA2-style): the depth target is
+// depth + (measured altitude - commanded altitude), never deeper than the commanded depth,
+// low-passed (altitude_time_constant) and descending at most altitude_max_rate, so DVL noise
+// does not shake it. Without bottom lock (altitude < 0) the last target is kept (first: the
+// current depth, if shallower than commanded): shallower than commanded is the safe side, and
+// descending blind to the commanded depth could meet the seabed the DVL lost.
 
 #include <cstdint>
+#include <deque>
+#include <functional>
 #include <optional>
 #include <string>
 
@@ -89,7 +111,15 @@ struct ControlCommand {
   double surge_speed = 0.0;           ///< m/s, WAYPOINT (> 0) and SETPOINT speed
   double tolerance = 0.0;             ///< m, WAYPOINT reached within this 3-D distance
   double timeout = 0.0;               ///< s, FAULT if not reached after this long; 0 = none
+  /// m, > 0: altitude mode (WAYPOINT, SETPOINT), keep this height above the seabed, never deeper
+  /// than the commanded depth; 0 = depth mode.
+  double altitude = 0.0;
 };
+
+/// Distance (m) from a position up to the first known rock in the water column above it (the
+/// vehicle's hull radius plus a margin wide), +infinity when the column is open up to the
+/// surface. Unknown space counts as open.
+using OverheadProbe = std::function<double(const Eigen::Vector3d& position)>;
 
 /// Mirror of auv::msg::ControllerStatus.
 struct ControllerStatusReport {
@@ -156,6 +186,14 @@ struct ControllerOptions {
   double navigation_timeout = 1.0;  ///< s, without navigation starts NAVIGATION_LOST
   double safety_clear_time = 3.0;   ///< s, conditions gone this long end the manoeuvre
   FaultAction fault_action = FaultAction::HOLD_DEPTH;  ///< after a command timeout
+  double breadcrumb_spacing = 1.0;  ///< m, distance between the positions kept as the trail
+  double breadcrumb_length = 30.0;  ///< m, length of the trail kept to back away along
+  double retreat_speed = 0.3;       ///< m/s, reversing speed when backing away from rock above
+  double overhead_margin = 0.5;     ///< m, kept below known rock when rising (MAX_DEPTH)
+
+  // Altitude mode.
+  double altitude_time_constant = 2.0;  ///< s, low-pass of the altitude-derived depth target
+  double altitude_max_rate = 0.3;       ///< m/s, fastest descent of that target
 
   /// Vehicle model used for feed-forward (drag, buoyancy) and thrust allocation.
   VehicleModel model;
@@ -202,6 +240,13 @@ class LowLevelController {
   /// Checks a command without applying it; returns the problem naming the field, if any.
   std::optional<std::string> validate(const ControlCommand& command) const;
 
+  /// Where the water above is open (see OverheadProbe); asked only during safety manoeuvres.
+  /// Without one the water above always counts as open.
+  void setOverheadProbe(OverheadProbe probe) { overhead_probe_ = std::move(probe); }
+  /// The breadcrumb trail, oldest first (positions at least breadcrumb_spacing apart, recorded
+  /// outside safety manoeuvres).
+  const std::deque<Eigen::Vector3d>& trail() const { return trail_; }
+
  private:
   struct Targets {  // what the guidance asks of the three loops
     double yaw = 0.0;
@@ -209,9 +254,18 @@ class LowLevelController {
     double surge_speed = 0.0;
   };
 
+  // controller_safety.cc: conditions, the manoeuvre's action, the breadcrumb trail.
   void updateSafety(double now);
+  ThrusterCommand safetyManoeuvre(double dt);
+  /// Backs away along the trail; false when it is used up (the caller holds).
+  bool retreatTargets(Targets& targets);
+  void recordBreadcrumb(const Eigen::Vector3d& position);
+  double overheadClearance(const Eigen::Vector3d& position) const;
+
   void startHolding(const Eigen::Vector3d& point, double radius, double yaw);
-  Targets guidance();
+  Targets guidance(double dt);
+  /// The depth to keep for a command depth of `commanded` (altitude mode, or `commanded`).
+  double depthTarget(double commanded, double dt);
   Targets holdTargets();
   /// Fraction of the speed to make good with `heading_error` (see turn_in_place_angle).
   double underwayFraction(double heading_error) const;
@@ -242,6 +296,14 @@ class LowLevelController {
   double depth_integral_ = 0.0;    // m s
   double surge_integral_ = 0.0;    // m
   double depth_rate_ = 0.0;        // m/s, from successive depths (setNavigation)
+
+  std::optional<double> altitude_depth_;  // m, smoothed depth target of altitude mode
+
+  // Safety manoeuvres.
+  OverheadProbe overhead_probe_;
+  std::deque<Eigen::Vector3d> trail_;      // breadcrumbs, oldest first
+  std::string condition_text_;             // the condition part of safety_text
+  std::optional<double> manoeuvre_depth_;  // m, depth held under rock (set at the first need)
 };
 
 }  // namespace auv::control

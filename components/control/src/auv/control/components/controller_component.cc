@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -55,6 +56,14 @@ const config::OptionTable<ControllerComponent::Options>& ControllerComponent::Op
       {"status_rate", &Options::status_rate,
        "periodic control/status messages per second (also sent on every change)", "Hz",
        Range::closed(0.01, 100.0)},
+      {"map_id", &Options::map_id, "OctomapUpdate.map_id followed (rock above the vehicle)"},
+      {"map_resolution", &Options::map_resolution, "leaf size of the map on map/update", "m",
+       Range::closed(0.01, 10.0)},
+      {"overhead_radius", &Options::overhead_radius,
+       "radius of the column above the vehicle that must be free of known rock (occupied cell "
+       "centres) for a safety manoeuvre to ascend: hull radius + margin, below the planner's "
+       "clearance",
+       "m", Range::closed(0.0, 100.0)},
   };
   return kTable;
 }
@@ -80,6 +89,10 @@ void ControllerComponent::configure(interfaces::Node& node) {
       fault_action == "stop" ? FaultAction::STOP : FaultAction::HOLD_DEPTH;
   controller_ = std::make_unique<LowLevelController>(options_.controller);  // check()s
   last_reported_ = controller_->status();
+  map_ = std::make_unique<mapping::MapReplica>(options_.map_id, options_.map_resolution);
+  controller_->setOverheadProbe([this](const Eigen::Vector3d& position) {
+    return overheadClearance(map_->tree(), position, options_.overhead_radius);
+  });
 
   thrusters_pub_ = node.createPublisher<msg::ThrusterSetpoints>("control/thrusters",
                                                                 interfaces::sensorDataQos());
@@ -95,6 +108,38 @@ void ControllerComponent::configure(interfaces::Node& node) {
       "nav/odometry", interfaces::sensorDataQos(),
       std::function<void(const msg::Odometry&)>([this](const msg::Odometry& m) { onOdometry(m); }),
       interfaces::SubscriptionOptions{interfaces::CallbackThread::MIDDLEWARE});
+  // Executor thread, as the control step that reads the replica.
+  map_sub_ = node.createSubscription<msg::OctomapUpdate>(
+      "map/update", interfaces::mapQos(),
+      std::function<void(const msg::OctomapUpdate&)>([this](const msg::OctomapUpdate& update) {
+        if (map_->apply(update) == mapping::MapReplica::Outcome::REJECTED) {
+          AUV_WARN(node_->logger(),
+                   "map update " << update.sequence_number()
+                                 << " not used for the water above the vehicle: " << map_->error());
+        }
+      }));
+}
+
+double ControllerComponent::overheadClearance(const octomap::OcTree& map,
+                                              const Eigen::Vector3d& position, double radius) {
+  double clearance = std::numeric_limits<double>::infinity();
+  if (position.z() <= 0.0 || map.getRoot() == nullptr) return clearance;
+  const octomap::point3d low(static_cast<float>(position.x() - radius),
+                             static_cast<float>(position.y() - radius), 0.0f);
+  const octomap::point3d high(static_cast<float>(position.x() + radius),
+                              static_cast<float>(position.y() + radius),
+                              static_cast<float>(position.z()));
+  for (auto it = map.begin_leafs_bbx(low, high), end = map.end_leafs_bbx(); it != end; ++it) {
+    if (!map.isNodeOccupied(*it)) continue;
+    // Cell centres within the radius, as the planner measures clearance: a wall the planner
+    // keeps its clearance from is beside the vehicle, not above it.
+    const Eigen::Vector2d offset(it.getX() - position.x(), it.getY() - position.y());
+    if (offset.norm() > radius) continue;
+    const double bottom = it.getZ() + 0.5 * it.getSize();  // the cell's deep face (z down)
+    if (bottom > position.z()) continue;                   // not wholly above the vehicle
+    clearance = std::min(clearance, std::max(0.0, position.z() - bottom));
+  }
+  return clearance;
 }
 
 void ControllerComponent::activate() {
@@ -118,9 +163,11 @@ void ControllerComponent::deactivate() {
 void ControllerComponent::cleanup() {
   command_sub_.reset();
   odometry_sub_.reset();
+  map_sub_.reset();
   thrusters_pub_.reset();
   status_pub_.reset();
   controller_.reset();
+  map_.reset();
 }
 
 void ControllerComponent::onOdometry(const msg::Odometry& odometry) {
@@ -165,6 +212,7 @@ void ControllerComponent::onCommand(const msg::ControllerCommand& m) {
   command.surge_speed = m.surge_speed();
   command.tolerance = m.tolerance();
   command.timeout = m.timeout();
+  command.altitude = m.altitude();
   const CommandResult result = controller_->setCommand(command, node_->clock().nowSeconds());
   switch (result.outcome) {
     case CommandResult::Outcome::ACCEPTED: {
@@ -173,7 +221,8 @@ void ControllerComponent::onCommand(const msg::ControllerCommand& m) {
                "command " << c.command_id << " " << toString(c.mode) << " (" << c.position.x()
                           << ", " << c.position.y() << ", " << c.position.z() << ") heading "
                           << c.heading << " depth " << c.depth << " speed " << c.surge_speed
-                          << " tolerance " << c.tolerance << " timeout " << c.timeout);
+                          << " tolerance " << c.tolerance << " timeout " << c.timeout
+                          << (c.altitude > 0 ? " altitude " + std::to_string(c.altitude) : ""));
       break;
     }
     case CommandResult::Outcome::REJECTED:

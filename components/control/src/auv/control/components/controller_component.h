@@ -3,23 +3,32 @@
 // on DDS. Subscribes `control/waypoint` (ControllerCommand) and `nav/odometry` (Odometry);
 // publishes `control/thrusters` (ThrusterSetpoints) at control_rate and `control/status`
 // (ControllerStatus) at status_rate and on every change of state. Runs on the node clock, so
-// `use_sim_time` makes it follow the simulator.
+// `use_sim_time` makes it follow the simulator. Keeps a replica of the map (`map/update`) to tell
+// the safety manoeuvres whether the water above the vehicle is open (overheadClearance).
 
 #include <cstdint>
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <string>
 
 #include "auv/control/controller.h"
 #include "auv/interfaces/component.h"
+#include "auv/mapping/map_replica.h"
 
 namespace auv::control {
 
 class ControllerComponent : public interfaces::Component {
  public:
   struct Options {
-    double control_rate = 20.0;    ///< Hz, control steps and `control/thrusters` messages
-    double status_rate = 2.0;      ///< Hz, periodic `control/status` (also sent on changes)
+    double control_rate = 20.0;      ///< Hz, control steps and `control/thrusters` messages
+    double status_rate = 2.0;        ///< Hz, periodic `control/status` (also sent on changes)
+    std::string map_id = "octomap";  ///< OctomapUpdate.map_id followed
+    double map_resolution = 0.5;     ///< m, leaf size of the followed map
+    /// m, radius of the water column above the vehicle that must be free of known rock for a
+    /// safety manoeuvre to ascend: the hull radius (0.8) plus a margin, below the planner's
+    /// clearance (1.2) so that a wall it keeps that far from does not count as rock above.
+    double overhead_radius = 1.0;
     ControllerOptions controller;  ///< parameters `controller.*` (model: `controller.model.*`)
     /// The component's own fields (the rates) with meaning, unit and range; the controller's
     /// are in ControllerOptions::table().
@@ -38,6 +47,12 @@ class ControllerComponent : public interfaces::Component {
   /// The controller's current status (call from the executor's thread, e.g. in tests).
   const ControllerStatusReport& status() const { return controller_->status(); }
   const Options& options() const { return options_; }
+
+  /// Distance from `position` up to the deep face of the nearest occupied cell of `map` wholly
+  /// above it whose centre lies within `radius` (horizontally), up to the surface (z = 0, NED);
+  /// +infinity when none. Unknown cells count as open (the paper's assumption).
+  static double overheadClearance(const octomap::OcTree& map, const Eigen::Vector3d& position,
+                                  double radius);
 
  private:
   /// Middleware thread: keeps the newest estimate with its arrival time. Navigation age must
@@ -65,6 +80,8 @@ class ControllerComponent : public interfaces::Component {
 
   std::shared_ptr<interfaces::Subscription<msg::ControllerCommand>> command_sub_;
   std::shared_ptr<interfaces::Subscription<msg::Odometry>> odometry_sub_;
+  std::shared_ptr<interfaces::Subscription<msg::OctomapUpdate>> map_sub_;
+  std::unique_ptr<mapping::MapReplica> map_;  // executor thread only (as the control step)
   std::shared_ptr<interfaces::Publisher<msg::ThrusterSetpoints>> thrusters_pub_;
   std::shared_ptr<interfaces::Publisher<msg::ControllerStatus>> status_pub_;
   std::shared_ptr<interfaces::Timer> control_timer_;
