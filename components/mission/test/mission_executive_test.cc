@@ -9,130 +9,11 @@
 
 #include "auv/interfaces/msg_eigen.h"
 #include "auv/mission/mission_executive.h"
+#include "executive_fixture.h"
 
 namespace auv::mission {
 namespace {
-
-#define EXPECT_CONTAINS(text, part) \
-  EXPECT_NE(std::string(text).find(part), std::string::npos) << "'" << (text) << "'"
-
-const Eigen::Vector3d kStart(0.0, 0.0, 5.0);
-
-MissionQuery query(const Eigen::Vector3d& goal, const std::string& name = "q") {
-  MissionQuery q;
-  q.name = name;
-  q.goal = goal;
-  q.goal_tolerance = 1.0;
-  q.time_budget = 2.5;
-  q.visibility_objective = false;
-  q.expected_distance = 3.0;
-  q.admissible_range = 1.5;
-  q.bounds_min = {-50, -50, 0};
-  q.bounds_max = {50, 50, 20};
-  return q;
-}
-
-msg::Point point(const Eigen::Vector3d& v) { return interfaces::toPoint(v); }
-Eigen::Vector3d vector(const msg::Point& p) { return interfaces::toEigen(p); }
-
-class MissionExecutiveTest : public ::testing::Test {
- protected:
-  static ExecutiveOptions defaults() {
-    ExecutiveOptions o;
-    o.odometry_timeout = 1.0;
-    o.controller_timeout = 5.0;
-    o.readiness_timeout = 60.0;
-    o.no_solution_timeout = 30.0;
-    o.request_distance = 1.5;
-    o.request_period = 2.0;
-    return o;
-  }
-
-  MissionExecutive executive{defaults()};
-  double t = 100.0;  // s, the fake clock
-  Eigen::Vector3d vehicle = kStart;
-  double yaw = 0.3;
-  uint64_t next_waypoint_id = 1;
-
-  msg::MissionState state() const { return executive.status().state(); }
-  std::string message() const { return executive.status().message(); }
-
-  void odometry() { executive.onOdometry(vehicle, yaw, t); }
-  /// The vehicle moves to `position` (one odometry message).
-  void moveTo(const Eigen::Vector3d& position) {
-    vehicle = position;
-    odometry();
-  }
-  void controller(bool safety = false, uint64_t active = 0, bool reached = false) {
-    msg::ControllerStatus status;
-    status.active_command_id(active);
-    status.state(safety ? msg::CONTROLLER_STATE_SAFETY_MANEUVER : msg::CONTROLLER_STATE_IDLE);
-    status.reached(reached);
-    status.safety_maneuver(safety);
-    if (safety) {
-      status.safety_reason(msg::SAFETY_REASON_MIN_ALTITUDE);
-      status.safety_text("altitude 0.8 m < 1.5 m");
-    }
-    executive.onControllerStatus(status, t);
-  }
-  /// Time passes with fresh navigation and controller status, then a tick.
-  void advance(double seconds) {
-    t += seconds;
-    odometry();
-    controller();
-    executive.tick(t);
-  }
-
-  /// Starts `queries` with everything ready; returns the outbox of the start.
-  MissionExecutive::Outbox startReady(const std::vector<MissionQuery>& queries) {
-    odometry();
-    controller();
-    executive.setPlannerPresent(true);
-    std::string why;
-    EXPECT_TRUE(executive.start("m-1", queries, t, &why)) << why;
-    return executive.takeOutbox();
-  }
-
-  msg::Waypoint waypoint(const Eigen::Vector3d& position, bool is_final = false) {
-    msg::Waypoint w;
-    w.waypoint_id(next_waypoint_id++);
-    w.query_id(executive.status().current_query_id());
-    w.position(point(position));
-    w.heading(0.7);
-    w.speed(0.5);
-    w.tolerance(0.5);
-    w.is_final(is_final);
-    return w;
-  }
-  /// Sends a waypoint; returns the controller command it produced.
-  msg::ControllerCommand follow(const msg::Waypoint& w) {
-    executive.onWaypoint(w, t);
-    auto out = executive.takeOutbox();
-    EXPECT_EQ(out.commands.size(), 1u);
-    return out.commands.empty() ? msg::ControllerCommand() : out.commands.back();
-  }
-
-  msg::WaypointCancel cancel(uint64_t waypoint_id, msg::CancelReason reason,
-                             uint64_t query_id = 0) {
-    msg::WaypointCancel c;
-    c.waypoint_id(waypoint_id);
-    c.query_id(query_id != 0 ? query_id : executive.status().current_query_id());
-    c.reason(reason);
-    c.reason_text("root at (3, 0, 5) is occupied");
-    return c;
-  }
-
-  /// The stop-and-keep-depth command of an abort.
-  void expectDepthHold(const MissionExecutive::Outbox& out, double depth) {
-    ASSERT_EQ(out.commands.size(), 1u);
-    const msg::ControllerCommand& hold = out.commands.front();
-    EXPECT_EQ(hold.mode(), msg::CONTROL_MODE_SETPOINT);
-    EXPECT_EQ(hold.surge_speed(), 0.0);
-    EXPECT_EQ(hold.depth(), depth);
-    EXPECT_EQ(hold.heading(), yaw);
-    EXPECT_NE(hold.command_id(), 0u);
-  }
-};
+using namespace executive_test;
 
 // ---- readiness --------------------------------------------------------------------------
 
@@ -638,19 +519,21 @@ TEST_F(MissionExecutiveTest, StartWhileRunningIsRefusedWithTheReason) {
   EXPECT_CONTAINS(why, "no queries");
 }
 
-TEST_F(MissionExecutiveTest, SafetyManoeuvreWhileExecutingAborts) {
+TEST_F(MissionExecutiveTest, SafetyManoeuvreWhileExecutingRecovers) {
   startReady({query({10, 0, 5})});
   follow(waypoint({4, 0, 5}));
   controller(/*safety=*/true);
   const auto out = executive.takeOutbox();
-  EXPECT_EQ(state(), msg::MISSION_STATE_ABORTED);
-  EXPECT_CONTAINS(message(), "controller safety manoeuvre: altitude 0.8 m < 1.5 m");
+  EXPECT_EQ(state(), msg::MISSION_STATE_RECOVERING);
+  EXPECT_CONTAINS(message(), "MIN_ALTITUDE: altitude 0.8 m < 1.5 m");
   // The controller is in charge: the mission sends nothing over its manoeuvre, and later
-  // waypoints are not followed.
+  // waypoints of the interrupted query are not followed.
   EXPECT_TRUE(out.commands.empty());
   executive.onWaypoint(waypoint({8, 0, 5}), t);
+  manoeuvre = true;
   advance(1.0);
   EXPECT_TRUE(executive.takeOutbox().commands.empty());
+  EXPECT_EQ(state(), msg::MISSION_STATE_RECOVERING);
 }
 
 TEST(ExecutiveOptionsTest, InvalidOptionsNameTheField) {
@@ -665,6 +548,16 @@ TEST(ExecutiveOptionsTest, InvalidOptionsNameTheField) {
   options = ExecutiveOptions();
   options.request_distance = -1.0;
   EXPECT_THROW(MissionExecutive{options}, std::invalid_argument);
+  for (double bad : {-1.0, 2.5, std::nan("")}) {
+    options = ExecutiveOptions();
+    options.max_recoveries = bad;
+    try {
+      MissionExecutive executive(options);
+      FAIL() << "accepted max_recoveries " << bad;
+    } catch (const std::invalid_argument& error) {
+      EXPECT_CONTAINS(error.what(), "max_recoveries");
+    }
+  }
 }
 
 }  // namespace

@@ -18,6 +18,20 @@ std::string formatSeconds(double seconds) {
 Eigen::Vector3d toVector(const msg::Point& p) { return interfaces::toEigen(p); }
 using interfaces::toPoint;
 
+const char* reasonName(msg::SafetyReason reason) {
+  static const char* const kNames[] = {
+      "NONE",        "MIN_ALTITUDE", "MAX_DEPTH",       "OBSTACLE", "NAVIGATION_LOST",
+      "LOW_BATTERY", "LEAK",         "COMMAND_TIMEOUT", "OPERATOR", "OTHER"};
+  const auto index = static_cast<size_t>(reason);
+  return index < sizeof(kNames) / sizeof(kNames[0]) ? kNames[index] : "UNKNOWN";
+}
+
+// Manoeuvres a re-issued query cannot help with: the vehicle must come home or be looked at.
+bool abortsAtOnce(msg::SafetyReason reason) {
+  return reason == msg::SAFETY_REASON_OPERATOR || reason == msg::SAFETY_REASON_LEAK ||
+         reason == msg::SAFETY_REASON_LOW_BATTERY;
+}
+
 }  // namespace
 
 const char* toString(msg::MissionState state) {
@@ -36,6 +50,8 @@ const char* toString(msg::MissionState state) {
       return "FAILED";
     case msg::MISSION_STATE_ABORTED:
       return "ABORTED";
+    case msg::MISSION_STATE_RECOVERING:
+      return "RECOVERING";
     default:
       return "UNKNOWN";
   }
@@ -66,11 +82,26 @@ const config::OptionTable<ExecutiveOptions>& ExecutiveOptions::table() {
       {"waypoint_timeout_factor", &O::waypoint_timeout_factor,
        "controller command timeout = this x distance / speed + margin", "",
        Range::aboveUpTo(0.0, 100.0)},
+      {"max_recoveries", &O::max_recoveries,
+       "re-issues of one query after controller safety manoeuvres (0: a manoeuvre aborts)", "",
+       Range::closed(0.0, 100.0)},
+      {"recovery_hold", &O::recovery_hold,
+       "held after a safety manoeuvre before the query is re-issued from where the vehicle is", "s",
+       Range::closed(0.0, 600.0)},
+      {"recovery_timeout", &O::recovery_timeout,
+       "a recovery whose safety manoeuvre has not ended this long after it began aborts", "s",
+       Range::above(0)},
   };
   return kTable;
 }
 
-void ExecutiveOptions::check() const { config::checkOptions(*this, table()); }
+void ExecutiveOptions::check() const {
+  config::checkOptions(*this, table());
+  if (max_recoveries != std::floor(max_recoveries)) {
+    throw std::invalid_argument("max_recoveries: must be a whole number, got " +
+                                std::to_string(max_recoveries));
+  }
+}
 
 MissionExecutive::MissionExecutive(const ExecutiveOptions& options) : options_(options) {
   options_.check();
@@ -82,7 +113,8 @@ MissionExecutive::MissionExecutive(const ExecutiveOptions& options) : options_(o
 bool MissionExecutive::running() const {
   const auto state = status_.state();
   return state == msg::MISSION_STATE_CHECKING_READINESS ||
-         state == msg::MISSION_STATE_WAITING_FOR_WAYPOINT || state == msg::MISSION_STATE_EXECUTING;
+         state == msg::MISSION_STATE_WAITING_FOR_WAYPOINT ||
+         state == msg::MISSION_STATE_EXECUTING || state == msg::MISSION_STATE_RECOVERING;
 }
 
 void MissionExecutive::setState(msg::MissionState state, const std::string& message) {
@@ -119,6 +151,8 @@ bool MissionExecutive::start(const std::string& mission_id,
   status_ = fresh;
   current_.reset();
   next_.reset();
+  query_recoveries_ = 0;
+  holding_since_.reset();
   readiness_since_ = now;
   setState(msg::MISSION_STATE_CHECKING_READINESS, "checking readiness");
   tick(now);
@@ -155,6 +189,10 @@ void MissionExecutive::tick(double now) {
     } else if (status_.message() != "not ready: " + reason) {
       setState(state, "not ready: " + reason);
     }
+    return;
+  }
+  if (state == msg::MISSION_STATE_RECOVERING) {
+    continueRecovery(now);
     return;
   }
   if (state != msg::MISSION_STATE_WAITING_FOR_WAYPOINT && state != msg::MISSION_STATE_EXECUTING) {
@@ -240,10 +278,13 @@ void MissionExecutive::onControllerStatus(const msg::ControllerStatus& status, d
   controller_ = status;
   controller_time_ = now;
   if (!running()) return;
+  if (status_.state() == msg::MISSION_STATE_RECOVERING) {
+    if (status.safety_maneuver()) holding_since_.reset();  // again: wait for it to end
+    continueRecovery(now);
+    return;
+  }
   if (status.safety_maneuver() && status_.state() != msg::MISSION_STATE_CHECKING_READINESS) {
-    setState(msg::MISSION_STATE_ABORTED,
-             "controller safety manoeuvre: " + status.safety_text() +
-                 " (the controller keeps the vehicle safe; restart the mission when clear)");
+    startRecovery(status, now);
     return;
   }
   if (status_.state() == msg::MISSION_STATE_EXECUTING && status.reached() &&
@@ -253,7 +294,11 @@ void MissionExecutive::onControllerStatus(const msg::ControllerStatus& status, d
 }
 
 void MissionExecutive::onWaypoint(const msg::Waypoint& waypoint, double now) {
-  if (!running() || waypoint.query_id() != status_.current_query_id()) return;
+  const auto state = status_.state();
+  if (state != msg::MISSION_STATE_WAITING_FOR_WAYPOINT && state != msg::MISSION_STATE_EXECUTING) {
+    return;  // not asked for (a recovery re-issues the query: its waypoints are stale)
+  }
+  if (waypoint.query_id() != status_.current_query_id()) return;
   if ((current_ && waypoint.waypoint_id() == current_->waypoint_id()) ||
       (next_ && waypoint.waypoint_id() == next_->waypoint_id())) {
     return;  // a repeat
@@ -336,11 +381,16 @@ void MissionExecutive::finishQuery(bool succeeded, double now) {
     return;
   }
   status_.current_query_index(next_index);
+  query_recoveries_ = 0;
   startQuery(now);
 }
 
 void MissionExecutive::onCancel(const msg::WaypointCancel& cancel, double now) {
-  if (!running() || cancel.query_id() != status_.current_query_id()) return;
+  const auto state = status_.state();
+  if (state != msg::MISSION_STATE_WAITING_FOR_WAYPOINT && state != msg::MISSION_STATE_EXECUTING) {
+    return;  // nothing followed (a recovery re-issues the query anyway)
+  }
+  if (cancel.query_id() != status_.current_query_id()) return;
   const uint64_t id = cancel.waypoint_id();
   const bool ours = id == 0 || (current_ && id == current_->waypoint_id()) ||
                     (next_ && id == next_->waypoint_id());
@@ -412,6 +462,83 @@ void MissionExecutive::abortToHold(const std::string& reason) {
   command_id_ = 0;
   setState(msg::MISSION_STATE_ABORTED,
            reason + (commanded ? "; holding depth" : "; the vehicle was not commanded yet"));
+}
+
+void MissionExecutive::startRecovery(const msg::ControllerStatus& status, double now) {
+  const std::string cause =
+      std::string(reasonName(status.safety_reason())) + ": " + status.safety_text();
+  const auto limit = static_cast<uint32_t>(options_.max_recoveries);
+  if (abortsAtOnce(status.safety_reason()) || query_recoveries_ >= limit) {
+    const std::string why = abortsAtOnce(status.safety_reason())
+                                ? ""
+                                : "; recoveries exhausted (" + std::to_string(query_recoveries_) +
+                                      " of max_recoveries " + std::to_string(limit) +
+                                      " used by this query)";
+    current_.reset();
+    next_.reset();
+    command_id_ = 0;
+    setState(msg::MISSION_STATE_ABORTED,
+             "controller safety manoeuvre " + cause + why +
+                 " (the controller keeps the vehicle safe; restart the mission when clear)");
+    return;
+  }
+  ++query_recoveries_;
+  status_.recoveries(status_.recoveries() + 1);
+  recovery_since_ = now;
+  holding_since_.reset();
+  recovery_cause_ = cause;
+  current_.reset();
+  next_.reset();
+  command_id_ = 0;
+  next_requested_ = false;
+  const std::string detail = "recovery " + std::to_string(query_recoveries_) + "/" +
+                             std::to_string(limit) + " of query " +
+                             std::to_string(status_.current_query_index() + 1) + " after " + cause;
+  outbox_.events.push_back({"RECOVERY_START", detail});
+  // The controller refuses commands during its manoeuvre: nothing is sent until it is over.
+  setState(msg::MISSION_STATE_RECOVERING, detail + "; waiting for the manoeuvre to end");
+}
+
+void MissionExecutive::continueRecovery(double now) {
+  if (now - controller_time_ > options_.controller_timeout) {
+    abortToHold("controller silent while recovering: no control/status for " +
+                formatSeconds(now - controller_time_) + " (controller_timeout " +
+                formatSeconds(options_.controller_timeout) + ")");
+    return;
+  }
+  const bool manoeuvre = controller_ && controller_->safety_maneuver();
+  const bool navigation = position_ && now - odometry_time_ <= options_.odometry_timeout;
+  if (!holding_since_ && (manoeuvre || !navigation)) {
+    if (now - recovery_since_ > options_.recovery_timeout) {
+      const std::string what = manoeuvre ? "the safety manoeuvre (" + recovery_cause_ + ")"
+                                         : std::string("stale navigation");
+      abortToHold("recovery given up: " + what + " still on after " +
+                  formatSeconds(now - recovery_since_) + " (recovery_timeout " +
+                  formatSeconds(options_.recovery_timeout) + ")");
+    }
+    return;
+  }
+  if (!holding_since_) {
+    // Over: hold where the controller left the vehicle while the map takes in the cause.
+    holding_since_ = now;
+    hold(true);
+    setState(msg::MISSION_STATE_RECOVERING, "manoeuvre over (" + recovery_cause_ + "); holding " +
+                                                formatSeconds(options_.recovery_hold) +
+                                                " before re-issuing query " +
+                                                std::to_string(status_.current_query_index() + 1));
+    return;
+  }
+  if (now - *holding_since_ < options_.recovery_hold) return;
+  if (!navigation) return;  // the query starts from the vehicle's position: wait for it
+  const uint64_t old_query = status_.current_query_id();
+  holding_since_.reset();
+  startQuery(now);
+  const std::string detail =
+      "query " + std::to_string(status_.current_query_index() + 1) + " re-issued as query id " +
+      std::to_string(status_.current_query_id()) + " (was " + std::to_string(old_query) +
+      "), recovery " + std::to_string(query_recoveries_) + " after " + recovery_cause_;
+  outbox_.events.push_back({"RECOVERY_REISSUE", detail});
+  setState(msg::MISSION_STATE_WAITING_FOR_WAYPOINT, detail + "; waiting for the first waypoint");
 }
 
 }  // namespace auv::mission

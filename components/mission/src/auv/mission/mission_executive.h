@@ -7,7 +7,12 @@
 //   IDLE --start--> CHECKING_READINESS --ready--> WAITING_FOR_WAYPOINT <--cancel-- EXECUTING
 //                                                  --waypoint--> EXECUTING --goal--> next query
 //   any active state --stale navigation / no waypoint for too long / abort--> ABORTED (hold)
-//   a safety manoeuvre of the controller --> ABORTED (the controller keeps the vehicle safe)
+//   WAITING_FOR_WAYPOINT / EXECUTING --controller safety manoeuvre--> RECOVERING: wait for the
+//     manoeuvre to end (the controller keeps the vehicle safe), HOLD recovery_hold s (the map
+//     takes in what caused it), re-issue the query from where the vehicle is (new query id)
+//     --> WAITING_FOR_WAYPOINT. At most max_recoveries per query; ABORTED when they are used up,
+//     when the manoeuvre (or stale navigation after it) lasts past recovery_timeout, or on abort.
+//     Manoeuvres for OPERATOR, LEAK and LOW_BATTERY abort at once (nothing to retry).
 
 #include <cstdint>
 #include <optional>
@@ -40,6 +45,13 @@ struct ExecutiveOptions {
   /// Controller command timeout = factor × distance / speed + waypoint_timeout_margin.
   double waypoint_timeout_factor = 4.0;
   double waypoint_timeout_margin = 30.0;  ///< s
+  /// Re-issues of one query after controller safety manoeuvres (0: a manoeuvre aborts).
+  double max_recoveries = 3;
+  /// s, held after a manoeuvre before the query is re-issued (the map takes in the cause).
+  double recovery_hold = 5.0;
+  /// s, a recovery whose manoeuvre has not ended (or navigation not returned) this long after
+  /// it began aborts the mission.
+  double recovery_timeout = 180.0;
   /// The fields with meaning, unit and range (the mission component's parameters of those
   /// names).
   static const config::OptionTable<ExecutiveOptions>& table();
@@ -54,6 +66,12 @@ class MissionExecutive {
     std::vector<msg::PlannerQuery> queries;
     std::vector<msg::WaypointRequest> requests;
     std::vector<msg::ControllerCommand> commands;
+    /// Named events for the mission log (RECOVERY_START, RECOVERY_REISSUE) with their detail.
+    struct Event {
+      std::string name;
+      std::string detail;
+    };
+    std::vector<Event> events;
     bool status_changed = false;
   };
 
@@ -95,6 +113,10 @@ class MissionExecutive {
   /// depth and heading.
   void hold(bool keep_position);
   void abortToHold(const std::string& reason);
+  /// A safety manoeuvre interrupted the query: RECOVERING, or ABORTED when it may not.
+  void startRecovery(const msg::ControllerStatus& status, double now);
+  /// RECOVERING: hold once the manoeuvre is over, re-issue after recovery_hold, or give up.
+  void continueRecovery(double now);
 
   ExecutiveOptions options_;
   msg::MissionStatus status_;
@@ -121,6 +143,12 @@ class MissionExecutive {
   double waiting_since_ = 0.0;
   double last_request_time_ = 0.0;
   uint64_t last_request_reached_id_ = 0;
+
+  // Recovery after a safety manoeuvre.
+  uint32_t query_recoveries_ = 0;        // recoveries of the current query (status: whole mission)
+  double recovery_since_ = 0.0;          // s, when the manoeuvre interrupted the query
+  std::optional<double> holding_since_;  // s, manoeuvre over, HOLD sent
+  std::string recovery_cause_;           // the manoeuvre's reason and text
 };
 
 const char* toString(msg::MissionState state);

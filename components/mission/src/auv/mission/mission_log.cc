@@ -85,7 +85,8 @@ void MissionLog::finish(const msg::MissionStatus& status, const octomap::OcTree*
       << "queries_failed: " << status.queries_failed() << "\n"
       << "waypoints_received: " << status.waypoints_received() << "\n"
       << "waypoints_reached: " << status.waypoints_reached() << "\n"
-      << "waypoints_cancelled: " << status.waypoints_cancelled() << "\n";
+      << "waypoints_cancelled: " << status.waypoints_cancelled() << "\n"
+      << "recoveries: " << status.recoveries() << "\n";
   if (map != nullptr) {
     // Temporary name, then rename: a reader never sees half a map.
     const fs::path final_path = fs::path(dir_) / "map.bt";

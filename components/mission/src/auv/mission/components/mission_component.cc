@@ -281,6 +281,15 @@ void MissionComponent::flush(const std::string& event, const std::string& detail
     command.header().stamp(interfaces::toMsgTime(node_->clock().nowNs()));
     command_pub_->publish(command);
   }
+  if (log_) {
+    for (const auto& event : out.events) {  // RECOVERY_START, RECOVERY_REISSUE
+      log_->event(now(), event.name, executive_->status(),
+                  executive_->vehiclePosition().value_or(Eigen::Vector3d::Constant(std::nan(""))),
+                  event.detail);
+    }
+  }
+  for (const auto& event : out.events)
+    AUV_WARN(node_->logger(), event.name << ": " << event.detail);
   if (!out.status_changed) return;
   const msg::MissionStatus& status = executive_->status();
   if (status.state() != logged_state_) {

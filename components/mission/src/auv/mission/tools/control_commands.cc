@@ -79,7 +79,8 @@ std::string describe(const msg::MissionStatus& s) {
   text += " - " + s.message() + " [succeeded " + std::to_string(s.queries_succeeded()) + "/" +
           std::to_string(s.query_count()) + ", waypoints " + std::to_string(s.waypoints_reached()) +
           " reached / " + std::to_string(s.waypoints_received()) + " received / " +
-          std::to_string(s.waypoints_cancelled()) + " cancelled]";
+          std::to_string(s.waypoints_cancelled()) + " cancelled, recoveries " +
+          std::to_string(s.recoveries()) + "]";
   return text;
 }
 

@@ -187,6 +187,7 @@ struct QueryRecord {
   Eigen::Vector3d start = Eigen::Vector3d::Constant(std::nan(""));
   Eigen::Vector3d end = Eigen::Vector3d::Constant(std::nan(""));
   bool succeeded = false;
+  bool interrupted = false;  // a safety manoeuvre ended this attempt (the query was re-issued)
 };
 
 /// What the mission log says: the queries in order, the waypoints and how the mission ended.
@@ -196,6 +197,8 @@ struct MissionRecord {
   std::vector<Eigen::Vector3d> waypoints;
   std::string final_state = "UNKNOWN", final_message;
   double start = std::nan(""), end = std::nan("");
+  std::map<int, int> recoveries;                 // by query index (RECOVERY_START events)
+  std::vector<Eigen::Vector3d> recovery_points;  // where each began
 };
 
 /// Reads events.csv and waypoints.csv; a query ends where the next starts, or at the end.
@@ -207,9 +210,16 @@ void readMissionLog(const fs::path& log, const std::vector<Sample>& truth, Missi
     const Eigen::Vector3d position(number(row[5]), number(row[6]), number(row[7]));
     if (std::isnan(m.start)) m.start = t;
     m.end = t;
+    const std::string query_id = row[3];
+    if (row[1] == "RECOVERY_START") {
+      ++m.recoveries[std::stoi(row[2])];
+      m.recovery_points.push_back(position);
+      m.queries[query_id].interrupted = true;
+      continue;
+    }
+    if (row[1].find('/') == std::string::npos) continue;  // other named events
     m.final_state = state;
     m.final_message = row[8];
-    const std::string query_id = row[3];
     if (query_id != "0") {
       QueryRecord& q = m.queries[query_id];
       if (std::isnan(q.start_t)) {
@@ -228,7 +238,7 @@ void readMissionLog(const fs::path& log, const std::vector<Sample>& truth, Missi
   for (std::size_t i = 0; i < m.ordered.size(); ++i) {
     QueryRecord& q = *m.ordered[i];
     q.end_t = i + 1 < m.ordered.size() ? m.ordered[i + 1]->start_t : m.end;
-    q.succeeded = i + 1 < m.ordered.size() || m.final_state == "SUCCEEDED";
+    q.succeeded = !q.interrupted && (i + 1 < m.ordered.size() || m.final_state == "SUCCEEDED");
     if (const Sample* s = at(truth, q.end_t)) q.end = s->p;
     if (const Sample* s = at(truth, q.start_t)) q.start = s->p;
   }
@@ -320,6 +330,7 @@ void drawLegend(Figure& figure, const MissionRecord& m, const TruthFacts& facts,
   figure.text(490, legend, "mapped occupied (top-down)", "#9a8c7a");
   figure.text(10, legend + 18,
               m.final_state + " - collisions: " + std::to_string(facts.collisions.size()) +
+                  " - recoveries (R): " + std::to_string(m.recovery_points.size()) +
                   " - north up, east right, " + json(1.0 / scale * 100) + " m per 100 px",
               facts.collisions.empty() ? "#000000" : "#ff0000");
 }
@@ -334,12 +345,16 @@ std::string summaryJson(const fs::path& run, const MissionRecord& m, const Truth
           << "  \"collisions\": " << facts.collisions.size() << ",\n"
           << "  \"min_true_clearance_m\": " << json(facts.min_clearance) << ",\n"
           << "  \"max_navigation_error_m\": " << json(facts.max_nav_error) << ",\n"
-          << "  \"executed_length_m\": " << json(pathLength(truth, m.start, m.end))
-          << ",\n  \"queries\": [";
+          << "  \"executed_length_m\": " << json(pathLength(truth, m.start, m.end)) << ",\n";
+  int recoveries = 0;
+  for (const auto& [index, count] : m.recoveries) recoveries += count;
+  summary << "  \"recoveries\": " << recoveries << ",\n  \"queries\": [";
   for (std::size_t i = 0; i < m.ordered.size(); ++i) {
     const QueryRecord& q = *m.ordered[i];
     summary << (i ? "," : "") << "\n    {\"index\": " << q.index
             << ", \"succeeded\": " << (q.succeeded ? "true" : "false")
+            << ", \"interrupted\": " << (q.interrupted ? "true" : "false")
+            << ", \"recoveries\": " << (m.recoveries.count(q.index) ? m.recoveries.at(q.index) : 0)
             << ", \"start_t\": " << json(q.start_t) << ", \"end_t\": " << json(q.end_t)
             << ", \"start\": [" << json(q.start.x()) << ", " << json(q.start.y()) << ", "
             << json(q.start.z()) << "], \"end\": [" << json(q.end.x()) << ", " << json(q.end.y())
@@ -412,6 +427,10 @@ int reportMain(const std::vector<std::string>& args) {
   figure.polyline(true_line, "#1f4e9c", 2);
   for (const auto& w : mission.waypoints) figure.circle(w, 2.0, "#2e8b57", true);
   for (const auto& c : facts.collisions) figure.circle(c, 6.0, "#ff0000", false);
+  for (const auto& r : mission.recovery_points) {
+    figure.circle(r, 5.0, "#d2691e", false);
+    figure.text(figure.x(r) + 6, figure.y(r) + 12, "R", "#d2691e");
+  }
   for (const QueryRecord* q : mission.ordered) {
     figure.circle(q->start, 4.0, "#000000", true);
     figure.text(figure.x(q->start) + 5, figure.y(q->start) - 5, "q" + std::to_string(q->index + 1),
