@@ -484,23 +484,44 @@ TEST(MissionComponentTest, LogIsCompleteWhenTheMissionEnds) {
   const std::filesystem::path log_dir = ::testing::TempDir() + "mission_component_test_log";
   std::filesystem::remove_all(log_dir);
   MissionHarness harness(Vendor::FASTDDS, Vendor::CYCLONEDDS, 155,
-                         {"log_dir:=" + log_dir.string()});
+                         {"log_dir:=" + log_dir.string(), "recovery_hold:=0.3"});
   ASSERT_TRUE(harness.discovered());
 
   const Eigen::Vector3d goal(3, 0, 5);
   ASSERT_EQ(harness.start("logged", {queryTo(goal)}).status().code(), msg::REPLY_CODE_OK);
-  const msg::Waypoint waypoint = harness.answerFirstRequest(goal, /*is_final=*/true);
-  ASSERT_NE(waypoint.query_id(), 0u);
+  const msg::Waypoint first = harness.answerFirstRequest({1, 0, 5}, /*is_final=*/false);
+  ASSERT_NE(first.query_id(), 0u);
   ASSERT_TRUE(
       harness.spinUntil([&] { return harness.commandOf(msg::CONTROL_MODE_WAYPOINT).has_value(); }));
+  // A safety manoeuvre interrupts the query: the mission recovers and re-issues it.
+  harness.controller.safety_maneuver(true);
+  harness.controller.state(msg::CONTROLLER_STATE_SAFETY_MANEUVER);
+  harness.controller.safety_reason(msg::SAFETY_REASON_MIN_ALTITUDE);
+  harness.controller.safety_text("altitude 0.6 m < min_altitude 1 m; ascending");
+  ASSERT_TRUE(harness.reachesState("logged", msg::MISSION_STATE_RECOVERING));
+  harness.controller.safety_maneuver(false);
+  harness.controller.state(msg::CONTROLLER_STATE_IDLE);
+  harness.controller.safety_reason(msg::SAFETY_REASON_NONE);
+  harness.controller.safety_text("");
+  ASSERT_TRUE(harness.spinUntil([&] { return harness.queries.size() == 2; }));
+  ASSERT_TRUE(harness.spinUntil(
+      [&] { return harness.requests.back().query_id() == harness.queries.back().query_id(); }));
+  const msg::Waypoint waypoint = harness.answerFirstRequest(goal, /*is_final=*/true);
+  ASSERT_NE(waypoint.query_id(), first.query_id());
+  ASSERT_TRUE(harness.spinUntil([&] {
+    return !harness.commands.empty() &&
+           harness.commands.back().mode() == msg::CONTROL_MODE_WAYPOINT;
+  }));
   // The controller reports the waypoint reached.
-  harness.controller.active_command_id(harness.commandOf(msg::CONTROL_MODE_WAYPOINT)->command_id());
+  harness.controller.active_command_id(harness.commands.back().command_id());
   harness.controller.state(msg::CONTROLLER_STATE_HOLDING);
   harness.controller.reached(true);
   ASSERT_TRUE(harness.reachesState("logged", msg::MISSION_STATE_SUCCEEDED));
   EXPECT_EQ(harness.statusOf("logged")->queries_succeeded(), 1u);
-  ASSERT_TRUE(
-      harness.spinUntil([&] { return harness.commandOf(msg::CONTROL_MODE_HOLD).has_value(); }));
+  EXPECT_EQ(harness.statusOf("logged")->recoveries(), 1u);
+  ASSERT_TRUE(harness.spinUntil([&] {
+    return harness.commands.back().mode() == msg::CONTROL_MODE_HOLD;  // the final hold
+  }));
 
   // The log is closed before the final status goes out.
   for (const char* name : {"events.csv", "waypoints.csv", "mission.yaml", "status.txt"}) {
@@ -510,10 +531,15 @@ TEST(MissionComponentTest, LogIsCompleteWhenTheMissionEnds) {
   EXPECT_CONTAINS(status, "mission_id: logged\n");
   EXPECT_CONTAINS(status, "state: SUCCEEDED\n");
   EXPECT_CONTAINS(status, "queries_succeeded: 1\n");
-  EXPECT_CONTAINS(status, "waypoints_received: 1\n");
+  EXPECT_CONTAINS(status, "waypoints_received: 2\n");
+  EXPECT_CONTAINS(status, "recoveries: 1\n");
   const std::string events = readFile(log_dir / "events.csv");
   EXPECT_EQ(events.rfind("t,event,", 0), 0u) << events;
   EXPECT_CONTAINS(events, "EXECUTING/waypoint");
+  EXPECT_CONTAINS(events, ",RECOVERY_START,0,");
+  EXPECT_CONTAINS(events, "recovery 1/3 of query 1 after MIN_ALTITUDE: altitude 0.6 m");
+  EXPECT_CONTAINS(events, "RECOVERING/controller");
+  EXPECT_CONTAINS(events, ",RECOVERY_REISSUE,0,");
   EXPECT_CONTAINS(events, "SUCCEEDED/");
   const std::string waypoints = readFile(log_dir / "waypoints.csv");
   std::ostringstream line;
