@@ -310,6 +310,9 @@ TEST(ControllerComponentTest, MapWithACeilingMakesTheManoeuvreBackAwayInsteadOfA
   })) << rig.harness.status.safety_text();
   ASSERT_TRUE(rig.freshThrust());
   EXPECT_EQ(rig.harness.thrust.vertical(), -1.0);
+  // Each change of action is logged.
+  EXPECT_TRUE(rig.spinUntil([&] { return rig.harness.logged("backing away: rock 2.5 m above"); }));
+  EXPECT_TRUE(rig.spinUntil([&] { return rig.harness.logged("; ascending"); }));
 }
 
 TEST(ControllerComponentTest, MalformedCommandsAreLoggedAndTheActiveOneKept) {

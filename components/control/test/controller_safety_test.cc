@@ -72,6 +72,7 @@ TEST(ControllerSafetyTest, MinAltitudeUnderRockBacksAwayAlongTheTrackThenAscends
   ASSERT_EQ(loop.status().safety_reason, SafetyReason::MIN_ALTITUDE);
   EXPECT_NE(loop.status().safety_text.find("backing away: rock 3.0 m above"), std::string::npos)
       << loop.status().safety_text;
+  EXPECT_EQ(loop.status().safety_action, "backing away");
 
   double shallowest_under_rock = start_depth;
   double off_track = 0.0;
@@ -97,6 +98,7 @@ TEST(ControllerSafetyTest, MinAltitudeUnderRockBacksAwayAlongTheTrackThenAscends
   EXPECT_TRUE(reversed);
   EXPECT_NE(loop.status().safety_text.find("; ascending"), std::string::npos)
       << loop.status().safety_text;
+  EXPECT_EQ(loop.status().safety_action, "ascending");
 }
 
 TEST(ControllerSafetyTest, TrailUsedUpHoldsPositionAndDepth) {

@@ -128,7 +128,10 @@ struct ControllerStatusReport {
   bool reached = false;  ///< the WAYPOINT (or SURFACE) goal was reached
   bool safety_maneuver = false;
   SafetyReason safety_reason = SafetyReason::NONE;
-  std::string safety_text;           ///< detail with the numbers, empty when no manoeuvre
+  std::string safety_text;  ///< detail with the numbers, empty when no manoeuvre
+  /// What the manoeuvre does now: "ascending", "backing away", "rising", "holding" (also at the
+  /// end of safety_text); empty when no manoeuvre.
+  std::string safety_action;
   double depth = 0.0;                ///< m, last known depth
   double altitude = -1.0;            ///< m, last known altitude; < 0 = unknown
   double distance_to_target = -1.0;  ///< m, 3-D distance to the WAYPOINT; < 0 = not applicable

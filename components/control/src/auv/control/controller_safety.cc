@@ -85,6 +85,7 @@ void LowLevelController::updateSafety(double now) {
     status_.safety_maneuver = false;
     status_.safety_reason = SafetyReason::NONE;
     status_.safety_text.clear();
+    status_.safety_action.clear();
     condition_text_.clear();
     manoeuvre_depth_.reset();
     status_.state = ControllerState::IDLE;
@@ -107,6 +108,7 @@ ThrusterCommand LowLevelController::safetyManoeuvre(double dt) {
   const double clearance = navigation_ ? overheadClearance(navigation_->position)
                                        : std::numeric_limits<double>::infinity();
   if (std::isinf(clearance)) {
+    status_.safety_action = "ascending";
     status_.safety_text = condition_text_ + "; ascending";
     manoeuvre_depth_.reset();
     return {0.0, 0.0, -1.0};  // horizontal off, full up: open water above, the surface is safe
@@ -118,6 +120,7 @@ ThrusterCommand LowLevelController::safetyManoeuvre(double dt) {
     case SafetyReason::NAVIGATION_LOST:
       // No position to follow the trail with and no fresh depth to regulate on: balance the
       // buoyancy, nothing else.
+      status_.safety_action = "holding";
       status_.safety_text = condition_text_ + "; holding: " + rock + ", no navigation";
       return {0.0, 0.0, options_.model.commandForThrust(options_.model.net_buoyancy)};
     case SafetyReason::MAX_DEPTH: {
@@ -126,6 +129,7 @@ ThrusterCommand LowLevelController::safetyManoeuvre(double dt) {
       const double target =
           std::min(nav.position.z(),
                    std::max(options_.max_depth - 1.0, rock_depth + options_.overhead_margin));
+      status_.safety_action = "rising";
       status_.safety_text = condition_text_ + "; rising to " + metres(target) + ": " + rock;
       ThrusterCommand out = regulate({nav.yaw, target, 0.0}, dt);
       out.port = out.starboard = 0.0;
@@ -134,8 +138,10 @@ ThrusterCommand LowLevelController::safetyManoeuvre(double dt) {
     default: {
       Targets targets{nav.yaw, *manoeuvre_depth_, 0.0};
       if (retreatTargets(targets)) {
+        status_.safety_action = "backing away";
         status_.safety_text = condition_text_ + "; backing away: " + rock;
       } else {
+        status_.safety_action = "holding";
         status_.safety_text = condition_text_ + "; holding: " + rock + ", no trail left";
       }
       return regulate(targets, dt);

@@ -274,8 +274,16 @@ void ControllerComponent::publishStatus() {
 
 void ControllerComponent::reportChanges() {
   const ControllerStatusReport& now = controller_->status();
-  if (!now.differsInState(last_reported_)) return;
   const auto& log = node_->logger();
+  if (now.safety_maneuver && last_reported_.safety_maneuver &&
+      now.safety_reason == last_reported_.safety_reason &&
+      now.safety_action != last_reported_.safety_action) {
+    // Same manoeuvre, new action (e.g. out from under the rock: ascending now).
+    AUV_WARN(log, "safety manoeuvre " << toString(now.safety_reason) << ": " << now.safety_text);
+    last_reported_.safety_action = now.safety_action;
+    publishStatus();
+  }
+  if (!now.differsInState(last_reported_)) return;
   if (now.safety_maneuver &&
       (!last_reported_.safety_maneuver || now.safety_reason != last_reported_.safety_reason)) {
     AUV_WARN(log, "safety manoeuvre " << toString(now.safety_reason) << ": " << now.safety_text);
