@@ -98,8 +98,9 @@ const config::OptionTable<ExecutiveOptions>& ExecutiveOptions::table() {
 void ExecutiveOptions::check() const {
   config::checkOptions(*this, table());
   if (max_recoveries != std::floor(max_recoveries)) {
-    throw std::invalid_argument("max_recoveries: must be a whole number, got " +
-                                std::to_string(max_recoveries));
+    std::ostringstream got;
+    got << max_recoveries;
+    throw std::invalid_argument("max_recoveries: must be a whole number, got " + got.str());
   }
 }
 
