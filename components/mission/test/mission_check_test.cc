@@ -2,6 +2,7 @@
 // the controller allows, and the plane of a fixed-depth query taken from the vehicle's depth.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <string>
 
 #include "auv/mission/mission_check.h"
@@ -130,6 +131,74 @@ TEST(MissionCheckTest, FixedDepthPlaneComesFromTheVehicleWhenUnset) {
   over_cell.fixed_depth = true;
   EXPECT_CONTAINS(refusal(over_cell, &map, 5.25, limits(1.3)), "inside a known obstacle");
   EXPECT_EQ(refusal(over_cell, &map, 15.0, limits(1.3)), "");
+}
+
+/// A seabed: rock from 8 to 10 m deep over x, y in [0, 10]; open water seen (free cells)
+/// from 2 to 4 m deep over x in [0, 5] only; a ledge (one layer at 5 m) over x, y in [6, 8].
+octomap::OcTree seabed() {
+  octomap::OcTree map(kResolution);
+  for (double x = 0.25; x < 10; x += kResolution) {
+    for (double y = 0.25; y < 10; y += kResolution) {
+      for (double z = 8.25; z < 10; z += kResolution) map.updateNode(x, y, z, true);
+      if (x < 5) {
+        for (double z = 2.25; z < 4; z += kResolution) map.updateNode(x, y, z, false);
+      }
+    }
+  }
+  for (double x = 6.25; x < 8; x += kResolution) {
+    for (double y = 6.25; y < 8; y += kResolution) map.updateNode(x, y, 5.25, true);
+  }
+  return map;
+}
+
+TEST(MissionCheckTest, GoalBelowTheSeabedIsRefused) {
+  const octomap::OcTree map = seabed();
+  // Under the rock with nothing seen between (the rock's inside is never seen): refused.
+  const std::string why = refusal(queryTo({2.25, 2.25, 12.0}), &map, 2.0, limits(1.3));
+  EXPECT_CONTAINS(why, "mission/start: query 'q' goal (2.25, 2.25, 12) is below the seabed");
+  EXPECT_CONTAINS(why, "known rock at 10 m depth above it");
+  EXPECT_CONTAINS(refusal(queryTo({7.25, 7.25, 7.0}), &map, 2.0, limits(0.5)), "below the seabed");
+  // Above the seabed: accepted; beside it, over unknown ground: accepted.
+  EXPECT_EQ(refusal(queryTo({2.25, 2.25, 5.0}), &map, 2.0, limits(1.3)), "");
+  EXPECT_EQ(refusal(queryTo({12.25, 2.25, 12.0}), &map, 2.0, limits(1.3)), "");
+  // Under an overhang with open water seen between the goal and the rock: not the seabed.
+  octomap::OcTree arch(kResolution);
+  arch.updateNode(2.25, 2.25, 1.25, true);
+  for (double z = 1.75; z < 6; z += kResolution) arch.updateNode(2.25, 2.25, z, false);
+  EXPECT_EQ(refusal(queryTo({2.25, 2.25, 5.25}), &arch, 2.0, limits(1.3)), "");
+  // A fixed-depth plane (the paper's 2-D mode) is not checked against rock above it.
+  MissionQuery plane = queryTo({7.25, 7.25, 0.0});
+  plane.fixed_depth = true;
+  plane.depth = 7.0;
+  EXPECT_EQ(refusal(plane, &map, 2.0, limits(0.5)), "");
+}
+
+TEST(MissionCheckTest, GoalWithinMinAltitudeOfKnownSeabedIsRefused) {
+  const octomap::OcTree map = seabed();
+  MissionQuery low = queryTo({2.25, 2.25, 5.0});  // 3 m above the seabed's top (8 m)
+  low.min_altitude = 2.0;                         // + 1.3 m clearance: 3.3 m needed
+  const std::string why = refusal(low, &map, 2.0, limits(1.3));
+  EXPECT_CONTAINS(why, "query 'q' goal (2.25, 2.25, 5) is 3 m above known seabed");
+  EXPECT_CONTAINS(why, "min_altitude 2 m + the planner's 1.3 m clearance");
+  low.min_altitude = 1.5;
+  EXPECT_EQ(refusal(low, &map, 2.0, limits(1.3)), "");
+  // Over unknown ground nothing is known below: accepted.
+  MissionQuery unknown = queryTo({12.25, 2.25, 5.0});
+  unknown.min_altitude = 2.0;
+  EXPECT_EQ(refusal(unknown, &map, 2.0, limits(1.3)), "");
+  EXPECT_DOUBLE_EQ(altitudeOverSeabed(map, {2.25, 2.25, 5.0}, 10.0), 3.0);
+  EXPECT_TRUE(std::isinf(altitudeOverSeabed(map, {2.25, 2.25, 5.0}, 2.5)));
+}
+
+TEST(MissionCheckTest, BandDeeperThanTheVehiclesMaxDepthIsRefused) {
+  MissionQuery deep = queryTo({5, 5, 10});
+  deep.min_depth = 2.0;
+  deep.max_depth = 25.0;
+  EXPECT_CONTAINS(refusal(deep, nullptr, 2.0, limits(1.3, 20.0)),
+                  "mission/start: query 'q' max_depth: the band reaches 25 m, deeper than the "
+                  "vehicle's max_depth 20 m");
+  deep.max_depth = 20.0;
+  EXPECT_EQ(refusal(deep, nullptr, 2.0, limits(1.3, 20.0)), "");
 }
 
 TEST(MissionCheckTest, EveryQueryIsCheckedAndTheRefusedOneNamed) {

@@ -65,6 +65,9 @@ void expectSameQuery(const MissionQuery& a, const MissionQuery& b) {
   EXPECT_EQ(a.bounds_max, b.bounds_max);
   EXPECT_EQ(a.fixed_depth, b.fixed_depth);
   EXPECT_EQ(a.depth, b.depth);
+  EXPECT_EQ(a.min_depth, b.min_depth);
+  EXPECT_EQ(a.max_depth, b.max_depth);
+  EXPECT_EQ(a.min_altitude, b.min_altitude);
 }
 
 TEST(MissionPlanTest, DefaultsApplyAndQueriesOverrideThem) {
@@ -314,6 +317,88 @@ TEST(MissionPlanTest, PlannerQueryKeepsEveryField) {
   EXPECT_TRUE(std::isnan(unset.depth()));
   EXPECT_EQ(unset.objective(), msg::PLANNER_OBJECTIVE_PATH_LENGTH);
   expectSameQuery(fromPlannerQuery(unset, 3), query);
+}
+
+}  // namespace
+}  // namespace auv::mission
+
+namespace auv::mission {
+namespace {
+
+/// A 3-D mission: the band and min_altitude in the defaults, one query overriding them.
+const char* const kBandMission = R"(mission:
+  defaults:
+    bounds: {min: [0, 0, 0], max: [40, 20, 20]}
+    fixed_depth: false
+    min_depth: 2.0
+    max_depth: 12.0
+    min_altitude: 1.5
+  queries:
+    - goal: [30, 10, 6]
+    - goal: [5, 5, 15]
+      max_depth: 18
+      min_altitude: 0
+)";
+
+TEST(MissionBandTest, BandAndMinAltitudeComeFromDefaultsAndQueries) {
+  MissionPlan plan = parseMission(kBandMission, "band.yaml");
+  ASSERT_EQ(plan.queries.size(), 2u);
+  EXPECT_EQ(plan.queries[0].min_depth, 2.0);
+  EXPECT_EQ(plan.queries[0].max_depth, 12.0);
+  EXPECT_EQ(plan.queries[0].min_altitude, 1.5);
+  EXPECT_EQ(plan.queries[1].min_depth, 2.0);
+  EXPECT_EQ(plan.queries[1].max_depth, 18.0);
+  EXPECT_EQ(plan.queries[1].min_altitude, 0.0);
+  // Through toYaml and back, and through the PlannerQuery and back.
+  const MissionPlan again = parseMission(toYaml(plan), "round trip");
+  ASSERT_EQ(again.queries.size(), 2u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    SCOPED_TRACE("query " + std::to_string(i));
+    expectSameQuery(again.queries[i], plan.queries[i]);
+    plan.queries[i].name = "query " + std::to_string(i + 1);
+    const msg::PlannerQuery wire = toPlannerQuery(plan.queries[i]);
+    EXPECT_EQ(wire.min_depth(), 2.0);
+    EXPECT_EQ(wire.max_depth(), i == 0 ? 12.0 : 18.0);
+    EXPECT_EQ(wire.min_altitude(), i == 0 ? 1.5 : 0.0);
+    expectSameQuery(fromPlannerQuery(wire, i), plan.queries[i]);
+  }
+  // No band: both ends 0 on the wire, and unset again on the way back.
+  MissionQuery plain = plan.queries[0];
+  plain.min_depth.reset();
+  plain.max_depth.reset();
+  const msg::PlannerQuery wire = toPlannerQuery(plain);
+  EXPECT_EQ(wire.min_depth(), 0.0);
+  EXPECT_EQ(wire.max_depth(), 0.0);
+  EXPECT_FALSE(fromPlannerQuery(wire, 0).min_depth.has_value());
+}
+
+TEST(MissionBandTest, BadBandsAreRefusedNamingTheField) {
+  const std::string base =
+      "mission:\n  queries:\n    - name: dive\n      goal: [5, 5, 5]\n"
+      "      bounds: {min: [0, 0, 1], max: [10, 10, 10]}\n";
+  const auto band = [&](const std::string& fields) { return errorOf(base + fields); };
+  EXPECT_EQ(band("      min_depth: 2\n      max_depth: 8\n      min_altitude: 1\n"), "");
+  EXPECT_CONTAINS(band("      min_depth: 6\n      max_depth: 6\n"),
+                  "test.yaml: query 'dive' min_depth: 6 m must be shallower than max_depth 6 m");
+  EXPECT_CONTAINS(band("      min_depth: 7\n      max_depth: 3\n"), "min_depth: 7 m must be");
+  EXPECT_CONTAINS(band("      min_depth: 0.5\n      max_depth: 8\n"),
+                  "query 'dive' min_depth: 0.5 m is above the bounds' z-range [1 m, 10 m]");
+  EXPECT_CONTAINS(band("      min_depth: 2\n      max_depth: 11\n"),
+                  "query 'dive' max_depth: 11 m is below the bounds' z-range [1 m, 10 m]");
+  EXPECT_CONTAINS(band("      min_depth: 2\n"), "query 'dive' min_depth: given without max_depth");
+  EXPECT_CONTAINS(band("      max_depth: 8\n"), "query 'dive' max_depth: given without min_depth");
+  EXPECT_CONTAINS(band("      min_depth: -1\n      max_depth: 8\n"), "min_depth: must be >= 0");
+  EXPECT_CONTAINS(band("      min_altitude: -0.5\n"), "query 'dive' min_altitude: must be >= 0");
+  EXPECT_CONTAINS(band("      min_depth: 2\n      max_depth: 8\n      fixed_depth: true\n"),
+                  "query 'dive' min_depth: a depth band is for 3-D planning");
+  // The goal must be inside the band: above it or below it is refused before anything moves.
+  EXPECT_CONTAINS(band("      min_depth: 6\n      max_depth: 9\n"),
+                  "query 'dive' goal: depth 5 m is above the band (min_depth 6 m)");
+  EXPECT_CONTAINS(band("      min_depth: 2\n      max_depth: 4\n"),
+                  "query 'dive' goal: depth 5 m is below the band (max_depth 4 m)");
+  EXPECT_CONTAINS(band("      min_depth: [2]\n      max_depth: 4\n"), "min_depth");
+  // min_altitude alone is fine in 2-D too: the planner keeps it over known seabed.
+  EXPECT_EQ(band("      fixed_depth: true\n      min_altitude: 2\n"), "");
 }
 
 }  // namespace

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "test_maps.h"
 
 namespace auv::planning {
@@ -58,12 +60,70 @@ TEST(MapValidity, FixedDepthKeepsSampledStatesAtThatDepth) {
   }
 }
 
+TEST(MapValidity, ClearanceIsASphereSoRockAboveTheHullCounts) {
+  testing::FlatWorld world;  // clearance 1 m
+  world.three_d = true;
+  world.clearance.min_altitude = 2.0;
+  // An overhang: rock between 2 and 3 m deep (NED), open water under it, nothing below.
+  testing::addOccupiedBox(*world.tree, {8.0, -2.0, 2.0}, {12.0, 2.0, 3.0});
+  world.build();
+  EXPECT_FALSE(world.si->isValid(world.state(10.0, 0.0, 3.75).get()));  // 0.75 m under it
+  EXPECT_TRUE(world.si->isValid(world.state(10.0, 0.0, 4.25).get()));   // 1.25 m under it
+  // Beside the rock at the same depth: the sphere reaches sideways as well.
+  EXPECT_FALSE(world.si->isValid(world.state(12.75, 0.0, 2.5).get()));
+  EXPECT_TRUE(world.si->isValid(world.state(13.25, 0.0, 2.5).get()));
+  // Rising into the rock from below is refused; passing under it with the clearance is not.
+  EXPECT_FALSE(
+      world.si->checkMotion(world.state(10.0, 0.0, 6.0).get(), world.state(10.0, 0.0, 3.5).get()));
+  EXPECT_TRUE(
+      world.si->checkMotion(world.state(5.0, 0.0, 4.5).get(), world.state(15.0, 0.0, 4.5).get()));
+}
+
+TEST(MapValidity, MinAltitudeKeepsStatesAboveKnownSeabedOnly) {
+  // Seabed (top at 8 m) known under x >= 10 only; elsewhere below is unknown, hence free.
+  const auto seabed = [](testing::FlatWorld& world) {
+    testing::addOccupiedBox(*world.tree, {10.0, -10.0, 8.0}, {20.0, 10.0, 10.0});
+    world.build();
+  };
+  testing::FlatWorld sphere_only;  // clearance 1 m, min_altitude 0
+  sphere_only.three_d = true;
+  seabed(sphere_only);
+  testing::FlatWorld world;
+  world.three_d = true;
+  world.clearance.min_altitude = 1.5;  // states keep 1.5 + 1 m of water down to the seabed
+  seabed(world);
+  for (const testing::FlatWorld* w : {&sphere_only, &world}) {
+    EXPECT_TRUE(w->si->isValid(w->state(15.0, 0.0, 5.25).get()));   // 2.75 m over it
+    EXPECT_FALSE(w->si->isValid(w->state(15.0, 0.0, 7.25).get()));  // 0.75 m: the sphere
+    EXPECT_TRUE(w->si->isValid(w->state(5.0, 0.0, 9.5).get()));     // over unknown space
+  }
+  // 2.25 m over the seabed: clear of the sphere, not of min_altitude + clearance (2.5 m).
+  EXPECT_TRUE(sphere_only.si->isValid(sphere_only.state(15.0, 0.0, 5.75).get()));
+  const auto low = world.state(15.0, 0.0, 5.75);
+  EXPECT_FALSE(world.si->isValid(low.get()));
+  EXPECT_NEAR(world.si->getStateValidityChecker()->clearance(low.get()), -0.25, 1e-9);
+  EXPECT_NEAR(world.field->altitude({15.0, 0.0, 5.75}, 10.0), 2.25, 1e-9);
+  EXPECT_TRUE(std::isinf(world.field->altitude({5.0, 0.0, 5.75}, 10.0)));  // nothing known
+  EXPECT_TRUE(std::isinf(world.field->altitude({15.0, 0.0, 5.75}, 2.0)));  // beyond reach
+  // Motions are stepped: a level run from unknown ground over the seabed too low is refused.
+  EXPECT_FALSE(
+      world.si->checkMotion(world.state(5.0, 0.0, 5.75).get(), world.state(18.0, 0.0, 5.75).get()));
+  EXPECT_TRUE(
+      world.si->checkMotion(world.state(5.0, 0.0, 5.25).get(), world.state(18.0, 0.0, 5.25).get()));
+  // A state that finds itself too low may climb away, not run along the seabed.
+  EXPECT_TRUE(world.si->checkMotion(low.get(), world.state(15.0, 0.0, 4.0).get()));
+  EXPECT_FALSE(world.si->checkMotion(low.get(), world.state(19.0, 0.0, 5.75).get()));
+}
+
 TEST(MapValidity, RejectsBadOptions) {
   PlanningSpaceOptions space;
   space.fixed_depth = 100.0;
   EXPECT_THROW(space.check(), PlanningConfigError);
   ClearanceOptions clearance;
   clearance.hull_radius = -1.0;
+  EXPECT_THROW(clearance.check(), PlanningConfigError);
+  clearance = ClearanceOptions();
+  clearance.min_altitude = -0.5;
   EXPECT_THROW(clearance.check(), PlanningConfigError);
 }
 

@@ -207,6 +207,59 @@ TEST_F(PlannerTest, TreeGrownThroughUnknownSpaceIsPrunedExactlyWhereTheMapFillsI
   }
 }
 
+TEST_F(PlannerTest, ASeabedMappedUnderPartOfA3DTreeRemovesTheNodesTooLowOverIt) {
+  world_.three_d = true;                // z in [0, 10]
+  world_.clearance.min_altitude = 1.5;  // 1.5 m + the 1 m clearance of water over the seabed
+  makePlanner(2.0, 0.0, 18.0, 0.0);     // at 5 m; nothing mapped yet
+  ASSERT_EQ(grow(3000), ob::PlannerStatus::EXACT_SOLUTION);
+  const auto position = [](const Node* node) { return statePosition(node->state); };
+  // Nodes the seabed (top at 8 m, under x >= 10) will put too low: within 2.5 m of it, yet
+  // more than the 1 m clearance away, so only the column check can remove them.
+  const auto tooLow = [&](const Node* node) {
+    const Eigen::Vector3d p = position(node);
+    return p.x() > 10.25 && p.z() > 8.0 - 2.5 && p.z() < 8.0 - 1.25;
+  };
+  std::size_t too_low = 0, kept_elsewhere = 0;
+  std::vector<const Node*> stack{planner_->root()};
+  while (!stack.empty()) {
+    const Node* node = stack.back();
+    stack.pop_back();
+    if (tooLow(node)) ++too_low;
+    if (position(node).x() < 6.0 && position(node).z() > 6.0) ++kept_elsewhere;
+    for (const Node* child : node->children) stack.push_back(child);
+  }
+  ASSERT_GT(too_low, 0u);
+  ASSERT_GT(kept_elsewhere, 0u);
+
+  const Eigen::Vector3d seabed_min(10.0, -10.0, 8.0), seabed_max(20.0, 10.0, 10.0);
+  testing::addOccupiedBox(*world_.tree, seabed_min, seabed_max);
+  world_.field->update();
+  // The limited re-check with the influence the session uses (clearance + min_altitude + a
+  // cell) removes what the column check refuses.
+  const UpdateResult result = planner_->updateTree(
+      world_.state(2.0, 0.0).get(), Eigen::AlignedBox3d(seabed_min, seabed_max),
+      world_.clearance.clearance() + world_.clearance.min_altitude + testing::kResolution);
+  EXPECT_FALSE(result.needsRestart());
+  EXPECT_GE(result.removed_nodes, too_low);
+  EXPECT_TRUE(planner_->checkConsistency());
+  std::size_t left_low = 0, left_elsewhere = 0;
+  stack = {planner_->root()};
+  while (!stack.empty()) {
+    const Node* node = stack.back();
+    stack.pop_back();
+    if (tooLow(node)) ++left_low;
+    if (position(node).x() < 6.0 && position(node).z() > 6.0) ++left_elsewhere;
+    for (const Node* child : node->children) {
+      EXPECT_TRUE(world_.si->isValid(child->state));
+      EXPECT_TRUE(world_.si->checkMotion(node->state, child->state));
+      stack.push_back(child);
+    }
+  }
+  EXPECT_EQ(left_low, 0u);
+  EXPECT_GT(left_elsewhere, 0u) << "deep nodes away from the seabed are kept";
+  EXPECT_EQ(planner_->updateTree(nullptr).removed_nodes, 0u) << "the full re-check agrees";
+}
+
 TEST_F(PlannerTest, ReportsACollidingRootAndABlockedVehicleToRootSegment) {
   makePlanner(2.0, 0.0, 18.0, 0.0);
   planner_->reset(world_.state(12.0, 0.0).get());

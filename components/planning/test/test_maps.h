@@ -38,14 +38,15 @@ inline void addRing(octomap::OcTree& map, const Eigen::Vector3d& centre, double 
   addOccupiedBox(map, {x - out, y + in, z0}, {x + out, y + out, z1});
 }
 
-/// A 2-D world (fixed depth 5 m) x in [0, size], y in [-size / 2, size / 2] (size 20 m unless
-/// set before build()), its map and planning space.
+/// A 2-D world (fixed depth 5 m; 3-D over z in [0, 10] with three_d) x in [0, size], y in
+/// [-size / 2, size / 2] (size 20 m unless set before build()), its map and planning space.
 struct FlatWorld {
   std::unique_ptr<octomap::OcTree> tree = std::make_unique<octomap::OcTree>(kResolution);
   std::shared_ptr<OctomapDistanceField> field;
   ompl::base::SpaceInformationPtr si;
   ClearanceOptions clearance;
   double size = 20.0;
+  bool three_d = false;  ///< plan in 3-D instead of the plane z = kDepth
   static constexpr double kDepth = 5.0;
 
   FlatWorld() {
@@ -62,14 +63,14 @@ struct FlatWorld {
     PlanningSpaceOptions space;
     space.min_corner = {0.0, -0.5 * size, 0.0};
     space.max_corner = {size, 0.5 * size, 10.0};
-    space.fixed_depth = kDepth;
+    if (!three_d) space.fixed_depth = kDepth;
     si = makeSpaceInformation(space, field, clearance);
   }
-  ompl::base::ScopedState<> state(double x, double y) const {
+  ompl::base::ScopedState<> state(double x, double y, double z = kDepth) const {
     ompl::base::ScopedState<> s(si);
     s[0] = x;
     s[1] = y;
-    s[2] = kDepth;
+    s[2] = z;
     return s;
   }
 };

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "test_maps.h"
 
 namespace auv::planning {
@@ -86,6 +88,39 @@ TEST_F(VisibilityObjectiveTest, ZeroWeightIsPathLength) {
   const auto from = world_.state(1.0, 1.0);
   const auto to = world_.state(4.0, 5.0);
   EXPECT_NEAR(length_only.motionCost(from.get(), to.get()).value(), 5.0, 1e-9);
+}
+
+TEST(VisibilityObjective3d, DistanceIsThreeDimensionalSoTheSeabedBelowIsSeen) {
+  testing::FlatWorld world;
+  world.three_d = true;
+  // Only a seabed, top at 9 m: d of Eq. (1) is the vertical distance down to it.
+  testing::addOccupiedBox(*world.tree, {0.0, -12.0, 9.0}, {22.0, 12.0, 10.0});
+  world.build();
+  VisibilityObjectiveOptions options;
+  options.cost = costOptions();  // admissible d in [3, 5]
+  VisibilityObjective objective(world.si, world.field, options);
+  EXPECT_NEAR(objective.stateCost(world.state(10.0, 0.0, 5.0).get()).value(), 1.0, 1e-9);
+  // d = 8 (1 m deep): (8 / 4 - 1)·100 = 100 -> density 2; d = 7: 75 -> 1.75; d = 2: 50 -> 1.5.
+  EXPECT_NEAR(objective.stateCost(world.state(10.0, 0.0, 1.0).get()).value(), 2.0, 1e-9);
+  EXPECT_NEAR(objective.stateCost(world.state(10.0, 0.0, 2.0).get()).value(), 1.75, 1e-9);
+  EXPECT_NEAR(objective.stateCost(world.state(10.0, 0.0, 7.0).get()).value(), 1.5, 1e-9);
+  // A level run at 5 m (d = 4) costs its length. A climb from 5 to 3 m leaves the admissible
+  // interval at d = 5: 1 m at density 1, then 1 m from 1.25 to 1.5 (Eq. (1) jumps to 25 at
+  // the edge), 2.375 in all; the trapezoid at 0.5 m steps gives 2.3125.
+  EXPECT_NEAR(
+      objective.motionCost(world.state(4.0, 0.0, 5.0).get(), world.state(16.0, 0.0, 5.0).get())
+          .value(),
+      12.0, 1e-6);
+  const double climb =
+      objective.motionCost(world.state(10.0, 0.0, 5.0).get(), world.state(10.0, 0.0, 3.0).get())
+          .value();
+  EXPECT_GT(climb, 2.25);
+  EXPECT_LT(climb, 2.4);
+  // The cost of a diagonal follows the 3-D length (its density is 1 all the way).
+  EXPECT_NEAR(
+      objective.motionCost(world.state(4.0, 0.0, 4.5).get(), world.state(7.0, 4.0, 5.5).get())
+          .value(),
+      std::sqrt(9.0 + 16.0 + 1.0), 1e-6);
 }
 
 TEST(VisibilityObjectiveNarrowPassage, HighCostNeverMakesThePassageInvalid) {

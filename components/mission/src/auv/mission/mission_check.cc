@@ -1,5 +1,6 @@
 #include "auv/mission/mission_check.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -37,6 +38,44 @@ double distanceToOccupied(const octomap::OcTree& map, const Eigen::Vector3d& poi
   return best;
 }
 
+std::optional<double> belowSeabed(const octomap::OcTree& map, const Eigen::Vector3d& point) {
+  octomap::OcTreeKey key;
+  if (!map.coordToKeyChecked(octomap::point3d(point.x(), point.y(), point.z()), key)) {
+    return std::nullopt;
+  }
+  const double half = map.getResolution() / 2;
+  // Up the column (NED: z decreases upwards, as the keys do) from the point's own cell.
+  for (octomap::key_type z = key[2];; --z) {
+    octomap::OcTreeKey cell = key;
+    cell[2] = z;
+    const double centre = map.keyToCoord(z);
+    if (centre + half < 0.0) break;  // above the surface
+    if (const octomap::OcTreeNode* node = map.search(cell)) {
+      if (map.isNodeOccupied(node)) return centre + half;
+      return std::nullopt;  // open water seen above the point
+    }
+    if (z == 0) break;
+  }
+  return std::nullopt;
+}
+
+double altitudeOverSeabed(const octomap::OcTree& map, const Eigen::Vector3d& point, double reach) {
+  constexpr double kNone = std::numeric_limits<double>::infinity();
+  octomap::OcTreeKey key;
+  if (!map.coordToKeyChecked(octomap::point3d(point.x(), point.y(), point.z()), key)) return kNone;
+  const double half = map.getResolution() / 2;
+  for (octomap::key_type z = key[2];; ++z) {
+    octomap::OcTreeKey cell = key;
+    cell[2] = z;
+    const double top = map.keyToCoord(z) - half;
+    if (top - point.z() > reach) break;
+    const octomap::OcTreeNode* node = map.search(cell);
+    if (node != nullptr && map.isNodeOccupied(node)) return std::max(0.0, top - point.z());
+    if (z == std::numeric_limits<octomap::key_type>::max()) break;
+  }
+  return kNone;
+}
+
 void checkAgainstVehicle(const std::vector<MissionQuery>& queries, const octomap::OcTree* map,
                          double vehicle_depth, const MissionLimits& limits,
                          const std::string& source) {
@@ -53,6 +92,12 @@ void checkAgainstVehicle(const std::vector<MissionQuery>& queries, const octomap
           << limits.max_depth << " m: unreachable depth";
       throw MissionError(why.str());
     }
+    if (q.max_depth && *q.max_depth > limits.max_depth) {
+      std::ostringstream why;
+      why << source << ": query '" << q.name << "' max_depth: the band reaches " << *q.max_depth
+          << " m, deeper than the vehicle's max_depth " << limits.max_depth << " m";
+      throw MissionError(why.str());
+    }
     if (map == nullptr) continue;
     const double distance = distanceToOccupied(*map, goal, limits.goal_clearance);
     if (distance < limits.goal_clearance) {
@@ -62,6 +107,27 @@ void checkAgainstVehicle(const std::vector<MissionQuery>& queries, const octomap
           << (distance == 0.0 ? " is inside a known obstacle" : " is too close to a known obstacle")
           << " (" << distance << " m from occupied space; the planner keeps "
           << limits.goal_clearance << " m)";
+      throw MissionError(why.str());
+    }
+    // 3-D queries only: a fixed-depth plane is the paper's 2-D mode, unchanged.
+    const std::optional<double> rock = q.fixed_depth ? std::nullopt : belowSeabed(*map, goal);
+    if (rock) {
+      std::ostringstream why;
+      why.precision(4);
+      why << context << where.str() << " is below the seabed: known rock at " << *rock
+          << " m depth above it and no open water seen between";
+      throw MissionError(why.str());
+    }
+    // The planner keeps min_altitude of water under its clearance sphere (map_validity.h).
+    const double reach = q.min_altitude + limits.goal_clearance;
+    const double altitude = q.min_altitude > 0.0 ? altitudeOverSeabed(*map, goal, reach)
+                                                 : std::numeric_limits<double>::infinity();
+    if (altitude < reach) {
+      std::ostringstream why;
+      why.precision(3);
+      why << context << where.str() << " is " << altitude
+          << " m above known seabed; the query keeps min_altitude " << q.min_altitude
+          << " m + the planner's " << limits.goal_clearance << " m clearance";
       throw MissionError(why.str());
     }
   }

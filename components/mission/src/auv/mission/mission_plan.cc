@@ -22,7 +22,10 @@ const std::vector<std::string> kQueryKeys = {"name",
                                              "admissible_range",
                                              "bounds",
                                              "fixed_depth",
-                                             "depth"};
+                                             "depth",
+                                             "min_depth",
+                                             "max_depth",
+                                             "min_altitude"};
 
 /// A point [north, east, down] in metres under `key`, when present.
 void readPoint(const YamlSection& section, const std::string& key, Eigen::Vector3d& point) {
@@ -32,6 +35,15 @@ void readPoint(const YamlSection& section, const std::string& key, Eigen::Vector
     section.fail(key, "expected [north, east, down] in metres");
   }
   section.read(key, point);
+}
+
+/// A number under `key`, when present.
+void readOptional(const YamlSection& section, const std::string& key,
+                  std::optional<double>& value) {
+  if (!section.has(key)) return;
+  double read = 0.0;
+  section.read(key, read);
+  value = read;
 }
 
 /// Fields of `section` override those of `query` (defaults, then the query's own).
@@ -60,11 +72,10 @@ void readQueryFields(const YamlSection& section, MissionQuery& query) {
     readPoint(section.child("bounds"), "max", query.bounds_max);
   }
   section.read("fixed_depth", query.fixed_depth);
-  if (section.has("depth")) {
-    double depth = 0.0;
-    section.read("depth", depth);
-    query.depth = depth;
-  }
+  readOptional(section, "depth", query.depth);
+  readOptional(section, "min_depth", query.min_depth);
+  readOptional(section, "max_depth", query.max_depth);
+  section.read("min_altitude", query.min_altitude);
 }
 
 /// The mission of a file's root section (the shared strict reader: ConfigError on bad input).
@@ -123,6 +134,43 @@ std::string vectorYaml(const Eigen::Vector3d& v) {
   return out.str();
 }
 
+std::string metres(double value) {
+  std::ostringstream out;
+  out << value << " m";
+  return out.str();
+}
+
+/// The depth band's rules (checkQuery); `fail(field, why)` throws.
+template <class Fail>
+void checkBand(const MissionQuery& q, const Eigen::Vector3d& goal, Fail fail) {
+  if (!q.min_depth && !q.max_depth) return;
+  if (!q.min_depth) fail("max_depth", "given without min_depth (a band needs both)");
+  if (!q.max_depth) fail("min_depth", "given without max_depth (a band needs both)");
+  const double low = *q.min_depth, high = *q.max_depth;
+  if (!std::isfinite(low) || low < 0.0) fail("min_depth", "must be >= 0 m (positive down)");
+  if (!std::isfinite(high)) fail("max_depth", "not finite");
+  if (q.fixed_depth) {
+    fail("min_depth",
+         "a depth band is for 3-D planning, and this query has fixed_depth: true "
+         "(drop min_depth/max_depth or set fixed_depth: false)");
+  }
+  if (!(low < high)) {
+    fail("min_depth", metres(low) + " must be shallower than max_depth " + metres(high));
+  }
+  const std::string z_range =
+      " the bounds' z-range [" + metres(q.bounds_min.z()) + ", " + metres(q.bounds_max.z()) + "]";
+  if (low < q.bounds_min.z()) fail("min_depth", metres(low) + " is above" + z_range);
+  if (high > q.bounds_max.z()) fail("max_depth", metres(high) + " is below" + z_range);
+  if (goal.z() < low) {
+    fail("goal",
+         "depth " + metres(goal.z()) + " is above the band (min_depth " + metres(low) + ")");
+  }
+  if (goal.z() > high) {
+    fail("goal",
+         "depth " + metres(goal.z()) + " is below the band (max_depth " + metres(high) + ")");
+  }
+}
+
 }  // namespace
 
 void checkQuery(const MissionQuery& q, const std::string& source) {
@@ -167,6 +215,10 @@ void checkQuery(const MissionQuery& q, const std::string& source) {
     fail("depth", "must be >= 0 m (positive down)");
   }
   if (!q.fixed_depth && goal.z() < 0.0) fail("goal", "is above the surface (z < 0)");
+  if (!(q.min_altitude >= 0.0) || !std::isfinite(q.min_altitude)) {
+    fail("min_altitude", "must be >= 0 m (0 = none)");
+  }
+  checkBand(q, goal, fail);
 }
 
 MissionPlan parseMission(const std::string& yaml_text, const std::string& source) {
@@ -193,6 +245,9 @@ std::string toYaml(const MissionPlan& plan) {
         << ", max: " << vectorYaml(q.bounds_max) << "}\n"
         << "      fixed_depth: " << (q.fixed_depth ? "true" : "false") << "\n";
     if (q.depth) out << "      depth: " << *q.depth << "\n";
+    if (q.min_depth) out << "      min_depth: " << *q.min_depth << "\n";
+    if (q.max_depth) out << "      max_depth: " << *q.max_depth << "\n";
+    if (q.min_altitude != 0.0) out << "      min_altitude: " << q.min_altitude << "\n";
   }
   return out.str();
 }
@@ -219,6 +274,10 @@ msg::PlannerQuery toPlannerQuery(const MissionQuery& q) {
   query.fixed_depth(q.fixed_depth);
   // On the wire an unset depth is NaN: the mission handler fills in the vehicle's depth.
   query.depth(q.depth ? *q.depth : std::numeric_limits<double>::quiet_NaN());
+  // On the wire no band is both ends 0 (planning.idl).
+  query.min_depth(q.min_depth.value_or(0.0));
+  query.max_depth(q.max_depth.value_or(0.0));
+  query.min_altitude(q.min_altitude);
   return query;
 }
 
@@ -236,6 +295,11 @@ MissionQuery fromPlannerQuery(const msg::PlannerQuery& query, std::size_t index)
   q.bounds_max = {query.bounds_max().x(), query.bounds_max().y(), query.bounds_max().z()};
   q.fixed_depth = query.fixed_depth();
   if (!std::isnan(query.depth())) q.depth = query.depth();
+  if (query.min_depth() != 0.0 || query.max_depth() != 0.0) {
+    q.min_depth = query.min_depth();  // checkQuery refuses an inverted one
+    q.max_depth = query.max_depth();
+  }
+  q.min_altitude = query.min_altitude();
   return q;
 }
 

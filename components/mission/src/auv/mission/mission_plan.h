@@ -36,6 +36,12 @@ struct MissionQuery {
   bool fixed_depth = false;  ///< plan in the plane z = depth
   /// m, depth of the plane; unset = the vehicle's depth when the query starts.
   std::optional<double> depth;
+  /// m, depth band of 3-D planning (fixed_depth false), both or neither: the planner samples
+  /// and keeps min_depth <= z <= max_depth inside the bounds' z-range. Unset: the z-range.
+  std::optional<double> min_depth;
+  std::optional<double> max_depth;
+  /// m, water kept between the planner's clearance sphere and known seabed below; 0 = none.
+  double min_altitude = 0.0;
 };
 
 struct MissionPlan {
@@ -51,11 +57,14 @@ MissionPlan parseMission(const std::string& yaml_text, const std::string& source
 std::string toYaml(const MissionPlan& plan);
 
 /// Checks what can be checked without a map: finite values, ranges, goal inside the bounds,
-/// bounds non-empty. Throws MissionError naming `source`, the query and the field.
+/// bounds non-empty, the depth band (both ends, min < max, inside the bounds' z-range, not
+/// with fixed_depth, the goal inside it), min_altitude >= 0. Throws MissionError naming
+/// `source`, the query and the field.
 void checkQuery(const MissionQuery& query, const std::string& source);
 
 /// The PlannerQuery for `query` (query_id, start and stamp left for the caller; depth NaN when
-/// the query has none: the mission handler fills in the vehicle's depth).
+/// the query has none: the mission handler fills in the vehicle's depth; min_depth and
+/// max_depth 0 without a band).
 msg::PlannerQuery toPlannerQuery(const MissionQuery& query);
 /// Back from a PlannerQuery (name "query <i>").
 MissionQuery fromPlannerQuery(const msg::PlannerQuery& query, std::size_t index);

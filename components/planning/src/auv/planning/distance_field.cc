@@ -1,6 +1,7 @@
 #include "auv/planning/distance_field.h"
 
 #include <algorithm>
+#include <limits>
 #include <string>
 
 #include <dynamicEDT3D/dynamicEDTOctomap.h>
@@ -65,6 +66,28 @@ double OctomapDistanceField::distance(const Eigen::Vector3d& position) const {
        half)
           .max(0.0);
   return std::min(gap.norm(), options_.max_distance);
+}
+
+double OctomapDistanceField::altitude(const Eigen::Vector3d& position, double reach) const {
+  constexpr double kNone = std::numeric_limits<double>::infinity();
+  octomap::OcTreeKey key;
+  if (!(reach >= 0.0) ||
+      !tree_->coordToKeyChecked(octomap::point3d(position.x(), position.y(), position.z()), key)) {
+    return kNone;
+  }
+  // Down the column (z grows downwards in NED, as the tree's keys do) from the state's own
+  // cell to the last cell whose top face is within reach.
+  const double half = 0.5 * tree_->getResolution();
+  for (octomap::key_type z = key[2];; ++z) {
+    octomap::OcTreeKey cell = key;
+    cell[2] = z;
+    const double top = tree_->keyToCoord(z) - half;
+    if (top - position.z() > reach) break;
+    const octomap::OcTreeNode* node = tree_->search(cell);
+    if (node != nullptr && tree_->isNodeOccupied(node)) return std::max(0.0, top - position.z());
+    if (z == std::numeric_limits<octomap::key_type>::max()) break;
+  }
+  return kNone;
 }
 
 double OctomapDistanceField::resolution() const { return tree_->getResolution(); }

@@ -33,6 +33,11 @@ class DistanceField {
   virtual double distance(const Eigen::Vector3d& position) const = 0;
   /// m, the distance reported when nothing occupied is nearer.
   virtual double maxDistance() const = 0;
+  /// m, vertical distance from `position` (NED, z down) to the top face of the nearest known
+  /// occupied cell directly below it (its column), 0 when its own cell is occupied; infinity
+  /// when no occupied cell lies within `reach` below. Unknown cells do not count (free until
+  /// seen): the min_altitude check of 3-D planning.
+  virtual double altitude(const Eigen::Vector3d& position, double reach) const = 0;
   /// m, the grid step of the underlying map: motions are checked at half of it.
   virtual double resolution() const = 0;
   /// Increases every time the field changes, so users can tell a stale check from a fresh one.
@@ -66,6 +71,8 @@ class OctomapDistanceField : public DistanceField {
 
   double distance(const Eigen::Vector3d& position) const override;
   double maxDistance() const override { return options_.max_distance; }
+  /// Reads the tree's column (the tree as it is now, like update()).
+  double altitude(const Eigen::Vector3d& position, double reach) const override;
   double resolution() const override;
   std::uint64_t revision() const override { return revision_; }
 

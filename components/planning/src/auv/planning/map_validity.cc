@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include <ompl/base/spaces/RealVectorStateSpace.h>
@@ -27,6 +28,10 @@ void ClearanceOptions::check() const {
   config::checkOptions<PlanningConfigError>(*this, table(), "clearance: ");
   if (!std::isfinite(motion_check_step)) {
     throw PlanningConfigError("clearance: motion_check_step must be finite");
+  }
+  if (!(min_altitude >= 0.0) || !std::isfinite(min_altitude)) {
+    throw PlanningConfigError("clearance: min_altitude must be >= 0 m, got " +
+                              std::to_string(min_altitude));
   }
 }
 
@@ -57,7 +62,19 @@ bool MapValidityChecker::isValid(const ob::State* state) const {
 }
 
 double MapValidityChecker::clearance(const ob::State* state) const {
-  return field_->distance(statePosition(state)) - options_.clearance();
+  const Eigen::Vector3d position = statePosition(state);
+  const double distance = field_->distance(position);
+  return std::min(distance - options_.clearance(), altitudeMargin(position, distance));
+}
+
+double MapValidityChecker::altitudeMargin(const Eigen::Vector3d& position, double distance) const {
+  constexpr double kNone = std::numeric_limits<double>::infinity();
+  if (options_.min_altitude <= 0.0) return kNone;
+  const double reach = options_.min_altitude + options_.clearance();
+  // Nothing occupied within reach in any direction: the column is clear too (the cheap test
+  // first; the column walk costs one octree search per cell).
+  if (distance >= reach) return kNone;
+  return field_->altitude(position, reach) - reach;
 }
 
 MapMotionValidator::MapMotionValidator(const ob::SpaceInformationPtr& si, double step)

@@ -24,6 +24,11 @@ struct ClearanceOptions {
   double safety_margin = 0.4;
   /// m, motion check step; <= 0 means half the map resolution. Never above half of it.
   double motion_check_step = 0.0;
+  /// m, water kept between the clearance sphere (hull_radius + safety_margin) and known
+  /// seabed directly below: a state with a known occupied cell less than min_altitude +
+  /// clearance() below it in its column is invalid; 0 = the sphere only. Set per query
+  /// (PlannerQuery.min_altitude), not a parameter.
+  double min_altitude = 0.0;
 
   /// hull_radius and safety_margin with meaning, unit and range (the planning component's
   /// parameters of those names); motion_check_step is not a parameter.
@@ -33,17 +38,23 @@ struct ClearanceOptions {
   double clearance() const { return hull_radius + safety_margin; }
 };
 
-/// Valid = inside the space bounds and at least clearance() from the nearest occupied cell.
+/// Valid = inside the space bounds, at least clearance() from the nearest occupied cell (a
+/// sphere: rock above, below and beside counts alike) and, with min_altitude > 0, no known
+/// occupied cell within min_altitude + clearance() directly below (docs/paper.md §2.2.2 in 3-D).
 class MapValidityChecker : public ompl::base::StateValidityChecker {
  public:
   MapValidityChecker(const ompl::base::SpaceInformationPtr& si,
                      std::shared_ptr<const DistanceField> field, const ClearanceOptions& options);
 
   bool isValid(const ompl::base::State* state) const override;
-  /// Distance to the nearest occupied cell minus the required clearance (< 0: too close).
+  /// Distance to the nearest occupied cell minus the required clearance, or the altitude over
+  /// known seabed minus min_altitude + clearance when that is smaller (< 0: invalid).
   double clearance(const ompl::base::State* state) const override;
 
  private:
+  /// The altitude term of clearance(): +infinity without known seabed within reach.
+  double altitudeMargin(const Eigen::Vector3d& position, double distance) const;
+
   std::shared_ptr<const DistanceField> field_;
   ClearanceOptions options_;
 };

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <utility>
 
@@ -41,6 +42,9 @@ class ReplicaDistanceField : public DistanceField {
     return field_ ? field_->distance(position) : max_distance_;
   }
   double maxDistance() const override { return max_distance_; }
+  double altitude(const Eigen::Vector3d& position, double reach) const override {
+    return field_ ? field_->altitude(position, reach) : std::numeric_limits<double>::infinity();
+  }
   double resolution() const override { return resolution_; }
   std::uint64_t revision() const override { return revision_; }
 
@@ -77,6 +81,39 @@ namespace {
 void setPosition(ob::State* state, const Eigen::Vector3d& position) {
   auto* values = state->as<ob::RealVectorStateSpace::StateType>()->values;
   for (int i = 0; i < 3; ++i) values[i] = position[i];
+}
+
+std::string depthText(double value) {
+  std::ostringstream text;
+  text << value << " m";
+  return text.str();
+}
+
+/// The space's z-range becomes the bounds' intersected with the query's depth band (3-D
+/// planning). Throws PlanningConfigError for an inverted band, one outside the bounds, or a
+/// goal outside it. The start is not checked: enforceBounds() brings it into the band.
+void applyBand(const PlanningQuery& query, PlanningSpaceOptions& space) {
+  if (!std::isfinite(query.min_depth) || !std::isfinite(query.max_depth) ||
+      !(query.min_depth < query.max_depth)) {
+    throw PlanningConfigError("depth band: min_depth " + depthText(query.min_depth) +
+                              " must be above max_depth " + depthText(query.max_depth) +
+                              " (both 0: no band)");
+  }
+  const double low = std::max(space.min_corner.z(), query.min_depth);
+  const double high = std::min(space.max_corner.z(), query.max_depth);
+  if (!(low < high)) {
+    throw PlanningConfigError("depth band [" + depthText(query.min_depth) + ", " +
+                              depthText(query.max_depth) + "] is outside the bounds' z-range [" +
+                              depthText(space.min_corner.z()) + ", " +
+                              depthText(space.max_corner.z()) + "]");
+  }
+  if (query.goal.z() < low || query.goal.z() > high) {
+    throw PlanningConfigError("goal depth " + depthText(query.goal.z()) +
+                              " is outside the depth band [" + depthText(low) + ", " +
+                              depthText(high) + "]");
+  }
+  space.min_corner.z() = low;
+  space.max_corner.z() = high;
 }
 
 }  // namespace
@@ -216,12 +253,17 @@ std::unique_ptr<PlanningSession::ActiveQuery> PlanningSession::buildQuery(
     space.fixed_depth = start.z();
   }
   space.check();
+  // The field covers the bounds, not just the band: Eq. (1) and the clearance see the rock
+  // outside the band too.
   OctomapDistanceFieldOptions field_options;
   field_options.max_distance = options_.max_distance;
   field_options.min_corner = space.min_corner - Eigen::Vector3d::Constant(options_.field_margin);
   field_options.max_corner = space.max_corner + Eigen::Vector3d::Constant(options_.field_margin);
+  if (!space.fixed_depth && query.hasBand()) applyBand(query, space);
   field_->rebuild(&map, field_options);
-  active->si = makeSpaceInformation(space, field_, options_.clearance);
+  ClearanceOptions clearance = options_.clearance;
+  clearance.min_altitude = query.min_altitude;
+  active->si = makeSpaceInformation(space, field_, clearance);
 
   ob::OptimizationObjectivePtr objective;
   if (query.objective == PlanningObjective::PATH_LENGTH) {
@@ -327,8 +369,9 @@ void PlanningSession::recheckTree(const std::optional<Eigen::Vector3d>& vehicle,
   q.si->enforceBounds(vehicle_state.get());  // also puts it on the fixed depth
   // Only edges near what changed can change (the mapping component reports the box of every
   // increment): within the clearance for validity, within the band of Eq. (1) for costs.
-  const double influence = std::max(options_.clearance.clearance(),
-                                    q.query.expected_distance + 0.5 * q.query.admissible_range) +
+  // A seabed appearing below reaches up min_altitude + clearance (the column check).
+  const double influence = std::max({options_.clearance.clearance() + q.query.min_altitude,
+                                     q.query.expected_distance + 0.5 * q.query.admissible_range}) +
                            options_.map_resolution;
   UpdateResult result = recheck_everything_
                             ? q.planner->updateTree(nullptr)

@@ -87,6 +87,14 @@ struct PlanningQuery {
   Eigen::Vector3d bounds_min = Eigen::Vector3d::Zero();
   Eigen::Vector3d bounds_max = Eigen::Vector3d::Zero();
   std::optional<double> fixed_depth;  ///< m, plan in the horizontal plane at this depth
+  /// m, depth band of 3-D planning (z positive down): the space's z-range is the bounds'
+  /// intersected with [min_depth, max_depth]. Both 0: no band; any other max_depth <=
+  /// min_depth is refused. Ignored in 2-D (fixed_depth here or in SessionOptions).
+  double min_depth = 0.0;
+  double max_depth = 0.0;
+  /// m, water kept between the clearance sphere and known seabed below (ClearanceOptions).
+  double min_altitude = 0.0;
+  bool hasBand() const { return min_depth != 0.0 || max_depth != 0.0; }
 };
 
 struct WaypointRequest {

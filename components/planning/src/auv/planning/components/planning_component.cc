@@ -34,6 +34,9 @@ PlanningQuery toPlanningQuery(const msg::PlannerQuery& query) {
   converted.bounds_min = toVector(query.bounds_min());
   converted.bounds_max = toVector(query.bounds_max());
   if (query.fixed_depth()) converted.fixed_depth = query.depth();
+  converted.min_depth = query.min_depth();
+  converted.max_depth = query.max_depth();
+  converted.min_altitude = query.min_altitude();
   return converted;
 }
 
