@@ -105,5 +105,40 @@ TEST_F(ScenarioTest, ErrorsNameTheFileAndField) {
   EXPECT_NE(syntax.find(": malformed YAML: "), std::string::npos) << syntax;
 }
 
+TEST_F(ScenarioTest, MissionSectionSaysHowTheWorldPlans) {
+  const Scenario plain = loadScenario(write("world: {mesh: block.ply, seabed_depth: 10}\n"));
+  EXPECT_TRUE(plain.mission.fixed_depth);  // the paper's 2-D mode unless a scenario says else
+  EXPECT_FALSE(plain.mission.hasBand());
+  const Scenario s = loadScenario(write(R"(
+world: {mesh: block.ply, seabed_depth: 10}
+mission: {fixed_depth: false, min_depth: 2, max_depth: 8, min_altitude: 1.5}
+)"));
+  EXPECT_FALSE(s.mission.fixed_depth);
+  EXPECT_DOUBLE_EQ(s.mission.min_depth, 2.0);
+  EXPECT_DOUBLE_EQ(s.mission.max_depth, 8.0);
+  EXPECT_DOUBLE_EQ(s.mission.min_altitude, 1.5);
+}
+
+TEST_F(ScenarioTest, MissionSectionErrorsNameTheFileAndField) {
+  const std::string world = "world: {mesh: block.ply, seabed_depth: 10}\n";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"mission: {fixed_depth: maybe}", "scenario.yaml: mission.fixed_depth"},
+      {"mission: {min_depth: 5, max_depth: 3}",
+       "scenario.yaml: mission.max_depth: must be greater"},
+      {"mission: {min_depth: 4, max_depth: 4}", "mission.max_depth: must be greater"},
+      {"mission: {min_depth: 2, max_depth: 12}", "mission.max_depth: must be inside the water"},
+      {"mission: {min_depth: -1, max_depth: 5}", "mission.min_depth: must be inside the water"},
+      {"mission: {min_depth: 2}", "mission.max_depth: missing"},
+      {"mission: {max_depth: 2}", "mission.min_depth: missing"},
+      {"mission: {min_altitude: -0.5}", "scenario.yaml: mission.min_altitude: must be >= 0"},
+      {"mission: {min_altitud: 1}", "did you mean 'min_altitude'"},
+      {"mission: {min_depth: deep, max_depth: 5}", "mission.min_depth: expected a finite number"},
+  };
+  for (const auto& [section, expected] : cases) {
+    const std::string error = errorOf(world + section + "\n");
+    EXPECT_NE(error.find(expected), std::string::npos) << section << " -> " << error;
+  }
+}
+
 }  // namespace
 }  // namespace auv::sim

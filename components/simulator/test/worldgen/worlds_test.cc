@@ -160,8 +160,55 @@ TEST_P(AllWorlds, WrittenMeshReloadsValidatesAndKeepsItsTexture) {
   EXPECT_NEAR(world.scenario.seabed_depth, world.generated.seabed_depth, 1e-9);
 }
 
+TEST_P(AllWorlds, MissionModeFitsTheWorldAndRoutesKeepToTheBand) {
+  const LoadedWorld& world = loaded(GetParam());
+  const MissionPlanning& m = world.scenario.mission;
+  EXPECT_EQ(m.fixed_depth, world.generated.mission.fixed_depth);
+  EXPECT_EQ(m.min_depth, world.generated.mission.min_depth);
+  EXPECT_EQ(m.max_depth, world.generated.mission.max_depth);
+  EXPECT_EQ(m.min_altitude, world.generated.mission.min_altitude);
+  const bool natural =
+      GetParam() == "arch" || GetParam() == "boulder_field" || GetParam() == "leaning_reef";
+  EXPECT_EQ(m.fixed_depth, !natural) << "the paper's worlds keep the 2-D mode";
+  if (m.fixed_depth) {
+    // Every route stays in the plane of the start.
+    for (const auto& route : world.generated.layout.routes)
+      for (const Vector3d& p : route) EXPECT_NEAR(p.z(), world.scenario.start_position.z(), 1e-9);
+    return;
+  }
+  ASSERT_TRUE(m.hasBand());
+  EXPECT_GT(m.min_altitude, 0.0);
+  for (const auto& route : world.generated.layout.routes) {
+    for (size_t i = 1; i < route.size(); ++i) {
+      for (int s = 0; s <= 20; ++s) {
+        const Vector3d p = route[i - 1] + (route[i] - route[i - 1]) * (s / 20.0);
+        EXPECT_GE(p.z(), m.min_depth - 1e-9) << GetParam() << " " << p.transpose();
+        EXPECT_LE(p.z(), m.max_depth + 1e-9) << GetParam() << " " << p.transpose();
+        const RayHit below = world.caster->cast(p.cast<float>(), Vector3f(0, 0, 1), 50.0f);
+        ASSERT_TRUE(below.hit()) << "no seabed under " << p.transpose();
+        EXPECT_GE(below.distance, m.min_altitude) << GetParam() << " " << p.transpose();
+      }
+    }
+  }
+}
+
+TEST_P(AllWorlds, SameSeedSameWorldOtherSeedOtherWorld) {
+  WorldGenOptions options;
+  options.detail = 0.03;
+  options.seed = 3;
+  const GeneratedWorld a = generateWorld(GetParam(), options);
+  const GeneratedWorld b = generateWorld(GetParam(), options);
+  options.seed = 4;
+  const GeneratedWorld c = generateWorld(GetParam(), options);
+  EXPECT_TRUE(a.mesh.vertices == b.mesh.vertices);
+  EXPECT_TRUE(a.mesh.triangles == b.mesh.triangles);
+  EXPECT_EQ(scenarioYaml(a, "x.obj"), scenarioYaml(b, "x.obj"));
+  EXPECT_FALSE(a.mesh.vertices == c.mesh.vertices);
+}
+
 INSTANTIATE_TEST_SUITE_P(Worldgen, AllWorlds,
-                         ::testing::Values("breakwater", "canyon", "dead_end_bay"));
+                         ::testing::Values("arch", "boulder_field", "breakwater", "canyon",
+                                           "dead_end_bay", "leaning_reef"));
 
 TEST(BreakwaterTest, BlocksAre14_5By12MetresWithGapsOfTwoToFourMetres) {
   const LoadedWorld& world = loaded("breakwater");
@@ -266,6 +313,101 @@ TEST(DeadEndBayTest, DirectRouteEndsInTheBay) {
   EXPECT_LT(left.distance + right.distance, 25.0);
 }
 
+// Depth of the first surface met looking down from 10 m above the sea at NED (x, y) (negative:
+// above the surface), or 1e9 for none.
+double firstRockDepth(const LoadedWorld& world, double x, double y) {
+  const RayHit hit = world.caster->cast(Vector3f(x, y, -10.0f), Vector3f(0, 0, 1), 60.0f);
+  return hit.hit() ? hit.distance - 10.0 : 1e9;
+}
+
+TEST(BoulderFieldTest, ManyTopsJustBelowTheStartDepthAndTallOnesToGoRound) {
+  const LoadedWorld& world = loaded("boulder_field");
+  const double start_depth = world.scenario.start_position.z();
+  const WorldLayout& layout = world.generated.layout;
+  ASSERT_GE(layout.shallow_boulder_tops.size(), 6u);
+  int shallow = 0;
+  for (const Vector3d& top : layout.shallow_boulder_tops) {
+    const double depth = firstRockDepth(world, top.x(), top.y());
+    shallow += depth > start_depth && depth <= start_depth + 1.5;
+  }
+  // A vehicle held at the start depth passes over these with less than 1.5 m of altitude.
+  EXPECT_GE(shallow, 6) << "of " << layout.shallow_boulder_tops.size();
+  ASSERT_GE(layout.tall_boulder_tops.size(), 2u);
+  for (const Vector3d& top : layout.tall_boulder_tops) {
+    // Too shallow to pass over inside the band at the planner's 1.2 m clearance.
+    const double depth = firstRockDepth(world, top.x(), top.y());
+    EXPECT_LT(depth, world.scenario.mission.min_depth + 1.2) << top.transpose();
+  }
+  // The first query's straight line at the start depth runs into rock.
+  const Vector3d start = world.scenario.start_position, goal = world.scenario.queries[0].goal;
+  EXPECT_TRUE(world.caster->occluded(start.cast<float>(), (goal - start).normalized().cast<float>(),
+                                     static_cast<float>((goal - start).norm())));
+}
+
+TEST(ArchTest, RockAboveOpenWaterOnTheRouteAndAWallBeyond) {
+  const LoadedWorld& world = loaded("arch");
+  const WorldLayout& layout = world.generated.layout;
+  const Vector3d under = layout.arch_under;
+  EXPECT_TRUE(clearWithin(*world.caster, under, 2.0));
+  EXPECT_FALSE(insideSolid(world, under));
+  // Surfacing from under the span meets rock, which reaches above the surface.
+  const std::vector<double> up =
+      crossings(*world.caster, under, Vector3d(0, 0, -1), under.z() + 5.0);
+  ASSERT_GE(up.size(), 2u) << "no span above the passage";
+  EXPECT_GT(under.z() - up[0], 2.0) << "the span's underside should be below 2 m depth";
+  EXPECT_LT(under.z() - up[0], 6.0);
+  EXPECT_LT(under.z() - up[1], 0.0) << "the span should rise above the surface";
+  // A route passes under the span.
+  bool on_route = false;
+  for (const auto& route : layout.routes)
+    for (const Vector3d& p : route) on_route |= (p - under).norm() < 1e-6;
+  EXPECT_TRUE(on_route);
+  // Flying on through the passage meets the wall beyond it.
+  const RayHit beyond =
+      world.caster->cast(under.cast<float>(), layout.arch_through.cast<float>(), 40.0f);
+  ASSERT_TRUE(beyond.hit());
+  EXPECT_GT(beyond.distance, 10.0);
+  EXPECT_LT(beyond.distance, 25.0);
+  // At the start depth the arch is closed: the straight line to the passage meets the span.
+  const Vector3d start = world.scenario.start_position;
+  const Vector3d level(under.x() + 3.0, under.y(), start.z());
+  EXPECT_TRUE(world.caster->occluded(start.cast<float>(),
+                                     (level - start).normalized().cast<float>(),
+                                     static_cast<float>((level - start).norm())));
+}
+
+TEST(LeaningReefTest, FaceLeansOutBelowTheNavigationDepthOverAnUndercut) {
+  const LoadedWorld& world = loaded("leaning_reef");
+  const WorldLayout& layout = world.generated.layout;
+  ASSERT_GE(layout.reef_stations.size(), 5u);
+  int undercut = 0;
+  for (const Vector3d& station : layout.reef_stations) {
+    auto faceAt = [&](double depth) {
+      const Vector3d origin(station.x(), station.y(), depth);
+      const RayHit hit =
+          world.caster->cast(origin.cast<float>(), layout.reef_towards.cast<float>(), 40.0f);
+      return hit.hit() ? static_cast<double>(hit.distance) : 1e9;
+    };
+    const double top = faceAt(1.0), navigation = faceAt(3.0);
+    double closest = 1e9, closest_depth = 0.0;
+    for (double depth = 1.0; depth <= 9.0; depth += 0.25) {
+      if (faceAt(depth) < closest) closest = faceAt(depth), closest_depth = depth;
+    }
+    // The face at depth is well out from where it is near the surface and at 3 m.
+    EXPECT_GT(top - closest, 3.0) << station.transpose();
+    EXPECT_GT(navigation - closest, 2.0) << station.transpose();
+    EXPECT_GT(closest_depth, 4.5) << station.transpose();
+    // Under the lip: open water with rock straight above.
+    const double deeper = closest_depth + 2.0;
+    if (faceAt(deeper) < closest + 1.0) continue;
+    const Vector3d below_lip =
+        Vector3d(station.x(), station.y(), deeper) + layout.reef_towards * (closest + 0.4);
+    const RayHit up = world.caster->cast(below_lip.cast<float>(), Vector3f(0, 0, -1), 4.0f);
+    undercut += up.hit() && !insideSolid(world, below_lip);
+  }
+  EXPECT_GE(undercut, 4) << "of " << layout.reef_stations.size();
+}
+
 TEST(WorldgenTest, SameSeedSameWorldOtherSeedOtherRock) {
   WorldGenOptions options;
   options.detail = 0.05;
@@ -310,7 +452,9 @@ TEST(WorldgenTest, UnknownWorldsAndBadOptionsAreConfigErrors) {
   WorldGenOptions options;
   options.detail = 0.0;
   EXPECT_THROW(generateWorld("canyon", options), ConfigError);
-  EXPECT_EQ(availableWorlds(), (std::vector<std::string>{"breakwater", "canyon", "dead_end_bay"}));
+  EXPECT_EQ(availableWorlds(),
+            (std::vector<std::string>{"arch", "boulder_field", "breakwater", "canyon",
+                                      "dead_end_bay", "leaning_reef"}));
 }
 
 }  // namespace

@@ -60,6 +60,15 @@ int checkMain(const std::vector<std::string>& args) {
         std::cout << "  query " << q.name << ": goal [" << q.goal.transpose() << "] tolerance "
                   << q.tolerance << " m\n";
       }
+      const MissionPlanning& m = scenario.mission;
+      if (m.fixed_depth) {
+        std::cout << "  mission: fixed depth (2-D, at the start depth)\n";
+      } else {
+        std::cout << "  mission: 3-D";
+        if (m.hasBand())
+          std::cout << ", depth band [" << m.min_depth << ", " << m.max_depth << "] m";
+        std::cout << ", min altitude " << m.min_altitude << " m\n";
+      }
       std::cout << "ok\n";
       return 0;
     }

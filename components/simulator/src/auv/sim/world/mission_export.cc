@@ -28,12 +28,25 @@ std::string missionYaml(const Scenario& scenario, const Mesh& world_mesh,
       << "    objective: " << options.objective << "\n"
       << "    expected_distance: " << options.expected_distance << "\n"
       << "    admissible_range: " << options.admissible_range << "\n"
-      << "    fixed_depth: " << (options.fixed_depth ? "true" : "false")
-      << "\n"
-      // The plane of the scenario's start, not the vehicle's depth at the moment the mission
-      // starts: an idle, positively buoyant vehicle may have floated up by then.
-      << "    depth: " << scenario.start_position.z() << "\n"
-      << "    bounds: {min: [" << lo.x() << ", " << lo.y() << ", 0.0], max: [" << hi.x() << ", "
+      << "    # fixed_depth: true plans in one horizontal plane at `depth` (the paper's 2-D mode,\n"
+      << "    # profiling sonar; worlds of vertical walls). false plans in 3-D inside\n"
+      << "    # [min_depth, max_depth], min_altitude above known seabed (natural terrain: "
+         "boulders,\n"
+      << "    # arches, overhangs; needs 3-D sensing such as a multibeam).\n";
+  const MissionPlanning& planning = scenario.mission;
+  if (planning.fixed_depth) {
+    // The plane of the scenario's start, not the vehicle's depth at the moment the mission
+    // starts: an idle, positively buoyant vehicle may have floated up by then.
+    out << "    fixed_depth: true\n"
+        << "    depth: " << scenario.start_position.z() << "\n";
+  } else {
+    out << "    fixed_depth: false\n";
+    if (planning.hasBand())
+      out << "    min_depth: " << planning.min_depth << "\n"
+          << "    max_depth: " << planning.max_depth << "\n";
+  }
+  if (planning.min_altitude > 0.0) out << "    min_altitude: " << planning.min_altitude << "\n";
+  out << "    bounds: {min: [" << lo.x() << ", " << lo.y() << ", 0.0], max: [" << hi.x() << ", "
       << hi.y() << ", " << scenario.seabed_depth << "]}\n"
       << "  queries:\n";
   for (const MissionQuery& q : scenario.queries) {

@@ -13,13 +13,13 @@ struct MissionExportOptions {
   double bounds_margin = 4.0;      ///< m, the sampling region: mesh, start and goals grown by this
   double expected_distance = 1.5;  ///< m, d_e of Eq. (1): beyond the planner clearance (1.2 m)
   double admissible_range = 1.0;   ///< m, Δd_a of Eq. (1)
-  bool fixed_depth = true;         ///< plan at the vehicle's depth (the paper's 2-D profiler)
   std::string objective = "visibility";  ///< visibility (Eq. 1 + length) or path_length
 };
 
 /// Mission YAML: one query per scenario query, horizontal bounds from the world mesh (in the
-/// world frame), the start and the goals, depth range from the surface to the seabed; fixed
-/// depth at the scenario's start depth.
+/// world frame), the start and the goals, depth range from the surface to the seabed. The
+/// scenario's `mission:` section decides the mode: fixed depth at the scenario's start depth
+/// (the default), or 3-D planning with its depth band and minimum altitude.
 std::string missionYaml(const Scenario& scenario, const Mesh& world_mesh,
                         const MissionExportOptions& options = {});
 

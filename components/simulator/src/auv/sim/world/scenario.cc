@@ -2,11 +2,41 @@
 
 #include <cmath>
 #include <filesystem>
+#include <sstream>
 
 namespace auv::sim {
 namespace {
 namespace fs = std::filesystem;
 constexpr double kDeg = M_PI / 180.0;
+
+std::string number(double value) {
+  std::ostringstream out;
+  out << value;
+  return out.str();
+}
+
+// The `mission:` section: the band must lie inside the water column of this world.
+void readMissionPlanning(const YamlSection& section, double seabed_depth, MissionPlanning& m) {
+  section.rejectUnknownKeys({"fixed_depth", "min_depth", "max_depth", "min_altitude"});
+  section.read("fixed_depth", m.fixed_depth);
+  section.read("min_depth", m.min_depth);
+  section.read("max_depth", m.max_depth);
+  section.read("min_altitude", m.min_altitude);
+  if (section.has("min_depth") != section.has("max_depth"))
+    section.fail(section.has("min_depth") ? "max_depth" : "min_depth",
+                 "missing: a depth band needs both min_depth and max_depth (m)");
+  if (!(m.min_altitude >= 0.0)) section.fail("min_altitude", "must be >= 0 (m above the seabed)");
+  if (!section.has("min_depth")) return;
+  if (!(m.min_depth >= 0.0) || m.min_depth > seabed_depth)
+    section.fail("min_depth", "must be inside the water column [0, " + number(seabed_depth) +
+                                  "] m (world.seabed_depth)");
+  if (!(m.max_depth >= 0.0) || m.max_depth > seabed_depth)
+    section.fail("max_depth", "must be inside the water column [0, " + number(seabed_depth) +
+                                  "] m (world.seabed_depth)");
+  if (!(m.min_depth < m.max_depth))
+    section.fail("max_depth", "must be greater than min_depth (" + number(m.min_depth) +
+                                  " m), got " + number(m.max_depth));
+}
 }  // namespace
 
 WaterOptics WaterOptics::fromVisibility(double visibility_m) {
@@ -61,7 +91,7 @@ Scenario loadScenario(const std::string& path) {
   s.root = loadYamlFile(path);
   const YamlSection& root = s.root;
   root.rejectUnknownKeys({"name", "description", "world", "water", "vehicle", "navigation", "sonar",
-                          "cameras", "lighting", "queries", "simulation"});
+                          "cameras", "lighting", "queries", "simulation", "mission"});
   s.name = fs::path(path).stem().string();
   root.read("name", s.name);
   root.read("description", s.description);
@@ -129,6 +159,7 @@ Scenario loadScenario(const std::string& path) {
     q.read("tolerance", query.tolerance, 0.01, 1000.0);
     s.queries.push_back(query);
   }
+  readMissionPlanning(root.child("mission"), s.seabed_depth, s.mission);
   return s;
 }
 

@@ -37,6 +37,18 @@ struct MissionQuery {
   double tolerance = 1.5;         ///< m
 };
 
+/// How the world's mission plans (the scenario's `mission:` section; written into the exported
+/// mission file's `defaults`). fixed_depth: one horizontal plane at the start depth (the paper's
+/// 2-D mode, for worlds of vertical walls); otherwise 3-D inside the depth band, keeping
+/// min_altitude over known seabed (natural terrain: boulders, arches, overhangs).
+struct MissionPlanning {
+  bool fixed_depth = true;
+  double min_depth = 0.0;     ///< m; min_depth = max_depth = 0: no band (bounds only)
+  double max_depth = 0.0;     ///< m
+  double min_altitude = 0.0;  ///< m above the seabed, 0 = none
+  bool hasBand() const { return max_depth > min_depth; }
+};
+
 struct Scenario {
   std::string name;
   std::string description;
@@ -59,6 +71,7 @@ struct Scenario {
   double start_yaw = 0.0;                   ///< rad, 0 = north
 
   std::vector<MissionQuery> queries;
+  MissionPlanning mission;
 
   /// The whole file; modules read their own sections (`vehicle`, `navigation`, `sonar`,
   /// `cameras`, `simulation`) with their own options' fromYaml().

@@ -109,13 +109,22 @@ struct ProfileRow {
 std::vector<ProfileRow> profileRows(const RockSpec& spec, float reference_width) {
   const float crest_start = spec.top_z - spec.crest * (spec.top_z - spec.seabed_z);
   std::vector<Vector2f> dense;  // (fraction, z)
-  dense.emplace_back(rockWidthFraction(spec, spec.bottom_z), spec.bottom_z);
-  dense.emplace_back(1.0f - spec.taper, crest_start);
-  const int crest_samples = 64;
-  for (int k = 1; k <= crest_samples; ++k) {
-    const float alpha = 0.5f * kPi * static_cast<float>(k) / crest_samples;
-    dense.emplace_back((1.0f - spec.taper) * std::cos(alpha),
-                       crest_start + (spec.top_z - crest_start) * std::sin(alpha));
+  if (spec.width_profile) {
+    const int samples = 256;
+    for (int k = 0; k <= samples; ++k) {
+      const float z =
+          spec.bottom_z + (spec.top_z - spec.bottom_z) * static_cast<float>(k) / samples;
+      dense.emplace_back(spec.width_profile(z), z);
+    }
+  } else {
+    dense.emplace_back(rockWidthFraction(spec, spec.bottom_z), spec.bottom_z);
+    dense.emplace_back(1.0f - spec.taper, crest_start);
+    const int crest_samples = 64;
+    for (int k = 1; k <= crest_samples; ++k) {
+      const float alpha = 0.5f * kPi * static_cast<float>(k) / crest_samples;
+      dense.emplace_back((1.0f - spec.taper) * std::cos(alpha),
+                         crest_start + (spec.top_z - crest_start) * std::sin(alpha));
+    }
   }
   dense.back() = Vector2f(0.0f, spec.top_z);
   std::vector<float> cumulative{0.0f};
@@ -153,6 +162,7 @@ float rockDisplacement(const GradientNoise& noise, const Vector3f& p) {
 }  // namespace
 
 float rockWidthFraction(const RockSpec& spec, float z) {
+  if (spec.width_profile) return z >= spec.top_z ? 0.0f : std::max(0.0f, spec.width_profile(z));
   const float crest_start = spec.top_z - spec.crest * (spec.top_z - spec.seabed_z);
   if (z <= crest_start)
     return 1.0f - spec.taper * (z - spec.seabed_z) / (crest_start - spec.seabed_z);

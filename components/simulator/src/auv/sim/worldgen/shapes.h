@@ -14,7 +14,8 @@ namespace auv::sim::worldgen {
 
 /// A rocky formation: a closed wall around a crest line (the "ridge"), leaning back as it rises
 /// and rounding over into the crest, its surface displaced by fractal noise. Overhang-free by
-/// construction (apart from the noise), so its cross-section at a depth is a closed curve.
+/// construction (apart from the noise) unless `width_profile` says otherwise; its
+/// cross-section at a depth is a closed curve.
 struct RockSpec {
   std::vector<Eigen::Vector2f> ridge;  ///< crest line, mesh xy (m), smooth and densely sampled;
                                        ///< a single point makes a round boulder
@@ -27,6 +28,9 @@ struct RockSpec {
   float crest = 0.3f;       ///< fraction of seabed_z..top_z taken by the rounded crest
   float taper = 0.35f;      ///< fraction of the half-width lost from the seabed to the crest
   float roughness = 0.5f;   ///< m, largest displacement of the surface along its normal
+  /// If set, replaces the crest/taper profile: the half-width at height z (bottom_z..top_z) as
+  /// a fraction of `half_width`, 0 at top_z; may grow with z (a face leaning out, overhanging).
+  std::function<float(float z)> width_profile;
   /// If set, the largest displacement (m, at most `roughness`) at a mesh xy point (e.g. small
   /// where a passage's width is designed); should vary smoothly.
   std::function<float(const Eigen::Vector2f& xy)> roughness_at;

@@ -97,7 +97,13 @@ float widestBase(const RockSpec& rock) {
     const float along = length * static_cast<float>(k) / 20.0f;
     widest = std::max({widest, rock.half_width(along, 1), rock.half_width(along, -1)});
   }
-  return widest * rockWidthFraction(rock, rock.bottom_z) + rock.roughness;
+  float fraction = rockWidthFraction(rock, rock.bottom_z);
+  // A profile may lean out (overhang): its widest row can be anywhere.
+  for (int k = 0; rock.width_profile && k <= 32; ++k)
+    fraction =
+        std::max(fraction,
+                 rockWidthFraction(rock, rock.bottom_z + (rock.top_z - rock.bottom_z) * k / 32.0f));
+  return widest * fraction + rock.roughness;
 }
 
 }  // namespace
@@ -220,6 +226,15 @@ GeneratedWorld finishWorld(WorldDraft& draft, const WorldGenOptions& options,
   world.stats.seabed_texel = scale.seabed_texel * report.texel_scale;
   draft.grids.clear();
   return world;
+}
+
+MissionPlanning threeDimensionalMission(double seabed_depth) {
+  MissionPlanning mission;
+  mission.fixed_depth = false;
+  mission.min_depth = 2.0;
+  mission.max_depth = seabed_depth - 2.0;
+  mission.min_altitude = 1.5;
+  return mission;
 }
 
 MissionQuery meshQuery(const std::string& name, const Vector3d& mesh_point, double tolerance) {

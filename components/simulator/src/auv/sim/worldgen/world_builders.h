@@ -45,6 +45,13 @@ struct WorldDraft {
 GeneratedWorld buildBreakwater(const WorldGenOptions& options);
 GeneratedWorld buildCanyon(const WorldGenOptions& options);
 GeneratedWorld buildDeadEndBay(const WorldGenOptions& options);
+GeneratedWorld buildBoulderField(const WorldGenOptions& options);
+GeneratedWorld buildArch(const WorldGenOptions& options);
+GeneratedWorld buildLeaningReef(const WorldGenOptions& options);
+
+/// The mission mode of the natural-terrain worlds: 3-D planning in a band from 2 m depth to
+/// 2 m above the seabed, 1.5 m minimum altitude.
+MissionPlanning threeDimensionalMission(double seabed_depth);
 
 /// Points (x, f(x)) for x from x0 to x1 every `step` (mesh xy).
 std::vector<Eigen::Vector2f> sampleLine(float x0, float x1, float step,

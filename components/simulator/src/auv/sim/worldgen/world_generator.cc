@@ -42,6 +42,18 @@ const std::map<std::string, WorldEntry>& registry() {
       {"dead_end_bay",
        {worldgen::buildDeadEndBay,
         "U-shaped bay whose direct route is a dead end; escape through narrow side passages"}},
+      {"boulder_field",
+       {worldgen::buildBoulderField,
+        "rounded boulders on a 10 m seabed, many tops just below 4 m, a few tall ones; cross "
+        "over or around (3-D)"}},
+      {"arch",
+       {worldgen::buildArch,
+        "rock arch (span from ~4.5 m depth to above the surface) with a wall beyond; pass "
+        "under it at ~7 m, never surface under it (3-D)"}},
+      {"leaning_reef",
+       {worldgen::buildLeaningReef,
+        "reef whose face leans out below 3 m (overhanging lip at ~6.5 m); work along it at "
+        "depth (3-D)"}},
   };
   return worlds;
 }
@@ -71,8 +83,9 @@ std::string quoted(const std::string& text) {
 
 std::string vec(const Eigen::Vector3d& v) {
   std::ostringstream out;
-  out << std::fixed << std::setprecision(3) << "[" << v.x() << ", " << v.y() << ", " << v.z()
-      << "]";
+  // + 0.0 turns -0 (a mesh coordinate 0 mapped to NED) into 0.
+  out << std::fixed << std::setprecision(3) << "[" << v.x() + 0.0 << ", " << v.y() + 0.0 << ", "
+      << v.z() + 0.0 << "]";
   return out.str();
 }
 
@@ -180,6 +193,14 @@ std::string scenarioYaml(const GeneratedWorld& world, const std::string& mesh_fi
     out << "  - {name: " << q.name << ", goal: " << vec(q.goal) << ", tolerance: " << q.tolerance
         << "}\n";
   }
+  const MissionPlanning& m = world.mission;
+  out << "# How the mission plans: fixed_depth true = one plane at the start depth (the paper's "
+         "2-D mode,\n# worlds of vertical walls); false = 3-D inside [min_depth, max_depth] m, "
+         "min_altitude m\n# above known seabed (natural terrain).\n"
+      << "mission:\n  fixed_depth: " << (m.fixed_depth ? "true" : "false") << "\n";
+  if (m.hasBand())
+    out << "  min_depth: " << m.min_depth << "\n  max_depth: " << m.max_depth << "\n";
+  if (m.min_altitude > 0.0) out << "  min_altitude: " << m.min_altitude << "\n";
   return out.str();
 }
 

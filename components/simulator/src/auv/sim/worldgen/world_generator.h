@@ -2,8 +2,10 @@
 // Procedural worlds for the simulator: `breakwater` (paper Figs. 3-5: a row of 14.5 m x 12 m
 // concrete blocks), `canyon` (Figs. 14-16 and section 4: two rocky formations forming a narrow
 // canyon, navigated at 3 m depth) and `dead_end_bay` (a U-shaped bay whose direct route is a
-// dead end). Each is one textured mesh plus a scenario file (start, queries, water); the same
-// name, seed and detail always give byte-identical files.
+// dead end), planned at fixed depth; and natural terrain that is not a vertical extrusion at
+// the navigation depth, planned in 3-D: `boulder_field`, `arch` and `leaning_reef`. Each is one
+// textured mesh plus a scenario file (start, queries, water, mission mode); the same name, seed
+// and detail always give byte-identical files.
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -18,7 +20,7 @@
 namespace auv::sim {
 
 /// Bumped whenever generated output changes, so cached worlds of an older generator are rebuilt.
-constexpr int kWorldGeneratorVersion = 2;
+constexpr int kWorldGeneratorVersion = 3;
 
 struct WorldGenOptions {
   uint64_t seed = 1;            ///< same seed, same world; another seed moves and reshapes the rock
@@ -36,11 +38,22 @@ struct WorldLayout {
   std::vector<Eigen::AlignedBox3d> blocks;  ///< breakwater blocks
   /// Collision-free polylines at query depth, one per query, from where the previous query
   /// ends (the start for the first) to its goal: proof that every query can be solved.
+  /// (In 3-D worlds the routes change depth, inside the mission's depth band.)
   std::vector<std::vector<Eigen::Vector3d>> routes;
   std::vector<Eigen::Vector3d> canyon_axis;  ///< canyon centre line at query depth, ~1 m steps
   double canyon_min_width = 0.0;             ///< m, designed range of the canyon's width at
   double canyon_max_width = 0.0;             ///< query depth along canyon_axis (roughness included)
   double query_depth = 0.0;                  ///< m
+  /// boulder_field: designed top (NED) of every boulder whose top is meant to lie just below
+  /// the start depth (a fixed-depth vehicle passes over it with little altitude).
+  std::vector<Eigen::Vector3d> shallow_boulder_tops;
+  std::vector<Eigen::Vector3d> tall_boulder_tops;  ///< boulder_field: tops above the start depth
+  Eigen::Vector3d arch_under{0, 0, 0};    ///< arch: open water under the span, on a route (NED)
+  Eigen::Vector3d arch_through{0, 0, 0};  ///< arch: unit horizontal direction of the passage
+  /// leaning_reef: points at the surface (NED, z = 0) off the reef's face, and the unit
+  /// horizontal direction from them towards the face.
+  std::vector<Eigen::Vector3d> reef_stations;
+  Eigen::Vector3d reef_towards{0, 0, 0};
 };
 
 struct WorldStats {
@@ -64,6 +77,7 @@ struct GeneratedWorld {
   Eigen::Vector3d start_position{0, 0, 0};  ///< m NED
   double start_yaw_deg = 0.0;               ///< deg, 0 = north, towards the first goal
   std::vector<MissionQuery> queries;        ///< goals in NED, solved in order
+  MissionPlanning mission;                  ///< the scenario's `mission:` section
 
   WorldLayout layout;
   WorldStats stats;
