@@ -1,8 +1,9 @@
 // The mapping component on real DDS: the component on Fast DDS fed with odometry and beams at a
 // wall; a late-joining map reader on Cyclone DDS gets a FULL map with the wall cell occupied and
 // keeps an exact replica from the increments; map/save and map/clear answer across vendors; a
-// saved map given as initial_map is the map from the start.
-// Each test on its own domain id (80..89).
+// saved map given as initial_map is the map from the start; DVL beams on dvl/beams (body-frame
+// clouds stamped past the newest odometry) wait for it and enter the map as rays.
+// Each test on its own domain id (80..89, 8).
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -342,6 +343,76 @@ TEST(MappingComponentTest, StartsFromAnInitialMapAndNamesOneItCannotTake) {
   } catch (const interfaces::ParameterError& error) {
     EXPECT_NE(std::string(error.what()).find("initial_map"), std::string::npos) << error.what();
     EXPECT_NE(std::string(error.what()).find(missing), std::string::npos) << error.what();
+  }
+}
+
+// The simulator's dvl/beams: four bottom returns in the body frame ("base_link"), the rays'
+// origin in sensor_origin, stamped a little after the odometry published with them, so that
+// each must wait for the next odometry sample to be placed.
+TEST(MappingComponentTest, DvlBeamCloudsWaitForOdometryAndEnterTheMapAsRays) {
+  constexpr int kDomain = 8;         // 80..89 are taken (test/README.md)
+  constexpr double kAltitude = 4.0;  // seabed 4 m below the DVL head
+  const Eigen::Vector3d head(0.0, 0.0, 0.2);
+  Node mapping_node("mapping", nodeOptions(Vendor::CYCLONEDDS, kDomain));
+  Node feeder_node("dvl", nodeOptions(Vendor::FASTDDS, kDomain));
+  MappingComponent mapping;
+  mapping.configure(mapping_node);
+  auto odometry =
+      feeder_node.createPublisher<msg::Odometry>("nav/odometry", interfaces::stateQos());
+  auto beams =
+      feeder_node.createPublisher<msg::PointCloud>("dvl/beams", interfaces::sensorDataQos());
+  std::vector<Eigen::Vector3d> footprints;  // body frame
+  for (int k = 0; k < 4; ++k) {
+    const double azimuth = M_PI / 4 + k * M_PI / 2, tilt = M_PI / 6;
+    footprints.push_back(head + kAltitude / std::cos(tilt) *
+                                    Eigen::Vector3d(std::sin(tilt) * std::cos(azimuth),
+                                                    std::sin(tilt) * std::sin(azimuth),
+                                                    std::cos(tilt)));
+  }
+  auto timer = feeder_node.createTimer(0.02, [&] {
+    const int64_t now = feeder_node.clock().nowNs();
+    msg::Odometry o;
+    setStamp(o.header(), now);
+    o.header().frame_id("world");
+    o.pose().pose().position().x(kVehicle.x());
+    o.pose().pose().position().y(kVehicle.y());
+    o.pose().pose().position().z(kVehicle.z());
+    o.pose().pose().orientation().w(1.0);
+    odometry->publish(o);
+    msg::PointCloud cloud;
+    setStamp(cloud.header(), now + 5000000);  // 5 ms after the newest odometry
+    cloud.header().frame_id("base_link");
+    cloud.sensor_origin().position().z(head.z());
+    cloud.sensor_origin().orientation().w(1.0);
+    cloud.max_range(60.0f);
+    for (const Eigen::Vector3d& f : footprints) {
+      msg::PointXYZI p;
+      p.x(static_cast<float>(f.x()));
+      p.y(static_cast<float>(f.y()));
+      p.z(static_cast<float>(f.z()));
+      p.intensity(0.87f);
+      cloud.points().push_back(p);
+    }
+    beams->publish(cloud);
+  });
+  interfaces::Executor executor;
+  executor.add(mapping_node);
+  executor.add(feeder_node);
+  mapping.activate();
+  ASSERT_TRUE(executor.spinUntil([&] { return mapping.cloudsInserted() >= 10; }, 20s))
+      << "inserted " << mapping.cloudsInserted() << " dropped " << mapping.cloudsDropped();
+  timer->cancel();
+  mapping.deactivate();
+  const octomap::OcTree& tree = mapping.builder().tree();
+  for (const Eigen::Vector3d& f : footprints) {
+    const Eigen::Vector3d bottom = kVehicle + f;
+    const octomap::OcTreeNode* cell = tree.search(bottom.x(), bottom.y(), bottom.z());
+    ASSERT_NE(cell, nullptr) << bottom.transpose();
+    EXPECT_TRUE(tree.isNodeOccupied(cell)) << bottom.transpose();
+    const Eigen::Vector3d water = kVehicle + head + 0.5 * (f - head);  // half-way along the ray
+    const octomap::OcTreeNode* free = tree.search(water.x(), water.y(), water.z());
+    ASSERT_NE(free, nullptr) << water.transpose();
+    EXPECT_FALSE(tree.isNodeOccupied(free)) << water.transpose();
   }
 }
 

@@ -1,6 +1,7 @@
-// The simulator component on real DDS (domains 190..199): it publishes clock, odometry and
-// sonar; thrusters move the vehicle; driving into a wall publishes a collision event and logs
-// it; bad worlds are refused naming the file.
+// The simulator component on real DDS (domains 190..199): it publishes clock,
+// odometry and sonar (and the multibeam's sonar/scan and dvl/beams when the scenario has them);
+// thrusters move the vehicle; driving into a wall publishes a collision event and logs it; bad
+// worlds and sensor sections are refused naming the file.
 #include "auv/sim/components/simulator_component.h"
 
 #include <gtest/gtest.h>
@@ -155,6 +156,97 @@ TEST_F(SimulatorComponentTest, AnUnknownWorldNameListsTheKnownWorlds) {
     FAIL() << "accepted world 'canyn'";
   } catch (const ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("canyon"), std::string::npos) << e.what();
+  }
+}
+
+// Counts what arrives on sonar/scan and dvl/beams (and nav/odometry, to know time passed).
+struct RangeSensorProbe {
+  explicit RangeSensorProbe(Node& node) {
+    scan = node.createSubscription<msg::PointCloud>(
+        "sonar/scan", interfaces::sensorDataQos(),
+        std::function<void(const msg::PointCloud&)>([this](const msg::PointCloud& m) {
+          ++scans;
+          frames_ok = frames_ok && m.header().frame_id() == "base_link";
+          for (const auto& p : m.points()) scan_returns += p.intensity() > 0.0f ? 1 : 0;
+        }));
+    dvl = node.createSubscription<msg::PointCloud>(
+        "dvl/beams", interfaces::sensorDataQos(),
+        std::function<void(const msg::PointCloud&)>([this](const msg::PointCloud& m) {
+          ++dvl_pings;
+          frames_ok = frames_ok && m.header().frame_id() == "base_link";
+          const Eigen::Vector3d origin(m.sensor_origin().position().x(),
+                                       m.sensor_origin().position().y(),
+                                       m.sensor_origin().position().z());
+          for (const auto& p : m.points()) {
+            dvl_ranges.push_back((Eigen::Vector3d(p.x(), p.y(), p.z()) - origin).norm());
+          }
+        }));
+    odometry = node.createSubscription<msg::Odometry>(
+        "nav/odometry", interfaces::stateQos(),
+        std::function<void(const msg::Odometry&)>([this](const msg::Odometry&) { ++odom; }));
+  }
+  int scans = 0, scan_returns = 0, dvl_pings = 0, odom = 0;
+  bool frames_ok = true;
+  std::vector<double> dvl_ranges;
+  std::shared_ptr<interfaces::Subscription<msg::PointCloud>> scan, dvl;
+  std::shared_ptr<interfaces::Subscription<msg::Odometry>> odometry;
+};
+
+TEST_F(SimulatorComponentTest, PublishesMultibeamScansAndDvlBeamsWhenTheScenarioHasThem) {
+  // The vehicle 3 m deep over a seabed at 10 m, the wall 6 m ahead; the DVL head 0.2 m below
+  // the body's origin sees the seabed 6.8 m below through beams 30 deg from the vertical.
+  std::ofstream(scenario_, std::ios::app) << "multibeam: {beams: 64, rows: 2, rate: 10}\n"
+                                             "dvl_beams: {range_noise: 0}\n";
+  Node sim_node("simulator", nodeOptions(Vendor::CYCLONEDDS, 194, params()));
+  Node probe_node("probe", nodeOptions(Vendor::FASTDDS, 194));
+  SimulatorComponent sim;
+  sim.configure(sim_node);
+  RangeSensorProbe probe(probe_node);
+  interfaces::Executor executor;
+  executor.add(sim_node);
+  executor.add(probe_node);
+  sim.activate();
+  EXPECT_TRUE(executor.spinUntil([&] { return probe.scans >= 5 && probe.dvl_pings >= 5; }, 30s))
+      << "scans " << probe.scans << " DVL pings " << probe.dvl_pings;
+  sim.deactivate();
+  EXPECT_TRUE(probe.frames_ok);
+  EXPECT_GT(probe.scan_returns, 0);  // the seabed and the wall ahead
+  ASSERT_FALSE(probe.dvl_ranges.empty());
+  const double depth = sim.trueState().position.z();  // it barely moves without thrust
+  for (double range : probe.dvl_ranges) {
+    EXPECT_NEAR(range, (10.0 - depth - 0.2) / std::cos(M_PI / 6), 0.3);
+  }
+}
+
+TEST_F(SimulatorComponentTest, NoScansOrDvlBeamsWithoutTheSections) {
+  std::ofstream(scenario_, std::ios::app) << "multibeam: {enabled: false}\n";
+  Node sim_node("simulator", nodeOptions(Vendor::CYCLONEDDS, 195, params()));
+  Node probe_node("probe", nodeOptions(Vendor::CYCLONEDDS, 195));
+  SimulatorComponent sim;
+  sim.configure(sim_node);
+  RangeSensorProbe probe(probe_node);
+  interfaces::Executor executor;
+  executor.add(sim_node);
+  executor.add(probe_node);
+  sim.activate();
+  // 3 s of simulation: a 10 Hz multibeam would have sent ~30 scans.
+  EXPECT_TRUE(executor.spinUntil([&] { return probe.odom >= 30; }, 30s)) << probe.odom;
+  sim.deactivate();
+  EXPECT_EQ(probe.scans, 0);
+  EXPECT_EQ(probe.dvl_pings, 0);
+}
+
+TEST_F(SimulatorComponentTest, ABadMultibeamSectionIsRefusedNamingFileAndField) {
+  std::ofstream(scenario_, std::ios::app) << "multibeam: {horizontal_aperture_deg: 190}\n";
+  Node node("simulator", nodeOptions(Vendor::CYCLONEDDS, 196, params()));
+  SimulatorComponent sim;
+  try {
+    sim.configure(node);
+    FAIL() << "accepted a 190 deg fan";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("wall.yaml: multibeam.horizontal_aperture_deg"),
+              std::string::npos)
+        << e.what();
   }
 }
 

@@ -27,6 +27,9 @@ const config::OptionTable<MappingComponent::Options>& MappingComponent::Options:
       {"map_directory", &O::map_directory, "directory map/save writes into"},
       {"beam_queue_length", &O::beam_queue_length, "beams kept waiting for newer odometry", "beams",
        Range::closed(0, 100000)},
+      {"cloud_queue_length", &O::cloud_queue_length,
+       "body-frame point clouds (sonar/scan, dvl/beams) kept waiting for newer odometry", "clouds",
+       Range::closed(0, 10000)},
       {"initial_map", &O::initial_map,
        "a .bt map to start from (map/save's format, same resolution), e.g. an earlier "
        "mission's at the site; empty: start empty"},
@@ -64,6 +67,11 @@ void MappingComponent::configure(interfaces::Node& node) {
       std::function<void(const msg::SonarBeam&)>([this](const msg::SonarBeam& b) { onBeam(b); }));
   cloud_sub_ = node.createSubscription<msg::PointCloud>(
       "sonar/scan", interfaces::sensorDataQos(),
+      std::function<void(const msg::PointCloud&)>(
+          [this](const msg::PointCloud& c) { onCloud(c); }));
+  // The DVL's beams are bottom returns: rays like the multibeam's, through the same path.
+  dvl_beams_sub_ = node.createSubscription<msg::PointCloud>(
+      "dvl/beams", interfaces::sensorDataQos(),
       std::function<void(const msg::PointCloud&)>(
           [this](const msg::PointCloud& c) { onCloud(c); }));
 
@@ -131,6 +139,7 @@ void MappingComponent::deactivate() {
 void MappingComponent::cleanup() {
   beam_sub_.reset();
   cloud_sub_.reset();
+  dvl_beams_sub_.reset();
   odometry_sub_.reset();
   update_pub_.reset();
   save_srv_.reset();
@@ -143,6 +152,9 @@ void MappingComponent::onOdometry(const msg::Odometry& odometry) {
   // Beams that arrived before the odometry covering them.
   while (!waiting_beams_.empty() && tryInsertBeam(waiting_beams_.front())) {
     waiting_beams_.pop_front();
+  }
+  while (!waiting_clouds_.empty() && tryInsertCloud(waiting_clouds_.front())) {
+    waiting_clouds_.pop_front();
   }
 }
 
@@ -175,26 +187,47 @@ bool MappingComponent::tryInsertBeam(const PendingBeam& beam) {
 
 void MappingComponent::onCloud(const msg::PointCloud& cloud) {
   const int64_t stamp_ns = interfaces::toNanoseconds(cloud.header().stamp());
-  // Points in the world frame are used as they are; any other frame is taken as the body
-  // frame and placed with the odometry pose at the cloud's stamp.
-  Eigen::Isometry3d world_T_cloud = Eigen::Isometry3d::Identity();
-  if (cloud.header().frame_id() != options_.world_frame) {
-    PoseLookupStatus status;
-    const auto pose = poses_->lookUp(stamp_ns, &status);
-    if (!pose) {
-      ++clouds_dropped_;
-      AUV_DEBUG(node_->logger(), "dropped cloud: " << toString(status));
-      return;
-    }
-    world_T_cloud = toIsometry(*pose);
-  }
   std::vector<Eigen::Vector3d> points;
   points.reserve(cloud.points().size());
-  for (const auto& point : cloud.points()) {
-    points.push_back(world_T_cloud * Eigen::Vector3d(point.x(), point.y(), point.z()));
+  for (const auto& point : cloud.points()) points.emplace_back(point.x(), point.y(), point.z());
+  const Eigen::Vector3d origin = toIsometry(cloud.sensor_origin()).translation();
+  // Points in the world frame are used as they are; any other frame is taken as the body
+  // frame and placed with the odometry pose at the cloud's stamp, waiting for it like beams.
+  if (cloud.header().frame_id() == options_.world_frame) {
+    insertWorldCloud(stamp_ns, points, origin, cloud.max_range());
+    return;
   }
-  const Eigen::Vector3d origin = world_T_cloud * toIsometry(cloud.sensor_origin()).translation();
-  builder_->insertCloud(points, origin, cloud.max_range());
+  PendingCloud pending{stamp_ns, std::move(points), origin, cloud.max_range()};
+  if (!waiting_clouds_.empty() || !tryInsertCloud(pending)) {  // keep clouds in stamp order
+    waiting_clouds_.push_back(std::move(pending));
+    while (static_cast<int64_t>(waiting_clouds_.size()) > options_.cloud_queue_length) {
+      waiting_clouds_.pop_front();
+      ++clouds_dropped_;
+    }
+  }
+}
+
+bool MappingComponent::tryInsertCloud(const PendingCloud& cloud) {
+  PoseLookupStatus status;
+  const auto pose = poses_->lookUp(cloud.stamp_ns, &status);
+  if (!pose) {
+    if (status == PoseLookupStatus::AFTER_END || status == PoseLookupStatus::EMPTY) return false;
+    ++clouds_dropped_;  // can never be placed
+    AUV_DEBUG(node_->logger(), "dropped cloud: " << toString(status));
+    return true;
+  }
+  const Eigen::Isometry3d world_T_body = toIsometry(*pose);
+  std::vector<Eigen::Vector3d> points;
+  points.reserve(cloud.points.size());
+  for (const Eigen::Vector3d& point : cloud.points) points.push_back(world_T_body * point);
+  insertWorldCloud(cloud.stamp_ns, points, world_T_body * cloud.origin, cloud.max_range);
+  return true;
+}
+
+void MappingComponent::insertWorldCloud(int64_t stamp_ns,
+                                        const std::vector<Eigen::Vector3d>& points,
+                                        const Eigen::Vector3d& origin, double max_range) {
+  builder_->insertCloud(points, origin, max_range);
   ++clouds_inserted_;
   newest_stamp_ns_ = std::max(newest_stamp_ns_, stamp_ns);
 }

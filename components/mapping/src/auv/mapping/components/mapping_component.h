@@ -14,7 +14,8 @@
 
 namespace auv::mapping {
 
-/// Subscribes `sonar/beam`, `sonar/scan` (sensor data) and `nav/odometry` (state); publishes
+/// Subscribes `sonar/beam`, `sonar/scan` (multibeam swaths), `dvl/beams` (the DVL's bottom
+/// returns; both point clouds, sensor data) and `nav/odometry` (state); publishes
 /// `map/update` (map profile: reliable, transient local); serves `map/save` (SaveMapRequest),
 /// `map/clear` and `map/request_full` (Trigger).
 ///
@@ -44,6 +45,8 @@ class MappingComponent : public interfaces::Component {
     std::string initial_map;
     /// Beams newer than the latest odometry wait for it; at most this many.
     int64_t beam_queue_length = 500;
+    /// Body-frame clouds newer than the latest odometry wait for it; at most this many.
+    int64_t cloud_queue_length = 50;
     /// The component's own fields (rates, names, queue) with meaning, unit and range; the
     /// map's and the pose buffer's are in their own tables.
     static const config::OptionTable<Options>& table();
@@ -76,6 +79,18 @@ class MappingComponent : public interfaces::Component {
   };
   /// Inserts the beam if its pose is known; false if it must wait for newer odometry.
   bool tryInsertBeam(const PendingBeam& beam);
+  /// A body-frame cloud waiting for odometry: its points and ray origin in the body frame.
+  struct PendingCloud {
+    int64_t stamp_ns = 0;
+    std::vector<Eigen::Vector3d> points;
+    Eigen::Vector3d origin;
+    double max_range = 0.0;
+  };
+  /// Inserts the cloud if its pose is known; false if it must wait for newer odometry.
+  bool tryInsertCloud(const PendingCloud& cloud);
+  /// Inserts points given in the world frame.
+  void insertWorldCloud(int64_t stamp_ns, const std::vector<Eigen::Vector3d>& points,
+                        const Eigen::Vector3d& origin, double max_range);
   void tick();
   void publishFull();
   void publishIncrement();
@@ -86,8 +101,10 @@ class MappingComponent : public interfaces::Component {
   std::unique_ptr<MapBuilder> builder_;
   std::unique_ptr<PoseBuffer> poses_;
   std::deque<PendingBeam> waiting_beams_;
+  std::deque<PendingCloud> waiting_clouds_;
   std::shared_ptr<interfaces::Subscription<msg::SonarBeam>> beam_sub_;
   std::shared_ptr<interfaces::Subscription<msg::PointCloud>> cloud_sub_;
+  std::shared_ptr<interfaces::Subscription<msg::PointCloud>> dvl_beams_sub_;
   std::shared_ptr<interfaces::Subscription<msg::Odometry>> odometry_sub_;
   std::shared_ptr<interfaces::Publisher<msg::OctomapUpdate>> update_pub_;
   std::shared_ptr<interfaces::Service<msg::SaveMapRequest, msg::SaveMapReply>> save_srv_;

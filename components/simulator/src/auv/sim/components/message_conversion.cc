@@ -76,6 +76,22 @@ msg::SonarBeam toSonarBeam(const SonarPing& ping) {
   return beam;
 }
 
+msg::PointCloud toPointCloud(const SensorCloud& cloud) {
+  msg::PointCloud out;
+  out.header(header(cloud.stamp, "base_link"));
+  out.sensor_origin(toPose(cloud.mounting));
+  out.max_range(static_cast<float>(cloud.max_range));
+  out.points().resize(cloud.points.size());
+  for (size_t i = 0; i < cloud.points.size(); ++i) {
+    msg::PointXYZI& p = out.points()[i];
+    p.x(cloud.points[i].x());
+    p.y(cloud.points[i].y());
+    p.z(cloud.points[i].z());
+    p.intensity(i < cloud.intensities.size() ? cloud.intensities[i] : 0.0f);
+  }
+  return out;
+}
+
 msg::CollisionEvent toCollisionEvent(const HullContact& contact, const VehicleState& state,
                                      double t, double speed, bool started) {
   msg::CollisionEvent event;

@@ -6,6 +6,7 @@
 #include "auv/msg/all.h"
 #include "auv/sim/sensors/navigation.h"
 #include "auv/sim/sensors/profiling_sonar.h"
+#include "auv/sim/sensors/sensor_cloud.h"
 #include "auv/sim/vehicle/vehicle.h"
 #include "auv/sim/world/hull_contact.h"
 
@@ -22,6 +23,9 @@ msg::Odometry toOdometry(const NavigationEstimate& estimate);
 msg::Odometry groundTruthOdometry(const VehicleState& state, double t, double altitude);
 /// `sonar/beam` from one ping.
 msg::SonarBeam toSonarBeam(const SonarPing& ping);
+/// `sonar/scan` (multibeam) and `dvl/beams`: points in the body frame ("base_link"),
+/// sensor_origin = the head's pose on the body.
+msg::PointCloud toPointCloud(const SensorCloud& cloud);
 /// `sim/collision`.
 msg::CollisionEvent toCollisionEvent(const HullContact& contact, const VehicleState& state,
                                      double t, double speed, bool started);

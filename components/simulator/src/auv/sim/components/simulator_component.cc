@@ -114,6 +114,14 @@ void SimulatorComponent::configure(interfaces::Node& node) {
       NavigationOptions::fromYaml(scenario_.root.child("navigation")), seed * 2654435761u + 1);
   sonar_ = std::make_unique<ProfilingSonar>(SonarOptions::fromYaml(scenario_.root.child("sonar")),
                                             seed * 2654435761u + 2);
+  const MultibeamOptions multibeam = MultibeamOptions::fromScenario(scenario_.root);
+  if (multibeam.enabled) {
+    multibeam_ = std::make_unique<Multibeam>(multibeam, seed * 2654435761u + 3);
+  }
+  const DvlBeamsOptions dvl_beams = DvlBeamsOptions::fromScenario(scenario_.root);
+  if (dvl_beams.enabled) {
+    dvl_beams_ = std::make_unique<DvlBeams>(dvl_beams, seed * 2654435761u + 4);
+  }
 
   state_ = VehicleState();
   state_.position = scenario_.start_position;
@@ -142,6 +150,13 @@ void SimulatorComponent::configure(interfaces::Node& node) {
   ground_truth_pub_ =
       node.createPublisher<msg::Odometry>("sim/ground_truth", interfaces::stateQos());
   sonar_pub_ = node.createPublisher<msg::SonarBeam>("sonar/beam", interfaces::sensorDataQos());
+  if (multibeam_) {
+    scan_pub_ = node.createPublisher<msg::PointCloud>("sonar/scan", interfaces::sensorDataQos());
+  }
+  if (dvl_beams_) {
+    dvl_beams_pub_ =
+        node.createPublisher<msg::PointCloud>("dvl/beams", interfaces::sensorDataQos());
+  }
   collision_pub_ =
       node.createPublisher<msg::CollisionEvent>("sim/collision", interfaces::commandQos());
   thrusters_sub_ = node.createSubscription<msg::ThrusterSetpoints>(
@@ -162,7 +177,9 @@ void SimulatorComponent::configure(interfaces::Node& node) {
 
   AUV_INFO(node.logger(), "world " << scenario_.name << " (" << report.triangles
                                    << " triangles) from " << scenario_.file << "; run folder "
-                                   << options_.run_dir);
+                                   << options_.run_dir << "; multibeam "
+                                   << (multibeam_ ? "on" : "off") << ", DVL beams "
+                                   << (dvl_beams_ ? "on" : "off"));
 }
 
 void SimulatorComponent::activate() {
@@ -182,9 +199,13 @@ void SimulatorComponent::cleanup() {
   odometry_pub_.reset();
   ground_truth_pub_.reset();
   sonar_pub_.reset();
+  scan_pub_.reset();
+  dvl_beams_pub_.reset();
   collision_pub_.reset();
   log_.reset();
   sonar_.reset();
+  multibeam_.reset();
+  dvl_beams_.reset();
   navigation_.reset();
   dynamics_.reset();
   world_.reset();
@@ -308,6 +329,17 @@ void SimulatorComponent::step(double dt) {
   }
   while (sonar_->due(t)) {
     sonar_pub_->publish(toSonarBeam(sonar_->ping(state.pose(), t, *world_)));
+  }
+  pingRangeSensors(t, state);
+}
+
+void SimulatorComponent::pingRangeSensors(double t, const VehicleState& state) {
+  const double seabed = scenario_.seabed_depth;
+  if (multibeam_ && multibeam_->due(t)) {
+    scan_pub_->publish(toPointCloud(multibeam_->ping(state.pose(), t, *world_, seabed)));
+  }
+  if (dvl_beams_ && dvl_beams_->due(t)) {
+    dvl_beams_pub_->publish(toPointCloud(dvl_beams_->ping(state.pose(), t, *world_, seabed)));
   }
 }
 

@@ -2,6 +2,8 @@
 // The simulator: stands in for the vehicle's hardware in a world given as a mesh. One thread
 // steps the physics at a fixed rate in simulation time and publishes what the real vehicle's
 // drivers would: `clock`, `nav/odometry` (drifting dead reckoning), `sonar/beam` (profiler),
+// `sonar/scan` (forward-looking multibeam) and `dvl/beams` (the DVL's four bottom returns) when
+// the scenario has those sensors,
 // plus ground truth for evaluation only (`sim/ground_truth`, `sim/collision`, and files in the
 // run folder). It applies `control/thrusters` from the low-level controller.
 
@@ -15,6 +17,8 @@
 #include "auv/interfaces/component.h"
 #include "auv/sim/components/ground_truth_log.h"
 #include "auv/sim/raycast/ray_caster.h"
+#include "auv/sim/sensors/dvl_beams.h"
+#include "auv/sim/sensors/multibeam.h"
 #include "auv/sim/sensors/navigation.h"
 #include "auv/sim/sensors/profiling_sonar.h"
 #include "auv/sim/vehicle/vehicle.h"
@@ -63,6 +67,8 @@ class SimulatorComponent : public interfaces::Component {
   double trueAltitude(const VehicleState& state) const;
   void checkCollision(double t, VehicleState& state);
   void publishClock(double t);
+  /// Pings the multibeam and the DVL beams when due.
+  void pingRangeSensors(double t, const VehicleState& state);
 
   interfaces::Node* node_ = nullptr;
   Options options_;
@@ -72,6 +78,8 @@ class SimulatorComponent : public interfaces::Component {
   std::unique_ptr<VehicleDynamics> dynamics_;
   std::unique_ptr<NavigationSimulator> navigation_;
   std::unique_ptr<ProfilingSonar> sonar_;
+  std::unique_ptr<Multibeam> multibeam_;  ///< null: the scenario has none
+  std::unique_ptr<DvlBeams> dvl_beams_;   ///< null: no dvl_beams section
   std::unique_ptr<GroundTruthLog> log_;
   HullShape hull_;
 
@@ -95,6 +103,8 @@ class SimulatorComponent : public interfaces::Component {
   std::shared_ptr<interfaces::Publisher<msg::Odometry>> odometry_pub_;
   std::shared_ptr<interfaces::Publisher<msg::Odometry>> ground_truth_pub_;
   std::shared_ptr<interfaces::Publisher<msg::SonarBeam>> sonar_pub_;
+  std::shared_ptr<interfaces::Publisher<msg::PointCloud>> scan_pub_;       ///< sonar/scan
+  std::shared_ptr<interfaces::Publisher<msg::PointCloud>> dvl_beams_pub_;  ///< dvl/beams
   std::shared_ptr<interfaces::Publisher<msg::CollisionEvent>> collision_pub_;
   std::shared_ptr<interfaces::Subscription<msg::ThrusterSetpoints>> thrusters_sub_;
 

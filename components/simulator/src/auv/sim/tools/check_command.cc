@@ -5,6 +5,10 @@
 
 #include "auv/config/errors.h"
 #include "auv/sim/raycast/ray_caster.h"
+#include "auv/sim/sensors/dvl_beams.h"
+#include "auv/sim/sensors/multibeam.h"
+#include "auv/sim/sensors/navigation.h"
+#include "auv/sim/sensors/profiling_sonar.h"
 #include "auv/sim/tools/commands.h"
 #include "auv/sim/vehicle/vehicle.h"
 #include "auv/sim/world/hull_contact.h"
@@ -16,7 +20,7 @@ int checkMain(const std::vector<std::string>& args) {
   if (args.size() != 1 || args[0] == "-h" || args[0] == "--help") {
     (args.size() == 1 ? std::cout : std::cerr)
         << "usage: auv sim check <scenario.yaml | mesh.ply | mesh.obj>\n"
-           "Validates a scenario (its mesh, water, start and queries) or a bare mesh.\n";
+           "Validates a scenario (its mesh, water, sensors, start and queries) or a bare mesh.\n";
     return args.size() == 1 ? 0 : 2;
   }
   const std::string path = args[0];
@@ -50,6 +54,21 @@ int checkMain(const std::vector<std::string>& args) {
         throw ConfigError(scenario.file +
                           ": vehicle.start: the vehicle would start inside the world");
       }
+      // The sensor sections, read and checked as the simulator reads them.
+      NavigationOptions::fromYaml(scenario.root.child("navigation"));
+      SonarOptions::fromYaml(scenario.root.child("sonar"));
+      const MultibeamOptions multibeam = MultibeamOptions::fromScenario(scenario.root);
+      const DvlBeamsOptions dvl_beams = DvlBeamsOptions::fromScenario(scenario.root);
+      std::cout << "  sensors: profiling sonar";
+      if (multibeam.enabled) {
+        std::cout << ", multibeam " << multibeam.beams << " x " << multibeam.rows << " beams over "
+                  << multibeam.horizontal_aperture * 180.0 / M_PI << " deg at " << multibeam.rate
+                  << " Hz";
+      }
+      if (dvl_beams.enabled) {
+        std::cout << ", DVL beams at " << dvl_beams.beam_angle * 180.0 / M_PI << " deg";
+      }
+      std::cout << "\n";
       for (const MissionQuery& q : scenario.queries) {
         Eigen::Isometry3d goal = Eigen::Isometry3d::Identity();
         goal.translation() = q.goal;

@@ -74,7 +74,7 @@ struct Scenario {
   MissionPlanning mission;
 
   /// The whole file; modules read their own sections (`vehicle`, `navigation`, `sonar`,
-  /// `cameras`, `simulation`) with their own options' fromYaml().
+  /// `multibeam`, `dvl_beams`, `cameras`, `simulation`) with their own options' fromYaml().
   YamlSection root{YAML::Node(), "", ""};
 
   /// Mesh coordinates -> world NED.
