@@ -177,6 +177,7 @@ class MapBuilder {
   detail::ChangedCells changed_;
   octomap::KeyRay ray_scratch_;
   std::vector<octomap::OcTreeKey> touched_;  // cells updated since the last settleInnerNodes()
+  std::vector<std::pair<uint64_t, octomap::OcTreeKey>> touched_codes_;  // scratch: sorting them
   octomap::KeySet free_scratch_;
   octomap::KeySet occupied_scratch_;
   std::shared_ptr<const octomap::OcTree> snapshot_;   // accessed with std::atomic_load/store
