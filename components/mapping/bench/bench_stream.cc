@@ -49,6 +49,92 @@ Eigen::Vector3d positionAt(int64_t stamp_ns) {
   return Eigen::Vector3d(kSpeed * 1e-9 * static_cast<double>(stamp_ns - kEpochNs), 0.0, 0.0);
 }
 
+// The multibeam scene: the simulator's default multibeam over a bouldery seabed.
+constexpr double kMbSeabed = 6.0;                       // m below the vehicle
+constexpr double kMbMaxRange = 30.0;                    // m
+constexpr double kMbRate = 10.0;                        // Hz
+constexpr double kMbHorizontal = 120.0 * M_PI / 180.0;  // rad
+constexpr double kMbVertical = 20.0 * M_PI / 180.0;     // rad
+constexpr double kMbPitch = 25.0 * M_PI / 180.0;        // rad, down
+constexpr double kMbNoReturn = 1.5;                     // x max range, as the simulator
+
+struct Boulder {
+  Eigen::Vector3d centre;
+  double radius;
+};
+
+// Range along unit `d` from `o` to the seabed plane or the first boulder, or infinity.
+double rangeToBoulders(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+                       const std::vector<Boulder>& boulders) {
+  double range =
+      d.z() > 1e-9 ? (kMbSeabed - o.z()) / d.z() : std::numeric_limits<double>::infinity();
+  for (const Boulder& b : boulders) {
+    const Eigen::Vector3d oc = o - b.centre;
+    const double half_b = oc.dot(d);
+    const double disc = half_b * half_b - (oc.squaredNorm() - b.radius * b.radius);
+    if (disc < 0) continue;
+    const double t = -half_b - std::sqrt(disc);
+    if (t > 0 && t < range) range = t;
+  }
+  return range;
+}
+
+void addMultibeamSwaths(const StreamOptions& options, std::mt19937& random, Stream& stream) {
+  std::normal_distribution<double> noise(0.0, kRangeNoise);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  const double length = kSpeed * static_cast<double>(options.swaths) / kMbRate + 40.0;
+  std::vector<Boulder> boulders;  // about one per 25 m^2 over a 50 m wide strip
+  for (int k = 0; k < static_cast<int>(length * 50.0 / 25.0); ++k) {
+    const double radius = 0.5 + 2.0 * uniform(random);
+    // Tops from 0.5 m to 4.5 m above the seabed: some within 2 m of the vehicle's depth.
+    const double top = kMbSeabed - 0.5 - 4.0 * uniform(random);
+    boulders.push_back(
+        {{-5.0 + length * uniform(random), -25.0 + 50.0 * uniform(random), top + radius}, radius});
+  }
+  const Eigen::Matrix3d pitch =
+      Eigen::AngleAxisd(-kMbPitch, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  std::vector<Eigen::Vector3d> fan;
+  for (std::size_t r = 0; r < options.rows; ++r) {
+    const double e = options.rows > 1 ? -kMbVertical / 2 + kMbVertical * r / (options.rows - 1) : 0;
+    for (std::size_t b = 0; b < options.points; ++b) {
+      const double a = -kMbHorizontal / 2 + kMbHorizontal * b / (options.points - 1);
+      fan.push_back(pitch * Eigen::Vector3d(std::cos(e) * std::cos(a), std::cos(e) * std::sin(a),
+                                            std::sin(e)));
+    }
+  }
+  stream.cloud_max_range = kMbMaxRange;
+  stream.points_per_cloud = fan.size();
+  for (std::size_t s = 0; s < options.swaths; ++s) {
+    const double t = static_cast<double>(s) / kMbRate;
+    const Eigen::Vector3d origin(kSpeed * t, 0.0, 0.0);
+    msg::PointCloud cloud;
+    cloud.header().stamp(interfaces::toMsgTime(kEpochNs + std::llround(1e9 * t)));
+    cloud.header().frame_id("world");
+    cloud.sensor_origin(pose(origin, Eigen::Quaterniond::Identity()));
+    cloud.max_range(static_cast<float>(kMbMaxRange));
+    std::vector<Eigen::Vector3d> points;
+    octomap::Pointcloud raw;
+    for (const Eigen::Vector3d& direction : fan) {
+      const double hit = rangeToBoulders(origin, direction, boulders);
+      const bool echo = hit <= kMbMaxRange;
+      const double range = echo ? hit + noise(random) : kMbNoReturn * kMbMaxRange;
+      const Eigen::Vector3d point = origin + range * direction;
+      msg::PointXYZI p;
+      p.x(static_cast<float>(point.x()));
+      p.y(static_cast<float>(point.y()));
+      p.z(static_cast<float>(point.z()));
+      p.intensity(echo ? 0.8f : 0.0f);
+      cloud.points().push_back(p);
+      points.emplace_back(p.x(), p.y(), p.z());  // what the component gets: float coordinates
+      raw.push_back(p.x(), p.y(), p.z());
+    }
+    stream.clouds.push_back(std::move(cloud));
+    stream.cloud_points.push_back(std::move(points));
+    stream.raw_clouds.push_back(std::move(raw));
+    stream.cloud_origins.push_back(origin);
+  }
+}
+
 }  // namespace
 
 int64_t Stream::lastBeamStampNs() const {
@@ -60,8 +146,12 @@ int64_t Stream::lastCloudStampNs() const {
 }
 
 Stream makeStream(const StreamOptions& options) {
-  if (options.odometry_rate <= 0 || options.points < 2) {
-    throw std::invalid_argument("makeStream: odometry_rate must be > 0 and points >= 2");
+  if (options.odometry_rate <= 0 || options.points < 2 || options.rows < 1) {
+    throw std::invalid_argument("makeStream: odometry_rate must be > 0, points >= 2 and rows >= 1");
+  }
+  if (options.swath_shape != "canyon" && options.swath_shape != "multibeam") {
+    throw std::invalid_argument("makeStream: swath shape must be canyon or multibeam, got " +
+                                options.swath_shape);
   }
   Stream stream;
   std::mt19937 random(options.seed);
@@ -147,8 +237,13 @@ Stream makeStream(const StreamOptions& options) {
     stream.events.push_back({Event::ODOMETRY, next_odometry++});
   }
 
+  if (options.swath_shape == "multibeam") {
+    addMultibeamSwaths(options, random, stream);
+    return stream;
+  }
   // Multibeam swaths: one world-frame cloud per swath, a vertical fan across the canyon.
   stream.cloud_max_range = kMaxRange;
+  stream.points_per_cloud = options.points;
   for (std::size_t s = 0; s < options.swaths; ++s) {
     const Eigen::Vector3d origin(kSwathSpacing * static_cast<double>(s), 0.0, 0.0);
     msg::PointCloud cloud;

@@ -10,12 +10,19 @@
 // rides in each beam's mounting, SonarBeam has no tilt field); returns beyond 20 m are no-return
 // beams. Each beam carries 200 intensity bins, like the simulator's. Odometry at 10 Hz (the
 // simulator's navigation rate): beams between two odometry samples wait for the next one in the
-// component and are placed with the interpolated pose. Multibeam swaths: 256 returns fanned
-// 2.4 rad across the canyon every 0.2 m, in the world frame.
+// component and are placed with the interpolated pose. Multibeam swaths (swath_shape
+// "canyon", the default): 256 returns fanned 2.4 rad across the canyon every 0.2 m, in the world
+// frame. swath_shape "multibeam": the simulator's forward-looking multibeam
+// (components/simulator/src/auv/sim/sensors/multibeam.h, its defaults): `points` beams over
+// 120 deg in `rows` rows over 20 deg, pitched 25 deg down, 30 m range, at 10 Hz while the
+// vehicle drives along x at 1.5 m/s, 6 m over a seabed strewn with boulders (spheres of
+// 0.5-2.5 m radius); beams that meet nothing within 30 m are points at 45 m (free space only,
+// as the simulator sends them); world frame.
 
 #include <Eigen/Geometry>
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include <octomap/Pointcloud.h>
@@ -28,8 +35,10 @@ namespace auv::mapping::bench {
 struct StreamOptions {
   std::size_t beams = 200000;
   std::size_t swaths = 2000;
-  std::size_t points = 256;     ///< per swath
-  double odometry_rate = 10.0;  ///< Hz
+  std::size_t points = 256;            ///< per swath (multibeam: per row)
+  std::string swath_shape = "canyon";  ///< "canyon" or "multibeam" (see above)
+  std::size_t rows = 4;                ///< multibeam rows per swath
+  double odometry_rate = 10.0;         ///< Hz
   unsigned seed = 1;
 };
 
@@ -59,6 +68,7 @@ struct Stream {
   std::vector<octomap::Pointcloud> raw_clouds;
   std::vector<Eigen::Vector3d> cloud_origins;
   double cloud_max_range = 20.0;
+  std::size_t points_per_cloud = 0;
 
   int64_t lastBeamStampNs() const;
   int64_t lastCloudStampNs() const;

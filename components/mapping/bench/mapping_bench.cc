@@ -5,6 +5,7 @@
 // component_bench.h; how to read the figures: README.md, "Benchmark".
 //
 //   mapping_bench [--beams 200000] [--swaths 2000] [--points 256] [--resolution 0.5]
+//                 [--swath-shape canyon|multibeam] [--rows 4]
 //                 [--odometry-rate 10] [--seed 1] [--vendors fastdds,cyclonedds]
 //                 [--modes inprocess,child,cross] [--domain 86] [--qos bulk_transfer]
 //                 [--beam-window 200] [--cloud-window 64] [--pin] [-p name:=value]...
@@ -68,6 +69,7 @@ std::vector<std::string> splitList(const std::string& value) {
 
 constexpr const char* kUsage =
     "usage: mapping_bench [--beams 200000] [--swaths 2000] [--points 256] [--resolution 0.5]\n"
+    "         [--swath-shape canyon|multibeam] [--rows 4]\n"
     "         [--odometry-rate 10] [--seed 1] [--vendors fastdds,cyclonedds]\n"
     "         [--modes inprocess,child,cross|none] [--domain 86] [--qos bulk_transfer|default]\n"
     "         [--beam-window 200] [--cloud-window 64] [--pin] [-p name:=value]... [--out f.md]\n"
@@ -96,6 +98,10 @@ Args parseArgs(int argc, char** argv) {
       a.stream.swaths = std::stoul(value);
     else if (key == "--points")
       a.stream.points = std::stoul(value);
+    else if (key == "--swath-shape")
+      a.stream.swath_shape = value;
+    else if (key == "--rows")
+      a.stream.rows = std::stoul(value);
     else if (key == "--odometry-rate")
       a.stream.odometry_rate = std::stod(value);
     else if (key == "--seed")
@@ -383,7 +389,7 @@ int main(int argc, char** argv) {
     beams.component(r.name, raw, runBeams(stream, r.run));
   }
 
-  const double n_points = static_cast<double>(stream.clouds.size() * args.stream.points);
+  const double n_points = static_cast<double>(stream.clouds.size() * stream.points_per_cloud);
   Table points("point", n_points);
   auto raw_clouds = [&] {
     return onWorkCpu(pin, [&] { return rawClouds(stream, args.resolution); });
@@ -395,7 +401,7 @@ int main(int argc, char** argv) {
   for (const Run& r : runs) {
     std::cerr << "mapping_bench: clouds through the " << r.name << " ...\n";
     const Timed raw = raw_clouds();
-    points.component(r.name, raw, runClouds(stream, args.stream.points, r.run));
+    points.component(r.name, raw, runClouds(stream, stream.points_per_cloud, r.run));
   }
 
   std::ostringstream report;
@@ -403,11 +409,11 @@ int main(int argc, char** argv) {
          << "resolution " << args.resolution << " m; " << stream.beams.size()
          << " profiler beams (50 Hz stamps, 200 bins each) with odometry at "
          << args.stream.odometry_rate << " Hz (" << stream.odometry.size() << " samples); "
-         << stream.clouds.size() << " swaths x " << args.stream.points << " points; seed "
-         << args.stream.seed << "; component input QoS "
-         << (args.qos.empty() ? std::string("default") : args.qos) << "; feeder window "
-         << args.beam_window << " beams / " << args.cloud_window << " clouds; "
-         << sysconf(_SC_NPROCESSORS_ONLN) << " CPUs, "
+         << stream.clouds.size() << " " << args.stream.swath_shape << " swaths x "
+         << stream.points_per_cloud << " points; seed " << args.stream.seed
+         << "; component input QoS " << (args.qos.empty() ? std::string("default") : args.qos)
+         << "; feeder window " << args.beam_window << " beams / " << args.cloud_window
+         << " clouds; " << sysconf(_SC_NPROCESSORS_ONLN) << " CPUs, "
          << (pin ? "raw, library and the component's executor thread pinned to CPU 1, the rest "
                    "to CPU 0"
                  : "unpinned")
