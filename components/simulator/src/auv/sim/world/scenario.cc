@@ -91,8 +91,8 @@ Scenario loadScenario(const std::string& path) {
   s.root = loadYamlFile(path);
   const YamlSection& root = s.root;
   root.rejectUnknownKeys({"name", "description", "world", "water", "vehicle", "navigation", "sonar",
-                          "multibeam", "dvl_beams", "cameras", "lighting", "queries",
-                          "simulation", "mission"});
+                          "multibeam", "dvl_beams", "cameras", "lighting", "queries", "simulation",
+                          "mission"});
   s.name = fs::path(path).stem().string();
   root.read("name", s.name);
   root.read("description", s.description);
