@@ -13,6 +13,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include "auv/sim/raycast/ray_caster.h"
+#include "auv/sim/sensors/dvl_beams.h"
+#include "auv/sim/sensors/multibeam.h"
 #include "auv/sim/world/scenario.h"
 #include "auv/sim/worldgen/world_generator.h"
 
@@ -170,6 +172,9 @@ TEST_P(AllWorlds, MissionModeFitsTheWorldAndRoutesKeepToTheBand) {
   const bool natural =
       GetParam() == "arch" || GetParam() == "boulder_field" || GetParam() == "leaning_reef";
   EXPECT_EQ(m.fixed_depth, !natural) << "the paper's worlds keep the 2-D mode";
+  // 3-D planning comes with 3-D sensing; the paper's worlds keep the profiler alone.
+  EXPECT_EQ(MultibeamOptions::fromScenario(world.scenario.root).enabled, natural);
+  EXPECT_EQ(DvlBeamsOptions::fromScenario(world.scenario.root).enabled, natural);
   if (m.fixed_depth) {
     // Every route stays in the plane of the start.
     for (const auto& route : world.generated.layout.routes)

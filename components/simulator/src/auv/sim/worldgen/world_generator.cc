@@ -201,6 +201,11 @@ std::string scenarioYaml(const GeneratedWorld& world, const std::string& mesh_fi
   if (m.hasBand())
     out << "  min_depth: " << m.min_depth << "\n  max_depth: " << m.max_depth << "\n";
   if (m.min_altitude > 0.0) out << "  min_altitude: " << m.min_altitude << "\n";
+  // 3-D planning needs 3-D sensing: rock below or above the vehicle's plane is invisible to the
+  // profiling sonar (components/simulator/README.md, 3-D sensing).
+  if (!m.fixed_depth)
+    out << "# 3-D sensing with the defaults: forward multibeam and the DVL's four beams.\n"
+        << "multibeam: {}\ndvl_beams: {}\n";
   return out.str();
 }
 
