@@ -69,6 +69,9 @@ void OracleOptions::check() const {
     throw OracleError("oracle: fixed_depth must be finite");
   }
   if (!std::isfinite(min_depth)) throw OracleError("oracle: min_depth must be finite");
+  if (max_depth && !(*max_depth > min_depth && std::isfinite(*max_depth))) {
+    throw OracleError("oracle: max_depth must be finite and > min_depth");
+  }
   if (!(padding >= 0.0) || !std::isfinite(padding)) {
     throw OracleError("oracle: padding must be >= 0 m");
   }
@@ -96,9 +99,10 @@ ShortestPathOracle::ShortestPathOracle(const octomap::OcTree& map, const OracleO
   z1 = high.z();
   if (options_.fixed_depth) {
     const double depth = *options_.fixed_depth;
-    if (depth < z0 || depth > z1 || depth < options_.min_depth) {
+    if (depth < z0 || depth > z1 || depth < options_.min_depth ||
+        (options_.max_depth && depth > *options_.max_depth)) {
       throw OracleError("oracle: fixed depth " + std::to_string(depth) +
-                        " m lies outside the map's depths or above min_depth");
+                        " m lies outside the map's depths or the depth band");
     }
     // Only obstacles within the clearance of the plane matter: a slab around it is enough.
     low.z() = std::max(z0, depth - options_.clearance - 2.0 * g);
@@ -125,6 +129,7 @@ ShortestPathOracle::ShortestPathOracle(const octomap::OcTree& map, const OracleO
     search_layers_ = 1;
   } else {
     min_corner_.z() = std::max(min_corner_.z(), options_.min_depth);
+    if (options_.max_depth) max_corner_.z() = std::min(max_corner_.z(), *options_.max_depth);
     search_layers_ = size_[2];
   }
   if (double(size_[0]) * size_[1] * search_layers_ >= double(std::numeric_limits<int32_t>::max())) {

@@ -35,6 +35,8 @@ struct OracleOptions {
   std::optional<double> fixed_depth;
   /// m, no path point above this depth (NED z; 0 = the sea surface).
   double min_depth = 0.0;
+  /// m, when set, no path point below this depth (a mission's depth band; > min_depth).
+  std::optional<double> max_depth;
   /// m, the searchable box is the map's known box grown by this much on every side, as free
   /// space: a vehicle's own map ends where its sonar saw (a horizontal profiler's map may be
   /// one voxel thick), and its start may lie just outside. >= 0.

@@ -169,6 +169,27 @@ TEST(ShortestPathOracle, GoesOverTheTopOfAWallIn3d) {
   EXPECT_FALSE(plane.shortestPath({1.05, -3.0, 3.05}, {1.05, 3.0, 3.05}).found);
 }
 
+TEST(ShortestPathOracle, DepthBandKeepsThePathBetweenMinAndMaxDepth) {
+  // A wall across the whole box from the surface down to 2.45 m: the way is under its bottom
+  // edge, at 2.45 + 0.65 = 3.1 m or deeper.
+  auto map = emptyBoxMap();
+  occupy(*map, {-9.95, 0.05, 0.05}, {9.95, 0.05, 2.45});
+  OracleOptions options;
+  options.clearance = kClearance;
+  options.grid = 0.1;
+  options.max_depth = 3.5;
+  const ShortestPathOracle deep(*map, options);
+  const OraclePath path = deep.shortestPath({1.05, -3.0, 2.05}, {1.05, 3.0, 2.05});
+  ASSERT_TRUE(path.found);
+  for (const Eigen::Vector3d& point : path.points) EXPECT_LE(point.z(), 3.5 + 1e-9);
+  expectFree(deep, path);
+  options.max_depth = 3.0;  // above the way under the wall
+  const ShortestPathOracle shallow(*map, options);
+  EXPECT_FALSE(shallow.shortestPath({1.05, -3.0, 2.05}, {1.05, 3.0, 2.05}).found);
+  options.min_depth = 3.0;  // the band is empty
+  EXPECT_THROW(ShortestPathOracle(*map, options), OracleError);
+}
+
 TEST(ShortestPathOracle, StraightLineWhenNothingIsInTheWay) {
   const auto map = wallWithGap();
   OracleOptions options;

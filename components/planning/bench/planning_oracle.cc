@@ -2,7 +2,8 @@
 // map (oracle.h), for "executed path length / shortest possible" figures.
 //
 //   planning_oracle --map true.bt --start x,y,z --goal x,y,z --clearance planner|M
-//                   [--fixed-depth] [--grid 0.2] [--min-depth 0] [--pad 0] [--csv path.csv]
+//                   [--fixed-depth] [--grid 0.2] [--min-depth 0] [--max-depth M] [--pad 0]
+//                   [--csv path.csv]
 //                   [--bottleneck] [--quiet]
 #include <chrono>
 #include <cmath>
@@ -28,7 +29,8 @@ using auv::planning::bench::ShortestPathOracle;
 
 const char* kUsage =
     "usage: planning_oracle --map true.bt --start x,y,z --goal x,y,z --clearance planner|M\n"
-    "                       [--fixed-depth] [--grid M] [--min-depth M] [--pad M] [--csv FILE]\n"
+    "                       [--fixed-depth] [--grid M] [--min-depth M] [--max-depth M]\n"
+    "                       [--pad M] [--csv FILE]\n"
     "                       [--bottleneck] [--quiet]\n"
     "Prints the length of the shortest path start -> goal keeping --clearance metres from every\n"
     "occupied voxel of a fully known map (`auv sim octomap`); unknown space counts as free.\n"
@@ -37,6 +39,8 @@ const char* kUsage =
     "  --fixed-depth   stay in the horizontal plane at the start's depth (goal moved onto it)\n"
     "  --grid M        search grid step (default 0.2; a multiple of the map resolution is best)\n"
     "  --min-depth M   no point above this depth (default 0, the surface)\n"
+    "  --max-depth M   no point below this depth (default: the map's deepest; a mission's\n"
+    "                  depth band is [--min-depth, --max-depth])\n"
     "  --pad M         grow the map's known box by M (free space): for a vehicle's own map,\n"
     "                  whose start may lie just outside what its sonar saw (default 0)\n"
     "  --csv FILE      also write the polyline (x,y,z per line, NED m)\n"
@@ -116,6 +120,8 @@ int main(int argc, char** argv) {
         if (options.padding < 0.0) throw UsageError("--pad: expected metres >= 0");
       } else if (arg == "--min-depth") {
         options.min_depth = parseNumber(arg, value());
+      } else if (arg == "--max-depth") {
+        options.max_depth = parseNumber(arg, value());
       } else if (arg == "--fixed-depth") {
         fixed_depth = true;
       } else if (arg == "--csv") {

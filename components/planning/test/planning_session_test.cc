@@ -133,7 +133,7 @@ class PlanningSessionTest : public ::testing::Test {
   bool solve() {
     for (int i = 0; i < 100; ++i) {
       slice();
-      if (session.planner()->bestSolution() != nullptr) return true;
+      if (session.planner()->hasSolution()) return true;
     }
     return false;
   }
@@ -505,7 +505,7 @@ TEST_F(PlanningSessionTest, BudgetCountsFromTheLastSolution) {
   addRing(*ring, goal, kDepth);
   replaceMap(std::move(ring));
   for (int i = 0; i < 8; ++i) slice(0.125);
-  ASSERT_EQ(session.planner()->bestSolution(), nullptr);
+  ASSERT_FALSE(session.planner()->hasSolution());
   EXPECT_TRUE(cancels.empty()) << cancels.front().text;
   slice(0.125);
   ASSERT_EQ(cancels.size(), 1u);

@@ -475,6 +475,25 @@ bool OnlineRRTstar::checkConsistency() const {
   return true;
 }
 
+void OnlineRRTstar::snapshot(TreeSnapshot& tree) const {
+  const Node* best = bestSolution();
+  // Depth-first from the root: a parent always gets its index before its children.
+  std::vector<std::pair<const Node*, int32_t>> stack;
+  if (root_) stack.emplace_back(root_, -1);
+  while (!stack.empty()) {
+    const auto [node, parent] = stack.back();
+    stack.pop_back();
+    const auto index = static_cast<int32_t>(tree.nodes.size());
+    const auto* values = node->state->as<ob::RealVectorStateSpace::StateType>()->values;
+    tree.nodes.emplace_back(values[0], values[1], values[2]);
+    tree.parents.push_back(parent);
+    tree.costs.push_back(node->cost.value());
+    if (parent < 0) tree.root_index = index;
+    if (node == best) tree.best_solution_index = index;
+    for (const Node* child : node->children) stack.emplace_back(child, index);
+  }
+}
+
 void OnlineRRTstar::getPlannerData(ob::PlannerData& data) const {
   ob::Planner::getPlannerData(data);
   if (root_ == nullptr) return;

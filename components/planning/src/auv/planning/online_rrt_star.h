@@ -17,16 +17,9 @@
 #include <ompl/util/RandomNumbers.h>
 #include <Eigen/Geometry>
 
-namespace auv::planning {
+#include "auv/planning/waypoint_planner.h"
 
-/// What updateTree() found.
-struct UpdateResult {
-  bool root_in_collision = false;        ///< the root (the active waypoint) is not valid
-  bool vehicle_to_root_blocked = false;  ///< the segment vehicle -> root is not valid
-  std::size_t removed_nodes = 0;         ///< nodes discarded with their colliding subtrees
-  /// The caller must cancel the active waypoint and reset() from the vehicle's position.
-  bool needsRestart() const { return root_in_collision || vehicle_to_root_blocked; }
-};
+namespace auv::planning {
 
 /// Parameters (declareParam): range (δ, m), goal_bias, goal_tolerance (ε_goal, m),
 /// rewire_factor, narrow_passage_bias (share of the random states drawn by OMPL's bridge test,
@@ -35,7 +28,7 @@ struct UpdateResult {
 /// 0 = δ). Works with OMPL's SimpleSetup and Benchmark: solve() grows the tree from
 /// the problem's start (or the current root), keeps growing across calls (anytime) until
 /// clear() or reset(), and reports the best solution so far.
-class OnlineRRTstar : public ompl::base::Planner {
+class OnlineRRTstar : public ompl::base::Planner, public WaypointPlanner {
  public:
   /// A tree node. `cost` is the cost-to-come from the root; `incoming_cost` the edge cost.
   struct Node {
@@ -60,27 +53,30 @@ class OnlineRRTstar : public ompl::base::Planner {
   /// best solution to `waypoint` and prunes the tree so it becomes the root (the other
   /// subtrees are freed). False (tree untouched) when there is no solution or the root
   /// itself is the best solution.
-  bool popWaypoint(ompl::base::State* waypoint);
+  bool popWaypoint(ompl::base::State* waypoint) override;
   /// DFS re-check of every node and edge on the current map; colliding subtrees are freed.
-  UpdateResult updateTree(const ompl::base::State* vehicle_state);
+  UpdateResult updateTree(const ompl::base::State* vehicle_state) override;
   /// The same, when the map changed only inside `changed` (RealVector states): edges whose
   /// bounding box stays `influence` metres away from it (the clearance, or how far the
   /// objective looks if farther) keep their validity and cost without a check.
   UpdateResult updateTree(const ompl::base::State* vehicle_state,
-                          const Eigen::AlignedBox3d& changed, double influence);
+                          const Eigen::AlignedBox3d& changed, double influence) override;
   /// Drops the tree and restarts it with `root_state` as root (keeps the goal).
-  void reset(const ompl::base::State* root_state);
+  void reset(const ompl::base::State* root_state) override;
 
   /// Best solution node (lowest cost-to-come + cost to the goal), or nullptr.
   const Node* bestSolution() const;
   /// Cost of bestSolution() up to the goal; infinite cost when there is none.
-  ompl::base::Cost bestCost() const;
+  ompl::base::Cost bestCost() const override;
   /// States from the root to the best solution node (empty when there is none).
-  std::vector<const ompl::base::State*> bestPath() const;
+  std::vector<const ompl::base::State*> bestPath() const override;
   const Node* root() const { return root_; }
-  std::size_t treeSize() const { return nn_ ? nn_->size() : 0; }
+  const ompl::base::State* rootState() const override { return root_ ? root_->state : nullptr; }
+  std::size_t treeSize() const override { return nn_ ? nn_->size() : 0; }
+  bool hasSolution() const override { return !solutions_.empty(); }
   /// Sampling iterations since the last clear() or reset().
-  uint64_t iterations() const { return iterations_; }
+  uint64_t iterations() const override { return iterations_; }
+  void snapshot(TreeSnapshot& tree) const override;
   /// Checks parent/child links, costs and the nearest-neighbour structure; true if consistent.
   bool checkConsistency() const;
 

@@ -60,7 +60,7 @@ struct PlanningSession::ActiveQuery {
   PlanningQuery query;
   ob::SpaceInformationPtr si;
   ob::ProblemDefinitionPtr pdef;
-  std::shared_ptr<OnlineRRTstar> planner;
+  std::shared_ptr<WaypointPlanner> planner;
   Eigen::Vector3d goal = Eigen::Vector3d::Zero();
   double time_budget = 0.0;
   // Last time the tree had a solution, or the query (re)started: the budget runs from here, so
@@ -152,6 +152,13 @@ const config::OptionTable<SessionOptions>& SessionOptions::table() {
        Range::closed(0.01, 10.0)},
       {"waypoint_tolerance", &O::waypoint_tolerance,
        "distance at which a waypoint counts as reached", "m", Range::closed(0.01, 10.0)},
+      {"replanning",
+       &O::replanning,
+       "on a map change: repair the anytime tree (the paper) or plan anew from scratch with "
+       "OMPL's RRTstar (the campaign's baseline)",
+       "",
+       {},
+       {"repair", "scratch"}},
   };
   return kTable;
 }
@@ -286,18 +293,10 @@ std::unique_ptr<PlanningSession::ActiveQuery> PlanningSession::buildQuery(
   active->pdef = std::make_shared<ob::ProblemDefinition>(active->si);
   active->pdef->setStartAndGoalStates(start_state, goal_state, query.goal_tolerance);
   active->pdef->setOptimizationObjective(objective);
-  active->planner = std::make_shared<OnlineRRTstar>(active->si);
-  active->planner->setRange(options_.range);
-  active->planner->setGoalBias(options_.goal_bias);
-  active->planner->setNarrowPassageBias(options_.narrow_passage_bias);
-  active->planner->setRewireFactor(options_.rewire_factor);
-  active->planner->setGoalTolerance(query.goal_tolerance);
-  active->planner->setProblemDefinition(active->pdef);
-  active->planner->setup();
-  // Root the tree at the start even when it is inside the clearance (a vehicle that drifted
-  // close to a wall): OMPL's start-state input skips invalid starts and would leave no tree,
-  // while the motion validator lets the tree leave such a root by moving away from the wall.
-  active->planner->reset(start_state.get());
+  const TreeSettings tree{options_.range, options_.goal_bias, options_.narrow_passage_bias,
+                          options_.rewire_factor, query.goal_tolerance};
+  active->planner = makeWaypointPlanner(replanningFromName(options_.replanning), tree, active->si,
+                                        active->pdef, start_state.get());
   return active;
 }
 
@@ -346,13 +345,13 @@ bool PlanningSession::planSlice(const std::optional<Eigen::Vector3d>& vehicle, d
   ActiveQuery& q = *query_;
   // Re-check the tree only when the map changed: between changes the tree stays valid, and the
   // vehicle moves along the root edge the tree already holds.
-  if (field_->revision() != q.checked_revision && q.planner->root() != nullptr) {
+  if (field_->revision() != q.checked_revision && q.planner->rootState() != nullptr) {
     recheckTree(vehicle, now);
   }
   regrowIfFullWithoutSolution();
   if (q.planner->treeSize() >= options_.max_tree_size) return false;
   // Stops at max_tree_size too: one slice may add thousands of nodes.
-  const OnlineRRTstar& planner = *q.planner;
+  const WaypointPlanner& planner = *q.planner;
   const std::size_t max_size = options_.max_tree_size;
   q.planner->solve(ob::plannerOrTerminationCondition(
       ob::timedPlannerTerminationCondition(options_.iteration_budget),
@@ -381,12 +380,12 @@ void PlanningSession::recheckTree(const std::optional<Eigen::Vector3d>& vehicle,
   // The vehicle drifts off the planned edges by its tracking error, which the safety margin
   // is there to absorb: the way to the root is blocked only when the hull itself would touch.
   result.vehicle_to_root_blocked = !vehicleReachesRoot(statePosition(vehicle_state.get()),
-                                                       statePosition(q.planner->root()->state));
+                                                       statePosition(q.planner->rootState()));
   // Without an active waypoint the root is where the vehicle holds (the query's start or the
   // waypoint just reached): too close to a newly seen wall is no reason to restart there, and
   // the motion validator lets the tree leave it by moving away from the wall.
   if (!result.needsRestart() || q.active_waypoint_id == 0) return;
-  const Eigen::Vector3d root = statePosition(q.planner->root()->state);
+  const Eigen::Vector3d root = statePosition(q.planner->rootState());
   std::ostringstream text;
   text << (result.root_in_collision ? "root" : "segment vehicle -> root") << " at (" << root.x()
        << ", " << root.y() << ", " << root.z() << ") closer than "
@@ -406,15 +405,15 @@ void PlanningSession::recheckTree(const std::optional<Eigen::Vector3d>& vehicle,
 
 void PlanningSession::regrowIfFullWithoutSolution() {
   ActiveQuery& q = *query_;
-  if (q.planner->treeSize() < options_.max_tree_size || q.planner->bestSolution() ||
-      q.planner->root() == nullptr) {
+  if (q.planner->treeSize() < options_.max_tree_size || q.planner->hasSolution() ||
+      q.planner->rootState() == nullptr) {
     return;
   }
   // Full without a solution: only popWaypoint() (which needs a solution) or a restart would
   // prune it, so growing would never resume, even once the map opens a way. Grow a fresh
   // tree from the same root: the active waypoint stays valid.
   ob::ScopedState<> root(q.si);
-  q.si->copyState(root.get(), q.planner->root()->state);
+  q.si->copyState(root.get(), q.planner->rootState());
   q.earlier_iterations += q.planner->iterations();
   q.planner->reset(root.get());
 }
@@ -423,7 +422,7 @@ void PlanningSession::finishSlice(double now) {
   if (!query_) return;
   answerWaypointRequest();
   ActiveQuery& q = *query_;
-  if (q.planner->bestSolution()) {
+  if (q.planner->hasSolution()) {
     q.solved_at = now;
     q.no_solution_reported = false;  // a later loss of every solution is reported again
     return;
@@ -439,12 +438,12 @@ void PlanningSession::finishSlice(double now) {
 }
 
 void PlanningSession::answerWaypointRequest() {
-  if (!pending_request_ || !query_ || !query_->planner->bestSolution() ||
+  if (!pending_request_ || !query_ || !query_->planner->hasSolution() ||
       pending_request_->query_id != query_->query.query_id) {
     return;
   }
   ActiveQuery& q = *query_;
-  const Eigen::Vector3d from = statePosition(q.planner->root()->state);
+  const Eigen::Vector3d from = statePosition(q.planner->rootState());
   ob::ScopedState<> waypoint_state(q.si);
   if (!q.planner->popWaypoint(waypoint_state.get())) return;  // the root is the goal already
   PlannedWaypoint waypoint;
@@ -479,7 +478,7 @@ bool PlanningSession::growing() const {
   return query_ != nullptr && query_->planner->treeSize() < options_.max_tree_size;
 }
 
-const OnlineRRTstar* PlanningSession::planner() const {
+const WaypointPlanner* PlanningSession::planner() const {
   return query_ ? query_->planner.get() : nullptr;
 }
 
@@ -487,24 +486,11 @@ TreeSnapshot PlanningSession::tree() const {
   TreeSnapshot tree;
   if (!query_) return tree;
   const ActiveQuery& q = *query_;
-  const OnlineRRTstar::Node* best = q.planner->bestSolution();
-  // Depth-first from the root: a parent always gets its index before its children.
-  std::vector<std::pair<const OnlineRRTstar::Node*, int32_t>> stack;
-  if (q.planner->root()) stack.emplace_back(q.planner->root(), -1);
-  while (!stack.empty()) {
-    const auto [node, parent] = stack.back();
-    stack.pop_back();
-    const auto index = static_cast<int32_t>(tree.nodes.size());
-    const Eigen::Vector3d position = statePosition(node->state);
-    tree.nodes.push_back(position);
-    tree.parents.push_back(parent);
-    tree.costs.push_back(node->cost.value());
-    if (parent < 0) tree.root_index = index;
-    if ((position - q.goal).norm() <= q.query.goal_tolerance) {
-      tree.solution_indices.push_back(index);
+  q.planner->snapshot(tree);
+  for (std::size_t i = 0; i < tree.nodes.size(); ++i) {
+    if ((tree.nodes[i] - q.goal).norm() <= q.query.goal_tolerance) {
+      tree.solution_indices.push_back(static_cast<int32_t>(i));
     }
-    if (node == best) tree.best_solution_index = index;
-    for (const OnlineRRTstar::Node* child : node->children) stack.emplace_back(child, index);
   }
   tree.iterations = q.earlier_iterations + q.planner->iterations();
   return tree;

@@ -1,9 +1,10 @@
 #pragma once
 // The planner's query and waypoint protocol (the paper's §2.2.1), without DDS: one query at a
-// time grown by an OnlineRRTstar in slices, waypoint requests answered by popping the tree,
-// cancels when the map blocks the way to the active waypoint, NO_SOLUTION once a query has had
-// no solution for its time budget. The `planning` component wires it to topics and runs it in
-// its planning thread; tests drive it directly with a clock of their own.
+// time grown by a WaypointPlanner (OnlineRRTstar; ScratchPlanner, the baseline) in slices,
+// waypoint requests answered by popping the tree, cancels when the map blocks the way to the
+// active waypoint, NO_SOLUTION once a query has had no solution for its time budget. The `planning`
+// component wires it to topics and runs it in its planning thread; tests drive it directly with a
+// clock of their own.
 
 #include <cstdint>
 #include <memory>
@@ -18,7 +19,7 @@
 #include "auv/config/option_table.h"
 #include "auv/planning/distance_field.h"
 #include "auv/planning/map_validity.h"
-#include "auv/planning/online_rrt_star.h"
+#include "auv/planning/waypoint_planner.h"
 
 namespace octomap {
 class OcTree;
@@ -59,6 +60,9 @@ struct SessionOptions {
   double default_time_budget = 10.0;
   double waypoint_speed = 0.5;      ///< m/s, Waypoint speed.
   double waypoint_tolerance = 0.5;  ///< m, Waypoint tolerance.
+  /// "repair": the paper's tree repair (OnlineRRTstar); "scratch": the from-scratch baseline
+  /// (ScratchPlanner: OMPL's RRTstar planned anew on every map change).
+  std::string replanning = "repair";
 
   /// The fields with meaning, unit and range (the planning component's parameters of those
   /// names); the clearance's are in ClearanceOptions::table().
@@ -130,18 +134,6 @@ struct WaypointCancel {
   std::string text;
 };
 
-/// The active tree as the viewers see it, depth-first from the root (a parent always comes
-/// before its children).
-struct TreeSnapshot {
-  std::vector<Eigen::Vector3d> nodes;
-  std::vector<int32_t> parents;  ///< -1 for the root
-  std::vector<double> costs;     ///< cost-to-come
-  int32_t root_index = -1;
-  int32_t best_solution_index = -1;
-  std::vector<int32_t> solution_indices;  ///< nodes within the goal tolerance of the goal
-  uint64_t iterations = 0;                ///< of the whole query, restarts included
-};
-
 struct PathSnapshot {
   std::vector<Eigen::Vector3d> positions;  ///< root to best solution (empty without one)
   double cost = 0.0;                       ///< infinite without a solution
@@ -206,7 +198,7 @@ class PlanningSession {
   /// Whether planSlice() would grow the tree: the caller should not wait for input.
   bool growing() const;
   /// The active query's planner (nullptr: none).
-  const OnlineRRTstar* planner() const;
+  const WaypointPlanner* planner() const;
   TreeSnapshot tree() const;
   PathSnapshot path() const;
   /// Version of the last map change reported (0: none).
