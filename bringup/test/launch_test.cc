@@ -1080,6 +1080,24 @@ TEST(ShippedLaunchTest, VehicleGivesTheMappingItsInitialMap) {
   }
 }
 
+// The campaign's baseline: replanning:= reaches the planner (default: the paper's repair).
+TEST(ShippedLaunchTest, VehicleGivesThePlannerItsReplanningMode) {
+  const std::string file = std::string(AUV_SHIPPED_LAUNCH_DIR) + "/vehicle.yaml";
+  for (const std::string mode : {"", "scratch"}) {
+    SCOPED_TRACE(mode);
+    std::map<std::string, std::string> arguments;
+    if (!mode.empty()) arguments["replanning"] = mode;
+    const LaunchDescription launch = parseLaunchFile(file, arguments);
+    std::string given = "(no planning)";
+    for (const ProcessDescription& process : launch.processes) {
+      for (const ComponentDescription& c : process.components) {
+        if (c.component == "planning") given = c.parameters["replanning"].as<std::string>();
+      }
+    }
+    EXPECT_EQ(given, mode.empty() ? "repair" : mode);
+  }
+}
+
 // Like ROS_DOMAIN_ID for ros2 launch: an exported AUV_DOMAIN_ID / AUV_DDS is every shipped
 // launch file's default domain and vendor, and domain:= / vendor:= still win.
 TEST(ShippedLaunchTest, ExportedDomainAndVendorAreTheDefaults) {

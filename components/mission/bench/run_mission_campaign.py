@@ -1,21 +1,30 @@
 #!/usr/bin/env python3
 """Mission campaign (benchmark, not a test): the world's inspection mission over many seeds.
 
-For each world and seed it runs `auv launch bringup/launch/vehicle.yaml auto_mission:=true`
-(simulator with navigation drift, mapping, planning, mission, controller), reads the mission
-report (`<run>/mission/summary.json`), and compares each completed query's executed true path
-with the oracle shortest path between the same two points on the world's true map at the
-planner's clearance (`planning_oracle` on `auv sim octomap`), twice: on a fine true map (0.1 m)
-and on the true map at the planner's own resolution (0.5 m: what the planner could do knowing
-the world in advance; narrow gaps that 0.5 m cells close are closed for both). Figures: success,
-collisions, minimum true clearance, navigation error, path length / oracle, wall time. Results go
-to bench_results/mission_campaign_<stamp>.{md,json}.
+For each world, seed and planner mode it runs `auv launch bringup/launch/vehicle.yaml
+auto_mission:=true replanning:=<mode>` (simulator with navigation drift, mapping, planning,
+mission, controller), reads the mission report (`<run>/mission/summary.json`), and compares each
+completed query's executed true path with the oracle shortest path between the same two points
+on the world's true map at the planner's clearance (`planning_oracle` on `auv sim octomap`): in
+the horizontal plane for a query at fixed depth, in 3-D within the query's depth band otherwise;
+twice: on a fine true map (0.1 m) and on the true map at the planner's own resolution (0.5 m:
+what the planner could do knowing the world in advance). Figures: success, recoveries, contacts,
+minimum true clearance, navigation error, path length / oracle, mission and wall time.
+
+Resumable and mergeable: each finished run appends one JSON line to --results (default
+bench_results/mission_campaign.jsonl); a run whose key (world, seed, planner mode and the
+configuration: launch file and arguments, objective, navigation, prior map, real-time factor)
+is already there is skipped, so a campaign stopped or killed goes on where it was by running
+the same command again, and only the run in progress is lost. `campaign_table.py` (or
+--report) turns one or more such files into the Markdown tables.
 
   components/mission/bench/run_mission_campaign.py [--worlds canyon,breakwater,dead_end_bay]
-      [--seeds 20] [--first-seed 1] [--real-time-factor 8] [--domain 45] [--keep-runs]
+      [--seeds 20] [--first-seed 1] [--planner repair,scratch] [--real-time-factor 4]
+      [--results FILE.jsonl] [--domain 45] [--keep-runs]
       [--navigation drift|ideal] [--launch FILE]   # ideal: no drift or noise; FILE: vehicle.yaml
       [--launch-arg NAME:=VALUE]...   # e.g. map_resolution:=0.25
       [--prior-map]   # the mapping starts from the true map: no exploration left
+  components/mission/bench/run_mission_campaign.py --report ROWS.jsonl...   # the tables only
   components/mission/bench/run_mission_campaign.py --evaluate RUN_DIR...   # finished runs again
 """
 import argparse
@@ -23,15 +32,19 @@ import datetime
 import json
 import os
 import shutil
-import statistics
 import subprocess
 import sys
 import time
 
 import yaml
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import campaign_table  # noqa: E402
+
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
 LAUNCH = os.path.join(ROOT, "bringup", "launch", "vehicle.yaml")
+RESULTS = os.path.join(ROOT, "bench_results", "mission_campaign.jsonl")
+PLANNERS = ("repair", "scratch")  # the planning component's `replanning`
 CLEARANCE = 1.2  # m, the planner's hull_radius + safety_margin (planning defaults)
 ORACLE_GRID = 0.2  # m
 TRUE_MAP_RESOLUTION = 0.1  # m
@@ -57,11 +70,47 @@ def find_program(name):
     return found
 
 
-def oracle_length(true_map, start, goal):
+def query_specs(mission):
+    """Per query of a mission file: whether it plans at fixed depth and its depth band (the
+    query's min_depth / max_depth, else its bounds' z range)."""
+    defaults = mission.get("defaults") or {}
+    specs = []
+    for query in mission["queries"]:
+        merged = {**defaults, **query}
+        bounds = merged.get("bounds") or {}
+        low = float(merged.get("min_depth") or 0.0)
+        high = float(merged.get("max_depth") or 0.0)
+        if high <= low:  # no band: the bounds are the limits
+            low = float(bounds["min"][2]) if bounds.get("min") else 0.0
+            high = float(bounds["max"][2]) if bounds.get("max") else None
+        specs.append({"fixed_depth": bool(merged.get("fixed_depth", False)),
+                      "band": [low, high]})
+    return specs
+
+
+def oracle_arguments(spec, start, goal):
+    """planning_oracle's mode arguments and the end points: the plane of the start at fixed
+    depth; in 3-D the band, with the end points moved into it (depth control keeps the vehicle
+    within centimetres of it, and the oracle refuses a point outside)."""
+    if spec is None or spec["fixed_depth"]:
+        return ["--fixed-depth"], start, goal
+    low, high = spec["band"]
+    arguments = ["--min-depth", str(low)]
+    if high is not None:
+        arguments += ["--max-depth", str(high)]
+
+    def inside(point):
+        z = max(point[2], low)
+        return [point[0], point[1], min(z, high) if high is not None else z]
+    return arguments, inside(start), inside(goal)
+
+
+def oracle_length(true_map, start, goal, spec=None, clearance=CLEARANCE, extra=()):
+    mode, start, goal = oracle_arguments(spec, start, goal)
     out = subprocess.run(
         [find_program("planning_oracle"), "--map", true_map, "--start", ",".join(map(str, start)),
-         "--goal", ",".join(map(str, goal)), "--clearance", str(CLEARANCE), "--fixed-depth",
-         "--grid", str(ORACLE_GRID), "--quiet"], capture_output=True, text=True)
+         "--goal", ",".join(map(str, goal)), "--clearance", str(clearance), *mode,
+         "--grid", str(ORACLE_GRID), "--quiet", *extra], capture_output=True, text=True)
     if out.returncode != 0:
         return None, out.stderr.strip()
     return float(out.stdout.strip().split()[0]), ""
@@ -102,7 +151,7 @@ def read_events(events_path):
     return events
 
 
-def own_map_ratios(run_dir, summary):
+def own_map_ratios(run_dir, summary, specs):
     """Executed length / the shortest path on the map the vehicle had at the end (its mission
     log's map.bt, in the navigation frame, unknown = free) between the navigation estimates at
     the query's start and end: what hindsight on its own map allows. The oracle keeps its
@@ -122,45 +171,59 @@ def own_map_ratios(run_dir, summary):
         if start is None or end is None:
             errors.append(f"query {query['index']}: no navigation estimate in events.csv")
             continue
-        out = subprocess.run(
-            [find_program("planning_oracle"), "--map", map_path,
-             "--start", ",".join(map(str, start)), "--goal", ",".join(map(str, end)),
-             "--clearance", str(CLEARANCE + 0.5 * MAP_RESOLUTION), "--fixed-depth", "--pad", "30",
-             "--grid", str(ORACLE_GRID), "--quiet"], capture_output=True, text=True)
-        if out.returncode != 0:
-            errors.append(f"query {query['index']}: {out.stderr.strip()}")
+        spec = specs[query["index"]] if query["index"] < len(specs) else None
+        length, error = oracle_length(map_path, start, end, spec,
+                                      CLEARANCE + 0.5 * MAP_RESOLUTION, ("--pad", "30"))
+        if length is None:
+            errors.append(f"query {query['index']}: {error}")
             continue
-        ratios.append(query["executed_length_m"] / float(out.stdout.strip().split()[0]))
+        ratios.append(query["executed_length_m"] / length)
     return [round(r, 3) for r in ratios], errors
 
 
 def evaluate(row, world, seed, run_dir, summary, cache):
     """Adds the summary's figures and the path ratios against the oracles to `row`."""
-    row.update({k: summary[k] for k in ("state", "message", "duration_s", "collisions",
-                                        "min_true_clearance_m", "max_navigation_error_m",
-                                        "executed_length_m")})
+    row.update({k: summary.get(k) for k in ("state", "message", "duration_s", "collisions",
+                                            "min_true_clearance_m", "max_navigation_error_m",
+                                            "executed_length_m")})
+    row["recoveries"] = summary.get("recoveries", 0)
     mission = yaml.safe_load(open(os.path.join(run_dir, "mission.yaml")))["mission"]
+    specs = query_specs(mission)
+    results = {}
     for key, resolution in (("path_ratios", TRUE_MAP_RESOLUTION),
                             ("path_ratios_map_res", MAP_RESOLUTION)):
         true_map = true_map_for(world, seed, cache, resolution)
         ratios = []
         for query in summary["queries"]:
+            index = query["index"]
+            spec = specs[index] if index < len(specs) else None
+            result = results.setdefault(index, {
+                "index": index, "name": mission["queries"][index].get("name")
+                if index < len(mission["queries"]) else None,
+                "succeeded": query["succeeded"], "path_m": query.get("executed_length_m"),
+                "oracle": "2d" if spec is None or spec["fixed_depth"] else "3d"})
             if not query["succeeded"]:
                 continue
             # Same end points as the vehicle: start and end of the executed query.
-            length, error = oracle_length(true_map, query["start"], query["end"])
+            length, error = oracle_length(true_map, query["start"], query["end"], spec)
             if length:
                 ratios.append(query["executed_length_m"] / length)
+                if resolution == TRUE_MAP_RESOLUTION:
+                    result["oracle_m"] = round(length, 3)
+                    result["ratio"] = round(query["executed_length_m"] / length, 3)
+                else:
+                    result["ratio_map_res"] = round(query["executed_length_m"] / length, 3)
             else:
                 row.setdefault("oracle_errors", []).append(error)
         row[key] = [round(r, 3) for r in ratios]
+    row["query_results"] = [results[i] for i in sorted(results)]
     events_path = os.path.join(run_dir, "mission", "events.csv")
     if os.path.exists(events_path):
         # Planner cancels of the active waypoint (blocked root or approach): each holds the
         # vehicle and replans from where it is.
         with open(events_path) as events:
             row["cancels"] = sum(1 for line in events if "/cancel," in line)
-    row["path_ratios_own_map"], own_errors = own_map_ratios(run_dir, summary)
+    row["path_ratios_own_map"], own_errors = own_map_ratios(run_dir, summary, specs)
     if own_errors:
         row["own_map_errors"] = own_errors
     row["queries"] = f'{sum(q["succeeded"] for q in summary["queries"])}/' \
@@ -190,19 +253,20 @@ def map_resolution(args):
     return MAP_RESOLUTION
 
 
-def run_mission(world, seed, args, runs_dir):
-    run_dir = os.path.join(runs_dir, f"{world}-{seed}")
+def run_mission(world, seed, planner, args, runs_dir):
+    run_dir = os.path.join(runs_dir, f"{world}-{seed}-{planner}")
     shutil.rmtree(run_dir, ignore_errors=True)
     scenario = world if args.navigation == "drift" else \
         ideal_navigation_scenario(world, seed, runs_dir)
     command = [find_program("auv"), "launch", args.launch, f"world:={scenario}", f"seed:={seed}",
                "auto_mission:=true", f"real_time_factor:={args.real_time_factor}",
-               f"domain:={args.domain}", f"run_dir:={run_dir}", f"objective:={args.objective}"]
+               f"domain:={args.domain}", f"run_dir:={run_dir}", f"objective:={args.objective}",
+               f"replanning:={planner}"]
     command += args.launch_arg
     if args.prior_map:
         command.append(f"initial_map:={true_map_for(world, seed, runs_dir, map_resolution(args))}")
     started = time.monotonic()
-    with open(os.path.join(runs_dir, f"{world}-{seed}.log"), "w") as log:
+    with open(os.path.join(runs_dir, f"{world}-{seed}-{planner}.log"), "w") as log:
         try:
             code = subprocess.run(command, stdout=log, stderr=subprocess.STDOUT,
                                   timeout=args.timeout).returncode
@@ -214,66 +278,69 @@ def run_mission(world, seed, args, runs_dir):
     return run_dir, code, wall, summary
 
 
-def write_results(rows, worlds, stamp, setup, quiet=False):
-    """The campaign table (per world) and every run, as .md and .json in bench_results/."""
-    results_dir = os.path.join(ROOT, "bench_results")
-    lines = [f"# Mission campaign {stamp}", "",
-             f"{setup}; clearance {CLEARANCE} m; "
-             f"oracle: planning_oracle on the true map at {TRUE_MAP_RESOLUTION} m and at the "
-             f"planner's {MAP_RESOLUTION} m, grid {ORACLE_GRID} m, between the executed query's "
-             "true start and end; on the vehicle's final map (mission/map.bt, navigation frame) "
-             f"at clearance {CLEARANCE} m + half a voxel between the navigation estimates at "
-             "the query's start and end.", "",
-             "| world | runs | succeeded | collisions (runs with any) | min true clearance (m) | "
-             f"path / oracle {TRUE_MAP_RESOLUTION} m median (max) | path / oracle "
-             f"{MAP_RESOLUTION} m median (max) | path / oracle on the vehicle's final map "
-             "median (max) | max nav error (m) | wall s / run |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
-    for world in worlds:
-        mine = [r for r in rows if r["world"] == world]
-        done = [r for r in mine if r.get("state") == "SUCCEEDED"]
-        collided = [r for r in mine if r.get("collisions", 0) > 0]
-        clearances = [r["min_true_clearance_m"] for r in mine
-                      if r.get("min_true_clearance_m") is not None]
-        ratios = [x for r in mine for x in r.get("path_ratios", [])]
-        ratios_map_res = [x for r in mine for x in r.get("path_ratios_map_res", [])]
-        ratios_own = [x for r in mine for x in r.get("path_ratios_own_map", [])]
-        nav = [r["max_navigation_error_m"] for r in mine if r.get("max_navigation_error_m")]
-        walls = [r["wall_s"] for r in mine if r.get("wall_s") is not None]
-        def cell(values, text):
-            return text(values) if values else "-"
-        def median_max(v):
-            return f"{statistics.median(v):.3f} ({max(v):.3f})"
-        lines.append(" | ".join([
-            f"| {world}", str(len(mine)), str(len(done)),
-            f"{sum(r.get('collisions', 0) for r in mine)} ({len(collided)})",
-            cell(clearances, lambda v: f"{min(v):.2f}"), cell(ratios, median_max),
-            cell(ratios_map_res, median_max), cell(ratios_own, median_max),
-            cell(nav, lambda v: f"{max(v):.2f}"),
-            cell(walls, lambda v: f"{statistics.mean(v):.0f}")]) + " |")
-    lines += ["", "Per run:", "", "```"] + [json.dumps(r) for r in rows] + ["```"]
-    md = os.path.join(results_dir, f"mission_campaign_{stamp}.md")
-    open(md, "w").write("\n".join(lines) + "\n")
-    json.dump(rows, open(os.path.join(results_dir, f"mission_campaign_{stamp}.json"), "w"),
-              indent=1)
-    if not quiet:
-        print("\n".join(lines[:len(worlds) + 6]))
-        print(f"results: {md}")
+def git_commit():
+    """The checked-out commit, with -dirty when tracked files differ from it."""
+    def git(*arguments):
+        out = subprocess.run(["git", "-C", ROOT, *arguments], capture_output=True, text=True)
+        return out.stdout.strip() if out.returncode == 0 else ""
+    commit = git("rev-parse", "--short=12", "HEAD") or "unknown"
+    return commit + ("-dirty" if git("status", "--porcelain", "--untracked-files=no") else "")
 
 
-def evaluate_runs(run_dirs):
-    """Path ratios of finished runs (<world>-<seed> folders with mission/summary.json)."""
+def configuration(args):
+    """What besides world, seed and planner mode makes two runs the same experiment."""
+    return {"launch": os.path.relpath(os.path.abspath(args.launch), ROOT),
+            "launch_args": sorted(args.launch_arg), "objective": args.objective,
+            "navigation": args.navigation, "prior_map": args.prior_map,
+            "real_time_factor": args.real_time_factor}
+
+
+def row_key(world, seed, planner, config):
+    return json.dumps({"world": world, "seed": seed, "planner": planner, "config": config},
+                      sort_keys=True)
+
+
+def done_keys(path):
+    """Keys of the runs already in the results file (a line cut off by a crash is ignored). A
+    run that left no report (the launch failed, e.g. a bad argument) is run again; its row
+    stays as evidence and the new one replaces it in the tables."""
+    if not os.path.exists(path):
+        return set()
+    return {row.get("key") for row in campaign_table.read_rows([path])
+            if row.get("state") != "NO REPORT"}
+
+
+def append_row(path, row):
+    """One line per finished run, on disk before the next run starts."""
+    with open(path, "a") as results:
+        results.write(json.dumps(row) + "\n")
+        results.flush()
+        os.fsync(results.fileno())
+
+
+def evaluate_runs(run_dirs, args):
+    """Path ratios of finished runs (<world>-<seed>[-<planner>] folders with
+    mission/summary.json), appended to the results file like campaign runs."""
     rows = []
+    config = configuration(args)
     for run_dir in run_dirs:
         run_dir = os.path.abspath(run_dir)
-        world, _, seed = os.path.basename(run_dir.rstrip("/")).rpartition("-")
+        name = os.path.basename(run_dir.rstrip("/"))
+        planner = "repair"
+        for mode in PLANNERS:
+            if name.endswith("-" + mode):
+                name, planner = name[:-len(mode) - 1], mode
+        world, _, seed = name.rpartition("-")
         summary_path = os.path.join(run_dir, "mission", "summary.json")
         if not world or not seed.isdigit() or not os.path.exists(summary_path):
-            sys.exit(f"run_mission_campaign: {run_dir}: not a <world>-<seed> run folder with "
-                     "mission/summary.json")
-        row = {"world": world, "seed": int(seed), "run": run_dir}
+            sys.exit(f"run_mission_campaign: {run_dir}: not a <world>-<seed>[-<planner>] run "
+                     "folder with mission/summary.json")
+        row = {"key": row_key(world, int(seed), planner, config), "world": world,
+               "seed": int(seed), "planner": planner, **config, "commit": git_commit(),
+               "evaluated": True, "run": run_dir}
         evaluate(row, world, int(seed), run_dir, json.load(open(summary_path)),
                  os.path.dirname(run_dir))
+        append_row(args.results, row)
         rows.append(row)
         print(json.dumps(row), flush=True)
     return rows
@@ -281,10 +348,21 @@ def evaluate_runs(run_dirs):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--worlds", default="canyon,breakwater,dead_end_bay")
+    parser.add_argument("--worlds", default="canyon,breakwater,dead_end_bay",
+                        help="comma-separated world names (any the simulator knows) or scenario "
+                             "files")
     parser.add_argument("--seeds", type=int, default=20)
     parser.add_argument("--first-seed", type=int, default=1)
-    parser.add_argument("--real-time-factor", type=float, default=8.0)
+    parser.add_argument("--planner", default="repair",
+                        help="comma-separated planner modes, each run per world and seed: "
+                             "repair (the paper's tree repair), scratch (OMPL's RRTstar from "
+                             "scratch on every map change)")
+    parser.add_argument("--real-time-factor", type=float, default=4.0,
+                        help="simulated seconds per wall second (at 8 the 2-core machine "
+                             "starved the stack); stated in every table")
+    parser.add_argument("--results", default=RESULTS,
+                        help="rows file (.jsonl): finished runs are appended, runs already in "
+                             "it are skipped (default: bench_results/mission_campaign.jsonl)")
     parser.add_argument("--domain", type=int, default=45)
     parser.add_argument("--timeout", type=float, default=3600.0, help="s of wall time per mission")
     parser.add_argument("--objective", default="visibility", choices=["visibility", "path_length"])
@@ -300,50 +378,64 @@ def main():
                              "(initial_map): nothing is left to explore, so what remains of path "
                              "/ oracle is the objective's and the planner's own (use with "
                              "--navigation ideal: the prior map is in the true frame)")
-    parser.add_argument("--keep-runs", action="store_true", help="keep the run folders")
+    parser.add_argument("--keep-runs", action="store_true", help="keep the run folders whole")
     parser.add_argument("--seed-major", action="store_true",
                         help="run seed by seed across the worlds (default: world by world)")
     parser.add_argument("--evaluate", nargs="+", metavar="RUN_DIR",
                         help="only evaluate finished run folders (no missions are run)")
+    parser.add_argument("--report", nargs="+", metavar="ROWS",
+                        help="only print the tables of these rows files (campaign_table.py)")
     args = parser.parse_args()
 
-    stamp = datetime.datetime.now().strftime("%Y%m%d_%H%M%S")
-    if not args.evaluate:
-        stamp += f"_d{args.domain}"  # campaigns started together on other domains differ
-    if args.evaluate:
-        rows = evaluate_runs(args.evaluate)
-        worlds = list(dict.fromkeys(r["world"] for r in rows))
-        write_results(rows, worlds, stamp, f"evaluation of {len(rows)} finished runs")
+    if args.report:
+        print(campaign_table.report(campaign_table.read_rows(args.report)))
         return
-    runs_dir = os.path.join(ROOT, "bench_results", f"mission_campaign_{stamp}")
+    os.makedirs(os.path.dirname(os.path.abspath(args.results)), exist_ok=True)
+    if args.evaluate:
+        evaluate_runs(args.evaluate, args)
+        print(campaign_table.report(campaign_table.read_rows([args.results])))
+        return
+    planners = args.planner.split(",")
+    for planner in planners:
+        if planner not in PLANNERS:
+            sys.exit(f"run_mission_campaign: --planner: expected {', '.join(PLANNERS)}, got "
+                     f"'{planner}'")
+    runs_dir = os.path.join(ROOT, "bench_results", "mission_campaign_runs")
     os.makedirs(runs_dir, exist_ok=True)
-    rows = []
     worlds = args.worlds.split(",")
     seeds = range(args.first_seed, args.first_seed + args.seeds)
-    # Seed by seed across the worlds: a campaign stopped early still covers every world.
+    # Seed by seed across the worlds: a campaign stopped early still covers every world. The
+    # modes of one world and seed run one after the other, so a comparison is never half made.
     order = [(w, s) for s in seeds for w in worlds] if args.seed_major else \
         [(w, s) for w in worlds for s in seeds]
-    setup = (f"{os.path.relpath(args.launch, ROOT)}, auto_mission, objective {args.objective}, "
-             f"real_time_factor {args.real_time_factor}, navigation "
-             + ("drift on (simulator defaults)" if args.navigation == "drift" else
-                "ideal (no drift, no noise)")
-             + (", prior map: the true map (initial_map)" if args.prior_map else "")
-             + "".join(f", {a}" for a in args.launch_arg))
+    config = configuration(args)
+    done = done_keys(args.results)
+    commit = git_commit()
     for world, seed in order:
-        run_dir, code, wall, summary = run_mission(world, seed, args, runs_dir)
-        row = {"world": world, "seed": seed, "exit": code, "wall_s": round(wall, 1)}
-        if summary:
-            evaluate(row, world, seed, run_dir, summary, runs_dir)
-        else:
-            row["state"] = "NO REPORT"
-        rows.append(row)
-        print(json.dumps(row), flush=True)
-        if not args.keep_runs and not row.get("collisions"):  # runs with contacts: evidence
-            for sub in ("ground_truth",):
-                shutil.rmtree(os.path.join(run_dir, sub), ignore_errors=True)
-        # After every run: a campaign stopped early keeps what it measured.
-        write_results(rows, worlds, stamp, setup, quiet=True)
-    write_results(rows, worlds, stamp, setup)
+        for planner in planners:
+            key = row_key(world, seed, planner, config)
+            if key in done:
+                print(f"skipped (in {os.path.relpath(args.results)}): {world} seed {seed} "
+                      f"{planner}", flush=True)
+                continue
+            load = os.getloadavg()[0]
+            started = datetime.datetime.now().isoformat(timespec="seconds")
+            run_dir, code, wall, summary = run_mission(world, seed, planner, args, runs_dir)
+            row = {"key": key, "world": world, "seed": seed, "planner": planner, **config,
+                   "commit": commit, "started": started, "exit": code, "wall_s": round(wall, 1),
+                   "load_average": [round(load, 2), round(os.getloadavg()[0], 2)],
+                   "run": os.path.relpath(run_dir, ROOT)}
+            if summary:
+                evaluate(row, world, seed, run_dir, summary, runs_dir)
+            else:
+                row["state"] = "NO REPORT"
+            append_row(args.results, row)
+            done.add(key)
+            print(json.dumps(row), flush=True)
+            if not args.keep_runs and not row.get("collisions"):  # runs with contacts: evidence
+                for sub in ("ground_truth",):
+                    shutil.rmtree(os.path.join(run_dir, sub), ignore_errors=True)
+    print(campaign_table.report(campaign_table.read_rows([args.results])))
 
 
 if __name__ == "__main__":
