@@ -134,6 +134,19 @@ TEST_F(ScratchSessionTest, AnswersWaypointByWaypointUpToTheGoalWithANewTreeForEa
   EXPECT_TRUE(cancels.empty()) << cancels.front().text;
 }
 
+TEST_F(ScratchSessionTest, TreeHasOneRootAtTheVehicleFromTheStart) {
+  ASSERT_TRUE(session.startQuery(makeQuery(1), *map, vehicle, t));
+  TreeSnapshot tree = session.tree();
+  ASSERT_EQ(tree.nodes.size(), 1u) << "the root is in the tree before the first slice";
+  EXPECT_EQ(tree.root_index, 0);
+  EXPECT_LT((tree.nodes[0] - kStart).norm(), 1e-12);
+  slice();
+  tree = session.tree();
+  ASSERT_GT(tree.nodes.size(), 1u);
+  EXPECT_EQ(std::count(tree.parents.begin(), tree.parents.end(), -1), 1)
+      << "the valid root was added twice";
+}
+
 TEST_F(ScratchSessionTest, MapChangeStartsATreeSharingNothingButTheRoot) {
   ASSERT_TRUE(session.startQuery(makeQuery(1), *map, vehicle, t));
   const auto first = next(0);

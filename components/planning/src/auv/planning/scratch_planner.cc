@@ -53,17 +53,19 @@ class FreshRRTstar : public ompl::geometric::RRTstar {
  public:
   using RRTstar::RRTstar;
 
-  /// After setup(): OMPL skips a start state that is not valid (a vehicle that drifted close
-  /// to a wall), which would leave no tree; such a root is added by hand, and the motion
-  /// validator lets the tree leave it by moving away from the wall.
+  /// After setup(): the root is added by hand, so the tree has it before the first solve()
+  /// (as OnlineRRTstar's) and even when it is not valid (a vehicle that drifted close to a
+  /// wall), which OMPL's start-state input would skip, leaving no tree; the motion validator
+  /// lets the tree leave such a root by moving away from the wall.
   void plant(const ob::State* root, ob::StateSamplerPtr sampler) {
-    sampler_ = std::move(sampler);   // solve() allocates its own only when none is set
-    if (si_->isValid(root)) return;  // solve() adds it from the problem definition
+    sampler_ = std::move(sampler);  // solve() allocates its own only when none is set
     auto* motion = new Motion(si_);
     si_->copyState(motion->state, root);
     motion->cost = opt_->identityCost();
     nn_->add(motion);
     startMotions_.push_back(motion);
+    // Use up the problem definition's copy of the root, so that solve() adds no second one.
+    if (si_->isValid(root)) pis_.nextStart();
   }
   std::size_t size() const { return nn_ ? nn_->size() : 0; }
   /// States from the root to the best goal motion (empty without one).
