@@ -67,11 +67,11 @@ class Session3dTest : public ::testing::Test {
   /// Slices until the tree has a solution (false after `limit`), then `extra` more.
   bool solve(int extra = 0, int limit = 200) {
     double t = 100.0;
-    for (int i = 0; i < limit && session.planner()->bestSolution() == nullptr; ++i) {
+    for (int i = 0; i < limit && !session.planner()->hasSolution(); ++i) {
       session.planSlice(query_.start, t += 0.1);
     }
     for (int j = 0; j < extra; ++j) session.planSlice(query_.start, t += 0.1);
-    return session.planner()->bestSolution() != nullptr;
+    return session.planner()->hasSolution();
   }
   /// The refusal text of a query that did not start.
   std::string refusal() const {
@@ -82,7 +82,7 @@ class Session3dTest : public ::testing::Test {
   }
   /// The best path; every edge is checked again on the session's space.
   std::vector<Eigen::Vector3d> checkedPath() const {
-    const auto& si = session.planner()->getSpaceInformation();
+    const auto& si = session.planner()->spaceInformation();
     const auto states = session.planner()->bestPath();
     std::vector<Eigen::Vector3d> path;
     for (std::size_t i = 0; i < states.size(); ++i) {
@@ -134,7 +134,7 @@ TEST_F(Session3dTest, EveryNodeAndWaypointStaysInTheBand) {
 
 TEST_F(Session3dTest, AStartOutsideTheBandIsRootedAtItsNearestDepthInside) {
   ASSERT_TRUE(start(query3d({2.0, 0.0, 1.2}, {18.0, 0.0, 5.0}, 3.0, 6.0)));
-  const Eigen::Vector3d root = statePosition(session.planner()->root()->state);
+  const Eigen::Vector3d root = statePosition(session.planner()->rootState());
   EXPECT_DOUBLE_EQ(root.z(), 3.0);
   EXPECT_DOUBLE_EQ(root.x(), 2.0);
   ASSERT_TRUE(solve());

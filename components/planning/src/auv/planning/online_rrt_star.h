@@ -77,6 +77,7 @@ class OnlineRRTstar : public ompl::base::Planner, public WaypointPlanner {
   /// Sampling iterations since the last clear() or reset().
   uint64_t iterations() const override { return iterations_; }
   void snapshot(TreeSnapshot& tree) const override;
+  const ompl::base::SpaceInformationPtr& spaceInformation() const override { return si_; }
   /// Checks parent/child links, costs and the nearest-neighbour structure; true if consistent.
   bool checkConsistency() const;
 

@@ -45,6 +45,7 @@ class ScratchPlanner : public WaypointPlanner {
   std::vector<const ompl::base::State*> bestPath() const override;
   ompl::base::Cost bestCost() const override;
   void snapshot(TreeSnapshot& tree) const override;
+  const ompl::base::SpaceInformationPtr& spaceInformation() const override { return si_; }
 
   /// Trees started since the last reset() (the first one included).
   uint64_t trees() const { return trees_; }

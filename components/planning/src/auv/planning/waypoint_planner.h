@@ -70,6 +70,8 @@ class WaypointPlanner {
   virtual ompl::base::Cost bestCost() const = 0;
   /// Fills nodes, parents, costs, root_index and best_solution_index of `tree`.
   virtual void snapshot(TreeSnapshot& tree) const = 0;
+  /// The space the tree lives in (its validity and motion checks).
+  virtual const ompl::base::SpaceInformationPtr& spaceInformation() const = 0;
 };
 
 /// How the planner handles a map change (the planning component's `replanning`).
