@@ -173,7 +173,10 @@ TEST_P(AllWorlds, MissionModeFitsTheWorldAndRoutesKeepToTheBand) {
       GetParam() == "arch" || GetParam() == "boulder_field" || GetParam() == "leaning_reef";
   EXPECT_EQ(m.fixed_depth, !natural) << "the paper's worlds keep the 2-D mode";
   // 3-D planning comes with 3-D sensing; the paper's worlds keep the profiler alone.
-  EXPECT_EQ(MultibeamOptions::fromScenario(world.scenario.root).enabled, natural);
+  const MultibeamOptions multibeam = MultibeamOptions::fromScenario(world.scenario.root);
+  EXPECT_EQ(multibeam.enabled, natural);
+  // Rock above the vehicle (an arch's underside) must be seen, not only the seabed.
+  if (natural) EXPECT_LT(multibeam.mount_pitch - 0.5 * multibeam.vertical_aperture, -0.1);
   EXPECT_EQ(DvlBeamsOptions::fromScenario(world.scenario.root).enabled, natural);
   if (m.fixed_depth) {
     // Every route stays in the plane of the start.

@@ -203,9 +203,14 @@ std::string scenarioYaml(const GeneratedWorld& world, const std::string& mesh_fi
   if (m.min_altitude > 0.0) out << "  min_altitude: " << m.min_altitude << "\n";
   // 3-D planning needs 3-D sensing: rock below or above the vehicle's plane is invisible to the
   // profiling sonar (components/simulator/README.md, 3-D sensing).
+  // The multibeam looks level with a 50 deg vertical fan (a 3-D imaging sonar's), not pitched
+  // down: the default fan (15..35 deg down) never sees the underside of an arch, and a 3-D
+  // path rising under one ran into it (arch, seed 2). Same rays per ping as the default.
   if (!m.fixed_depth)
-    out << "# 3-D sensing with the defaults: forward multibeam and the DVL's four beams.\n"
-        << "multibeam: {}\ndvl_beams: {}\n";
+    out << "# 3-D sensing: a level multibeam fan reaching 25 deg above and below the vehicle,\n"
+        << "# and the DVL's four beams.\n"
+        << "multibeam: {pitch_deg: 0, beams: 128, rows: 8, vertical_aperture_deg: 50}\n"
+        << "dvl_beams: {}\n";
   return out.str();
 }
 

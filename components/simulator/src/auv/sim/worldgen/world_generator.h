@@ -20,7 +20,7 @@
 namespace auv::sim {
 
 /// Bumped whenever generated output changes, so cached worlds of an older generator are rebuilt.
-constexpr int kWorldGeneratorVersion = 4;
+constexpr int kWorldGeneratorVersion = 5;
 
 struct WorldGenOptions {
   uint64_t seed = 1;            ///< same seed, same world; another seed moves and reshapes the rock
