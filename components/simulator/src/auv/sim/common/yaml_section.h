@@ -12,4 +12,15 @@ using config::loadYamlFile;
 using config::requireOption;
 using config::YamlSection;
 
+/// Runs the options' cross-field check() and prefixes its message with the scenario file, so the
+/// one-line error names both the file and the field ("scenario.yaml: multibeam.rows: ...").
+template <typename Options>
+void checkInFile(const YamlSection& section, const Options& options) {
+  try {
+    options.check();
+  } catch (const ConfigError& e) {
+    throw ConfigError(section.file() + ": " + e.what());
+  }
+}
+
 }  // namespace auv::sim

@@ -15,6 +15,18 @@ void require(bool ok, const char* field, const char* what, double value) {
 bool positive(double x) { return std::isfinite(x) && x > 0.0; }
 bool nonNegative(double x) { return std::isfinite(x) && x >= 0.0; }
 
+// The four Janus beams in azimuth order, `beam_angle` from the vertical; checks the options first.
+std::vector<Eigen::Vector3d> janusDirections(const DvlBeamsOptions& options) {
+  options.check();
+  const double s = std::sin(options.beam_angle), c = std::cos(options.beam_angle);
+  std::vector<Eigen::Vector3d> directions;
+  for (int k = 0; k < DvlBeams::kBeams; ++k) {
+    const double azimuth = options.azimuth_offset + k * M_PI / 2;
+    directions.emplace_back(s * std::cos(azimuth), s * std::sin(azimuth), c);
+  }
+  return directions;
+}
+
 }  // namespace
 
 Eigen::Isometry3d DvlBeamsOptions::mounting() const {
@@ -50,48 +62,19 @@ DvlBeamsOptions DvlBeamsOptions::fromYaml(const YamlSection& section, bool prese
   section.read("max_range", o.max_range);
   section.read("range_noise", o.range_noise);
   if (!o.enabled) return o;
-  try {
-    o.check();
-  } catch (const ConfigError& e) {
-    throw ConfigError(section.file() + ": " + e.what());
-  }
+  checkInFile(section, o);
   return o;
 }
 
 DvlBeams::DvlBeams(const DvlBeamsOptions& options, uint64_t seed)
-    : options_(options), schedule_(options.rate), rng_(seed) {
-  options_.check();
-  const double s = std::sin(options_.beam_angle), c = std::cos(options_.beam_angle);
-  for (int k = 0; k < kBeams; ++k) {
-    const double azimuth = options_.azimuth_offset + k * M_PI / 2;
-    directions_.emplace_back(s * std::cos(azimuth), s * std::sin(azimuth), c);
-  }
-}
+    : options_(options), schedule_(options.rate), fan_(janusDirections(options), seed) {}
 
 SensorCloud DvlBeams::ping(const Eigen::Isometry3d& body_pose_true, double time,
                            const RayCaster& world, double seabed_depth) {
   const DvlBeamsOptions& o = options_;
-  SensorCloud cloud;
-  cloud.stamp = time;
-  cloud.mounting = o.mounting();
-  cloud.max_range = o.max_range;
-  const Eigen::Isometry3d head_to_world = body_pose_true * cloud.mounting;
-  world_directions_.resize(kBeams);
-  for (int k = 0; k < kBeams; ++k) {
-    world_directions_[k] = (head_to_world.linear() * directions_[k]).normalized().cast<float>();
-  }
-  castToSurfaces(world, seabed_depth, head_to_world.translation().cast<float>(), world_directions_,
-                 static_cast<float>(o.max_range), distances_, cos_incidence_);
-  for (int k = 0; k < kBeams; ++k) {
-    const double noise = o.range_noise * normal_(rng_);  // drawn for every beam
-    const double distance = distances_[k];
-    if (std::isfinite(distance) && distance < o.min_range) continue;  // blanked: left out
-    const bool echo = std::isfinite(distance);
-    const double range = echo ? std::clamp(distance + noise, o.min_range, o.max_range)
-                              : SensorCloud::kNoReturnFactor * o.max_range;
-    cloud.points.push_back((cloud.mounting * (range * directions_[k])).cast<float>());
-    cloud.intensities.push_back(echo ? std::max(1e-3f, cos_incidence_[k]) : 0.0f);
-  }
+  // Every bottom return echoes, however oblique (the default max_incidence).
+  const BeamReturnModel model{o.min_range, o.max_range, o.range_noise};
+  SensorCloud cloud = fan_.ping(o.mounting(), model, body_pose_true, time, world, seabed_depth);
   schedule_.fired(time);
   return cloud;
 }

@@ -9,12 +9,10 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
-#include <random>
 #include <vector>
 
 #include "auv/sim/common/yaml_section.h"
 #include "auv/sim/raycast/ray_caster.h"
-#include "auv/sim/sensors/multibeam.h"
 #include "auv/sim/sensors/sensor_cloud.h"
 
 namespace auv::sim {
@@ -61,17 +59,13 @@ class DvlBeams {
                    double seabed_depth);
 
   /// Unit beam directions in the head frame (z down), in azimuth order.
-  const std::vector<Eigen::Vector3d>& beamDirections() const { return directions_; }
+  const std::vector<Eigen::Vector3d>& beamDirections() const { return fan_.directions(); }
   const DvlBeamsOptions& options() const { return options_; }
 
  private:
   DvlBeamsOptions options_;
   PingSchedule schedule_;
-  std::mt19937_64 rng_;
-  std::normal_distribution<double> normal_{0.0, 1.0};
-  std::vector<Eigen::Vector3d> directions_;
-  std::vector<Eigen::Vector3f> world_directions_;
-  std::vector<float> distances_, cos_incidence_;
+  BeamFan fan_;
 };
 
 }  // namespace auv::sim

@@ -20,16 +20,23 @@ double spread(int i, int n, double width) {
   return n > 1 ? -0.5 * width + width * static_cast<double>(i) / (n - 1) : 0.0;
 }
 
-}  // namespace
-
-void PingSchedule::fired(double time) {
-  if (first_ || time - next_ >= period_ || time + 1e-9 < next_) {
-    next_ = time + period_;
-  } else {
-    next_ += period_;
+// Row by row from the upper edge of the vertical aperture down, beams from port to starboard;
+// checks the options first.
+std::vector<Eigen::Vector3d> fanDirections(const MultibeamOptions& options) {
+  options.check();
+  std::vector<Eigen::Vector3d> directions;
+  for (int r = 0; r < options.rows; ++r) {
+    const double elevation = spread(r, options.rows, options.vertical_aperture);  // + = down
+    for (int b = 0; b < options.beams; ++b) {
+      const double azimuth = spread(b, options.beams, options.horizontal_aperture);
+      directions.emplace_back(std::cos(elevation) * std::cos(azimuth),
+                              std::cos(elevation) * std::sin(azimuth), std::sin(elevation));
+    }
   }
-  first_ = false;
+  return directions;
 }
+
+}  // namespace
 
 Eigen::Isometry3d MultibeamOptions::mounting() const {
   // Pitching the head's x axis down in FRD is a negative rotation about y.
@@ -91,63 +98,18 @@ MultibeamOptions MultibeamOptions::fromYaml(const YamlSection& section, bool pre
   section.readDegrees("max_incidence_deg", o.max_incidence);
   section.read("sound_speed", o.sound_speed);
   if (!o.enabled) return o;
-  try {
-    o.check();
-  } catch (const ConfigError& e) {
-    throw ConfigError(section.file() + ": " + e.what());
-  }
+  checkInFile(section, o);
   return o;
 }
 
 Multibeam::Multibeam(const MultibeamOptions& options, uint64_t seed)
-    : options_(options), schedule_(options.rate), rng_(seed) {
-  options_.check();
-  for (int r = 0; r < options_.rows; ++r) {
-    const double elevation = spread(r, options_.rows, options_.vertical_aperture);  // + = down
-    for (int b = 0; b < options_.beams; ++b) {
-      const double azimuth = spread(b, options_.beams, options_.horizontal_aperture);
-      directions_.emplace_back(std::cos(elevation) * std::cos(azimuth),
-                               std::cos(elevation) * std::sin(azimuth), std::sin(elevation));
-    }
-  }
-}
+    : options_(options), schedule_(options.rate), fan_(fanDirections(options), seed) {}
 
 SensorCloud Multibeam::ping(const Eigen::Isometry3d& body_pose_true, double time,
                             const RayCaster& world, double seabed_depth) {
   const MultibeamOptions& o = options_;
-  SensorCloud cloud;
-  cloud.stamp = time;
-  cloud.mounting = o.mounting();
-  cloud.max_range = o.max_range;
-
-  const Eigen::Isometry3d head_to_world = body_pose_true * cloud.mounting;
-  const size_t n = directions_.size();
-  world_directions_.resize(n);
-  for (size_t i = 0; i < n; ++i) {
-    world_directions_[i] = (head_to_world.linear() * directions_[i]).normalized().cast<float>();
-  }
-  castToSurfaces(world, seabed_depth, head_to_world.translation().cast<float>(), world_directions_,
-                 static_cast<float>(o.max_range), distances_, cos_incidence_);
-
-  const double min_cos = std::cos(o.max_incidence) - 1e-9;
-  cloud.points.reserve(n);
-  cloud.intensities.reserve(n);
-  for (size_t i = 0; i < n; ++i) {
-    // Drawn for every beam so that noise sequences do not depend on what was hit.
-    const double noise = o.range_noise * normal_(rng_);
-    const double distance = distances_[i];
-    double range = SensorCloud::kNoReturnFactor * o.max_range;  // nothing within max_range
-    float intensity = 0.0f;
-    if (std::isfinite(distance)) {
-      // Something is there: closer than the blanking distance, or hit too obliquely to echo,
-      // the beam reports nothing, and is left out rather than sent as free water.
-      if (distance < o.min_range || cos_incidence_[i] < min_cos) continue;
-      range = std::clamp(distance + noise, o.min_range, o.max_range);
-      intensity = std::max(1e-3f, cos_incidence_[i]);
-    }
-    cloud.points.push_back((cloud.mounting * (range * directions_[i])).cast<float>());
-    cloud.intensities.push_back(intensity);
-  }
+  const BeamReturnModel model{o.min_range, o.max_range, o.range_noise, o.max_incidence};
+  SensorCloud cloud = fan_.ping(o.mounting(), model, body_pose_true, time, world, seabed_depth);
   schedule_.fired(time);
   return cloud;
 }

@@ -10,7 +10,6 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
-#include <random>
 #include <vector>
 
 #include "auv/sim/common/yaml_section.h"
@@ -57,22 +56,6 @@ struct MultibeamOptions {
   }
 };
 
-/// Fires pings at a fixed rate in simulation time; the first call is always due. When the
-/// caller falls a whole period behind, missed pings are dropped rather than burst.
-class PingSchedule {
- public:
-  explicit PingSchedule(double rate) : period_(1.0 / rate) {}
-  bool due(double time) const { return time + 1e-9 >= next_; }
-  /// Marks a ping at `time` and schedules the next one.
-  void fired(double time);
-  double next() const { return next_; }
-
- private:
-  double period_;
-  double next_ = -1e300;
-  bool first_ = true;
-};
-
 class Multibeam {
  public:
   /// Throws ConfigError when the options are invalid.
@@ -86,18 +69,13 @@ class Multibeam {
 
   /// Unit beam directions in the head frame, row by row (index row * beams + beam), rows from
   /// the upper edge of the vertical aperture down, beams from port to starboard.
-  const std::vector<Eigen::Vector3d>& beamDirections() const { return directions_; }
+  const std::vector<Eigen::Vector3d>& beamDirections() const { return fan_.directions(); }
   const MultibeamOptions& options() const { return options_; }
 
  private:
   MultibeamOptions options_;
   PingSchedule schedule_;
-  std::mt19937_64 rng_;
-  std::normal_distribution<double> normal_{0.0, 1.0};
-  std::vector<Eigen::Vector3d> directions_;
-  // Scratch buffers reused across pings.
-  std::vector<Eigen::Vector3f> world_directions_;
-  std::vector<float> distances_, cos_incidence_;
+  BeamFan fan_;
 };
 
 }  // namespace auv::sim

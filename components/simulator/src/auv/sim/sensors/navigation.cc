@@ -103,11 +103,7 @@ NavigationOptions NavigationOptions::fromYaml(const YamlSection& section) {
   section.read("gps_noise", o.gps_noise, 0.0);
   section.read("gps_max_depth", o.gps_max_depth, 0.0);
   section.read("initial_position_noise", o.initial_position_noise, 0.0);
-  try {
-    o.check();  // cross-field constraints (e.g. min < max altitude)
-  } catch (const ConfigError& e) {
-    throw ConfigError(section.file() + ": " + e.what());
-  }
+  checkInFile(section, o);
   return o;
 }
 

@@ -131,11 +131,7 @@ SonarOptions SonarOptions::fromYaml(const YamlSection& section) {
   section.read("noise_level", o.noise_level, 0.0);
   section.read("pulse_length", o.pulse_length, 1e-6);
   section.read("sound_speed", o.sound_speed, 1.0);
-  try {
-    o.check();  // cross-field constraints (ranges, ping rate vs travel time)
-  } catch (const ConfigError& e) {
-    throw ConfigError(section.file() + ": " + e.what());
-  }
+  checkInFile(section, o);
   return o;
 }
 

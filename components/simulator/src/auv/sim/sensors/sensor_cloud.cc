@@ -37,4 +37,52 @@ void castToSurfaces(const RayCaster& world, double seabed_depth, const Eigen::Ve
   }
 }
 
+void PingSchedule::fired(double time) {
+  if (first_ || time - next_ >= period_ || time + 1e-9 < next_) {
+    next_ = time + period_;
+  } else {
+    next_ += period_;
+  }
+  first_ = false;
+}
+
+SensorCloud BeamFan::ping(const Eigen::Isometry3d& mounting, const BeamReturnModel& model,
+                          const Eigen::Isometry3d& body_pose_true, double time,
+                          const RayCaster& world, double seabed_depth) {
+  SensorCloud cloud;
+  cloud.stamp = time;
+  cloud.mounting = mounting;
+  cloud.max_range = model.max_range;
+
+  const Eigen::Isometry3d head_to_world = body_pose_true * mounting;
+  const size_t n = directions_.size();
+  world_directions_.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    world_directions_[i] = (head_to_world.linear() * directions_[i]).normalized().cast<float>();
+  }
+  castToSurfaces(world, seabed_depth, head_to_world.translation().cast<float>(), world_directions_,
+                 static_cast<float>(model.max_range), distances_, cos_incidence_);
+
+  const double min_cos = std::cos(model.max_incidence) - 1e-9;
+  cloud.points.reserve(n);
+  cloud.intensities.reserve(n);
+  for (size_t i = 0; i < n; ++i) {
+    // Drawn for every beam so that noise sequences do not depend on what was hit.
+    const double noise = model.range_noise * normal_(rng_);
+    const double distance = distances_[i];
+    double range = SensorCloud::kNoReturnFactor * model.max_range;  // nothing within max_range
+    float intensity = 0.0f;
+    if (std::isfinite(distance)) {
+      // Something is there: closer than the blanking distance, or hit too obliquely to echo,
+      // the beam reports nothing, and is left out rather than sent as free water.
+      if (distance < model.min_range || cos_incidence_[i] < min_cos) continue;
+      range = std::clamp(distance + noise, model.min_range, model.max_range);
+      intensity = std::max(1e-3f, cos_incidence_[i]);
+    }
+    cloud.points.push_back((mounting * (range * directions_[i])).cast<float>());
+    cloud.intensities.push_back(intensity);
+  }
+  return cloud;
+}
+
 }  // namespace auv::sim

@@ -14,11 +14,7 @@ VehicleModel readVehicleModel(const YamlSection& section) {
     section.read(option.name, model.*option.member<double>(), option.range.min, option.range.max);
   }
   section.rejectUnknownKeys(known);
-  try {
-    model.check();
-  } catch (const control::ConfigError& e) {
-    throw ConfigError(section.file() + ": " + e.what());  // check() names "vehicle.<field>"
-  }
+  checkInFile(section, model);
   return model;
 }
 

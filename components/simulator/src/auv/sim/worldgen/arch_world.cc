@@ -155,13 +155,7 @@ GeneratedWorld buildArch(const WorldGenOptions& options) {
   world.layout.arch_through = Vector3d(1.0, 0.0, 0.0);  // north, in NED as in the mesh
   world.mission = threeDimensionalMission(world.seabed_depth);
 
-  SeabedSpec seabed;
-  seabed.mean_z = kSeabedZ;
-  seabed.undulation = 0.4f;
-  seabed.spacing = scale.seabed_spacing;
-  seabed.texel_size = scale.seabed_texel;
-  seabed.seed = random.next();
-  seabed = addSeabed(draft, seabed, 12.0f);
+  const SeabedSpec seabed = addSeabed(draft, seabedSpec(kSeabedZ, 0.4f, random, scale), 12.0f);
   addRubble(draft, random, seabed, 14, 1.4f, 5.0f, scale);
   return finishWorld(draft, options, scale);
 }

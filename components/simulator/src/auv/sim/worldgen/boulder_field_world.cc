@@ -129,13 +129,7 @@ GeneratedWorld buildBoulderField(const WorldGenOptions& options) {
   world.layout.query_depth = -kStartZ;
   world.mission = threeDimensionalMission(world.seabed_depth);
 
-  SeabedSpec seabed;
-  seabed.mean_z = kSeabedZ;
-  seabed.undulation = 0.3f;
-  seabed.spacing = scale.seabed_spacing;
-  seabed.texel_size = scale.seabed_texel;
-  seabed.seed = random.next();
-  addSeabed(draft, seabed, 12.0f);
+  addSeabed(draft, seabedSpec(kSeabedZ, 0.3f, random, scale), 12.0f);
   return finishWorld(draft, options, scale);
 }
 

@@ -75,12 +75,7 @@ GeneratedWorld buildBreakwater(const WorldGenOptions& options) {
   world.layout.routes = {meshRoute(route), meshRoute({route.rbegin(), route.rend()})};
   world.layout.query_depth = -kQueryZ;
 
-  SeabedSpec seabed;
-  seabed.mean_z = kSeabedZ;
-  seabed.undulation = 0.3f;
-  seabed.spacing = scale.seabed_spacing;
-  seabed.texel_size = scale.seabed_texel;
-  seabed.seed = random.next();
+  SeabedSpec seabed = seabedSpec(kSeabedZ, 0.3f, random, scale);
   seabed.covered = nullptr;
   Eigen::AlignedBox2f area;
   for (const auto& box : blocks) area.extend(box.min().head<2>()).extend(box.max().head<2>());

@@ -182,13 +182,7 @@ GeneratedWorld buildCanyon(const WorldGenOptions& options) {
   addOutcrops(draft, random, 2, outcrop_area, {route1, route2, route3}, 5.0f, 1.5f, 2.5f, -2.5f,
               0.5f, kSeabedZ, scale);
 
-  SeabedSpec seabed;
-  seabed.mean_z = kSeabedZ;
-  seabed.undulation = 0.35f;
-  seabed.spacing = scale.seabed_spacing;
-  seabed.texel_size = scale.seabed_texel;
-  seabed.seed = random.next();
-  seabed = addSeabed(draft, seabed, 15.0f);
+  const SeabedSpec seabed = addSeabed(draft, seabedSpec(kSeabedZ, 0.35f, random, scale), 15.0f);
   // Fallen blocks at the foot of the rocks, well below the navigation depth.
   addRubble(draft, random, seabed, 16, 1.6f, 6.0f, scale);
   return finishWorld(draft, options, scale);

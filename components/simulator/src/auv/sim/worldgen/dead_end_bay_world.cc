@@ -146,13 +146,7 @@ GeneratedWorld buildDeadEndBay(const WorldGenOptions& options) {
   addOutcrops(draft, random, 6, outcrop_area, {route, east_route}, 4.0f, 1.8f, 2.8f, -1.8f, 0.3f,
               kSeabedZ, scale);
 
-  SeabedSpec seabed;
-  seabed.mean_z = kSeabedZ;
-  seabed.undulation = 0.4f;
-  seabed.spacing = scale.seabed_spacing;
-  seabed.texel_size = scale.seabed_texel;
-  seabed.seed = random.next();
-  seabed = addSeabed(draft, seabed, 12.0f);
+  const SeabedSpec seabed = addSeabed(draft, seabedSpec(kSeabedZ, 0.4f, random, scale), 12.0f);
   addRubble(draft, random, seabed, 14, 1.6f, 5.0f, scale);
   return finishWorld(draft, options, scale);
 }

@@ -103,13 +103,7 @@ GeneratedWorld buildLeaningReef(const WorldGenOptions& options) {
   world.layout.reef_towards = meshToNed(Vector3d(0.0, 1.0, 0.0));  // west, towards the reef
   world.mission = threeDimensionalMission(world.seabed_depth);
 
-  SeabedSpec seabed;
-  seabed.mean_z = kSeabedZ;
-  seabed.undulation = 0.35f;
-  seabed.spacing = scale.seabed_spacing;
-  seabed.texel_size = scale.seabed_texel;
-  seabed.seed = random.next();
-  seabed = addSeabed(draft, seabed, 12.0f);
+  const SeabedSpec seabed = addSeabed(draft, seabedSpec(kSeabedZ, 0.35f, random, scale), 12.0f);
   addRubble(draft, random, seabed, 16, 0.6f, 5.0f, scale);  // low: the deep goal is near
   return finishWorld(draft, options, scale);
 }

@@ -191,6 +191,17 @@ void addRubble(WorldDraft& draft, LayoutRandom& random, const SeabedSpec& seabed
   }
 }
 
+SeabedSpec seabedSpec(float mean_z, float undulation, LayoutRandom& random,
+                      const DetailScale& scale) {
+  SeabedSpec seabed;
+  seabed.mean_z = mean_z;
+  seabed.undulation = undulation;
+  seabed.spacing = scale.seabed_spacing;
+  seabed.texel_size = scale.seabed_texel;
+  seabed.seed = random.next();
+  return seabed;
+}
+
 SeabedSpec addSeabed(WorldDraft& draft, SeabedSpec seabed, float margin) {
   Eigen::AlignedBox2f area;
   for (const SurfaceGrid& grid : draft.grids) {

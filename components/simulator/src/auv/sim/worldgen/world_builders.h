@@ -79,6 +79,10 @@ bool underRock(const WorldDraft& draft, const Eigen::Vector2f& xy);
 RockSpec boulder(const Eigen::Vector2f& xy, float base_radius, float height, float seabed_z,
                  uint64_t seed, const DetailScale& scale);
 
+/// A seabed at mean height `mean_z` (mesh z) with relief of `undulation` m, at the scale's
+/// detail, seeded from `random` (its area is left to addSeabed()).
+SeabedSpec seabedSpec(float mean_z, float undulation, LayoutRandom& random,
+                      const DetailScale& scale);
 /// Seabed under everything built so far plus `margin` m, holes under the rocks; adds it and
 /// returns its spec with the area filled in.
 SeabedSpec addSeabed(WorldDraft& draft, SeabedSpec seabed, float margin);
