@@ -24,6 +24,8 @@ PACKAGES=(
   # reconstruction: bundle adjustment (Ceres); COLMAP is the SfM benchmark's anchor, opencv-doc
   # ships real chessboard photos for the calibration tests
   libceres-dev colmap opencv-doc
+  # reconstruction import: EXIF of photos from anywhere (libexiv2); exiv2 writes test EXIF
+  libexiv2-dev exiv2
   # reconstruction texturing: max-flow (Boost.Graph, header-only), atlas packing (stb_rect_pack)
   libboost-dev libstb-dev
   # reconstruction pipeline benchmark: wall time and peak memory per stage (GNU time)

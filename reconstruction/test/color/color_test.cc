@@ -263,6 +263,45 @@ TEST(CorrectStage, MissingCalibrationIsAClearErrorAndEarlierOutputStays) {
   fs::remove_all(survey);
 }
 
+TEST(CorrectStage, WithoutCalibrationTheImportPriorGivesTheIntrinsics) {
+  const fs::path survey = surveyWithKeyframes("prior", false);
+  // What `auv recon import` writes: the keys of a calibration, no distortion.
+  calibration::CameraCalibration prior;
+  prior.image_size = cv::Size(160, 120);
+  prior.camera_matrix = (cv::Mat_<double>(3, 3) << 192, 0, 79.5, 0, 192, 59.5, 0, 0, 1);
+  prior.distortion = cv::Mat::zeros(1, 5, CV_64F);
+  calibration::writeCalibration(survey / "calibration" / "left.prior.yaml", prior,
+                                calibration::CalibrationOptions());
+  const CorrectStageResult result = runCorrectStage(Survey(survey), CorrectStageOptions());
+  EXPECT_FALSE(result.cameras[0].undistorted);
+  const calibration::CameraCalibration used =
+      calibration::readCalibration(survey / "corrected" / "left.yaml", "test");
+  EXPECT_DOUBLE_EQ(used.camera_matrix.at<double>(0, 0), 192.0);
+  const nlohmann::json report = readReport(survey / "report.json");
+  EXPECT_EQ(report["stages"]["correct"]["cameras"]["left"]["intrinsics_file"],
+            (survey / "calibration" / "left.prior.yaml").string());
+
+  // A real calibration wins over the prior (and undistorts).
+  calibration::CameraCalibration c = prior;
+  c.camera_matrix.at<double>(0, 0) = c.camera_matrix.at<double>(1, 1) = 150;
+  c.distortion.at<double>(0) = 0.1;
+  calibration::writeCalibration(survey / "calibration" / "left.yaml", c,
+                                calibration::CalibrationOptions());
+  EXPECT_TRUE(runCorrectStage(Survey(survey), CorrectStageOptions()).cameras[0].undistorted);
+
+  // A keyframe of another size than the prior is named, with the prior file.
+  fs::remove(survey / "calibration" / "left.yaml");
+  cv::imwrite((survey / "keyframes" / "left" / "left_0001_000099.png").string(),
+              cv::Mat(60, 80, CV_8UC3, cv::Scalar(1, 2, 3)));
+  try {
+    runCorrectStage(Survey(survey), CorrectStageOptions());
+    FAIL();
+  } catch (const StageError& e) {
+    EXPECT_NE(std::string(e.what()).find("left.prior.yaml"), std::string::npos) << e.what();
+  }
+  fs::remove_all(survey);
+}
+
 TEST(CorrectStage, KeyframeOfAnotherSizeThanTheCalibrationNamesBoth) {
   const fs::path survey = surveyWithKeyframes("size", true);
   cv::imwrite((survey / "keyframes" / "left" / "left_0001_000099.png").string(),

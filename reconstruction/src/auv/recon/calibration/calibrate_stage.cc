@@ -56,15 +56,7 @@ CalibrateStageResult runCalibrateStage(const Survey& survey, const CalibrateStag
   writeCalibration(result.file, c, options.calibration);
   const cv::Mat& K = c.camera_matrix;
   std::vector<double> distortion(c.distortion.begin<double>(), c.distortion.end<double>());
-  nlohmann::json section;
-  try {
-    const nlohmann::json report = readReport(survey.report());
-    if (report.contains("stages") && report["stages"].contains("calibrate")) {
-      section = report["stages"]["calibrate"];
-    }
-  } catch (const std::exception&) {
-  }
-  if (!section.is_object()) section = nlohmann::json::object();
+  nlohmann::json section = readReportSection(survey.report(), "calibrate");
   section[options.camera] = {{"input", options.input},
                              {"views_used", c.views_used},
                              {"views_tried", c.views_tried},

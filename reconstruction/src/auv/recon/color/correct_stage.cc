@@ -75,6 +75,7 @@ CorrectStageResult runCorrectStage(const Survey& survey, const CorrectStageOptio
     std::string camera;
     std::vector<fs::path> images;
     std::optional<calibration::CameraCalibration> calibration;
+    fs::path intrinsics_file;  ///< calibration/<camera>.yaml, or the import's .prior.yaml
     std::unique_ptr<calibration::Undistorter> undistorter;
   };
   std::vector<Work> work;
@@ -94,19 +95,25 @@ CorrectStageResult runCorrectStage(const Survey& survey, const CorrectStageOptio
                        "camera '" + camera + "': " + folder.string() + ": no keyframes (.png)");
     }
     const fs::path calibration_file = survey.calibrationFile(camera);
+    // Without a calibration, the prior `auv recon import` wrote (EXIF or stated focal, no
+    // distortion) gives the intrinsics: nothing to undistort with, and the images stay as taken.
+    const fs::path prior_file = survey.calibration() / (camera + ".prior.yaml");
     const bool has_calibration = fs::exists(calibration_file, error);
-    if (options.undistort_images && !has_calibration) {
+    const bool has_prior = !has_calibration && fs::exists(prior_file, error);
+    if (options.undistort_images && !has_calibration && !has_prior) {
       throw StageError(kStage, "camera '" + camera +
                                    "': no calibration: " + calibration_file.string() +
                                    " not found (run `auv recon calibrate " +
                                    survey.root().string() + " --camera " + camera +
-                                   " --input <chessboard video or folder>`, or pass "
+                                   " --input <chessboard video or folder>`, import the footage "
+                                   "with `auv recon import` for an intrinsics prior, or pass "
                                    "--no-undistort to keep the lens distortion)");
     }
-    if (has_calibration) {
-      w.calibration = calibration::readCalibration(calibration_file, kStage);
+    if (has_calibration || has_prior) {
+      w.intrinsics_file = has_calibration ? calibration_file : prior_file;
+      w.calibration = calibration::readCalibration(w.intrinsics_file, kStage);
     }
-    if (options.undistort_images) {
+    if (options.undistort_images && has_calibration) {
       w.undistorter = std::make_unique<calibration::Undistorter>(*w.calibration, options.undistort);
     }
     total += w.images.size();
@@ -122,20 +129,18 @@ CorrectStageResult runCorrectStage(const Survey& survey, const CorrectStageOptio
     outputs.push_back(std::make_unique<StagedOutput>(survey.corrected() / w.camera));
     CameraCorrection camera;
     camera.camera = w.camera;
-    camera.undistorted = options.undistort_images && !w.undistorter->identity();
+    camera.undistorted = w.undistorter && !w.undistorter->identity();
     for (const auto& file : w.images) {
       cv::Mat image = cv::imread(file.string(), cv::IMREAD_COLOR);
       if (image.empty()) throw StageError(kStage, file.string() + ": not a readable image");
-      if (w.undistorter) {
-        if (image.size() != w.calibration->image_size) {
-          throw StageError(kStage, file.string() + ": " + std::to_string(image.cols) + "x" +
-                                       std::to_string(image.rows) + " px, but " +
-                                       survey.calibrationFile(w.camera).string() + " is for " +
-                                       std::to_string(w.calibration->image_size.width) + "x" +
-                                       std::to_string(w.calibration->image_size.height));
-        }
-        image = w.undistorter->apply(image);
+      if (w.calibration && image.size() != w.calibration->image_size) {
+        throw StageError(kStage, file.string() + ": " + std::to_string(image.cols) + "x" +
+                                     std::to_string(image.rows) + " px, but " +
+                                     w.intrinsics_file.string() + " is for " +
+                                     std::to_string(w.calibration->image_size.width) + "x" +
+                                     std::to_string(w.calibration->image_size.height));
       }
+      if (w.undistorter) image = w.undistorter->apply(image);
       if (options.correct_colors) {
         CorrectedImage corrected = correctColor(image, options.color);
         camera.mean_alpha += corrected.statistics.mean_alpha;
@@ -166,17 +171,9 @@ CorrectStageResult runCorrectStage(const Survey& survey, const CorrectStageOptio
   for (auto& output : outputs) output->commit();
   calibration::CalibrationOptions board;  // board keys of the yaml: defaults, informative only
   // The report keeps the cameras of earlier runs that this one did not redo.
-  nlohmann::json cameras_json = nlohmann::json::object();
-  try {
-    const nlohmann::json report = readReport(survey.report());
-    if (report.contains("stages") && report["stages"].contains(kStage) &&
-        report["stages"][kStage].contains("cameras") &&
-        report["stages"][kStage]["cameras"].is_object()) {
-      cameras_json = report["stages"][kStage]["cameras"];
-    }
-  } catch (const std::exception&) {
-    // An unreadable report is set aside by updateReport.
-  }
+  nlohmann::json cameras_json =
+      readReportSection(survey.report(), kStage).value("cameras", nlohmann::json::object());
+  if (!cameras_json.is_object()) cameras_json = nlohmann::json::object();
   for (size_t i = 0; i < work.size(); ++i) {
     const Work& w = work[i];
     const fs::path yaml = survey.corrected() / (w.camera + ".yaml");
@@ -184,12 +181,13 @@ CorrectStageResult runCorrectStage(const Survey& survey, const CorrectStageOptio
                              {"undistorted", result.cameras[i].undistorted},
                              {"mean_alpha_removed", result.cameras[i].mean_alpha},
                              {"mean_beta_removed", result.cameras[i].mean_beta},
-                             {"seconds", result.cameras[i].seconds}};
+                             {"seconds", result.cameras[i].seconds},
+                             {"intrinsics_file", w.intrinsics_file.string()}};
     if (w.undistorter) {
       calibration::writeCalibration(yaml, w.undistorter->undistorted(), board);
       camera["intrinsics"] = intrinsicsJson(w.undistorter->undistorted());
     } else if (w.calibration) {
-      calibration::writeCalibration(yaml, *w.calibration, board);  // still distorted
+      calibration::writeCalibration(yaml, *w.calibration, board);  // still distorted, or a prior
       camera["intrinsics"] = intrinsicsJson(*w.calibration);
     } else {
       std::error_code error;

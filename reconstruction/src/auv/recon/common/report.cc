@@ -48,6 +48,19 @@ nlohmann::json readReport(const fs::path& report) {
   }
 }
 
+nlohmann::json readReportSection(const fs::path& report, const std::string& stage) {
+  try {
+    const nlohmann::json whole = readReport(report);
+    if (whole.contains("stages") && whole["stages"].is_object() &&
+        whole["stages"].contains(stage) && whole["stages"][stage].is_object()) {
+      return whole["stages"][stage];
+    }
+  } catch (const std::exception&) {
+    // An unreadable report is set aside by updateReport.
+  }
+  return nlohmann::json::object();
+}
+
 void updateReport(const fs::path& report, const std::string& stage, const nlohmann::json& section) {
   fs::create_directories(report.parent_path().empty() ? fs::path(".") : report.parent_path());
   ReportLock lock(report);

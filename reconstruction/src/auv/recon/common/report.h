@@ -21,4 +21,9 @@ void updateReport(const std::filesystem::path& report, const std::string& stage,
 /// The whole report; an empty object when there is none yet. Throws on invalid JSON.
 nlohmann::json readReport(const std::filesystem::path& report);
 
+/// `stage`'s section as written, or an empty object when there is none, it is not an object, or
+/// the report is unreadable (updateReport sets that aside). For stages that keep the entries of
+/// earlier runs (cameras not redone) beside this run's.
+nlohmann::json readReportSection(const std::filesystem::path& report, const std::string& stage);
+
 }  // namespace auv::recon

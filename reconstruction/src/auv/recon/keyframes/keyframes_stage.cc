@@ -233,16 +233,7 @@ KeyframesStageResult runKeyframesStage(const Survey& survey, const KeyframesStag
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   // The report keeps the cameras of earlier runs that this one did not redo.
-  nlohmann::json section;
-  try {
-    const nlohmann::json report = readReport(survey.report());
-    if (report.contains("stages") && report["stages"].contains(kStage)) {
-      section = report["stages"][kStage];
-    }
-  } catch (const std::exception&) {
-    // An unreadable report is set aside by updateReport.
-  }
-  if (!section.is_object()) section = nlohmann::json::object();
+  nlohmann::json section = readReportSection(survey.report(), kStage);
   if (!section.contains("cameras") || !section["cameras"].is_object()) {
     section["cameras"] = nlohmann::json::object();
   }

@@ -9,6 +9,7 @@
 #include "auv/recon/evaluate/figures_stage.h"
 #include "auv/recon/features/features_stage.h"
 #include "auv/recon/features/match_stage.h"
+#include "auv/recon/import/import_stage.h"
 #include "auv/recon/keyframes/keyframes_stage.h"
 #include "auv/recon/mesh/mesh_stage.h"
 #include "auv/recon/sfm/sfm_stage.h"
@@ -30,7 +31,8 @@ std::vector<std::unique_ptr<const Stage>> make() {
 const std::vector<const Stage*>& stages() {
   // The one list of stages, in order. A new stage (pipeline/README.md) is one entry here.
   static const std::vector<std::unique_ptr<const Stage>> owned =
-      make<calibration::CalibrateStage,  // not chained: a chessboard recording
+      make<import::ImportStage,          // not chained: footage from outside the survey
+           calibration::CalibrateStage,  // not chained: a chessboard recording
            keyframes::KeyframesStage,    // the chain of `auv recon run`, docs/paper.md §3.1-3.7
            color::CorrectStage, features::FeaturesStage, features::MatchStage, sfm::SfmStage,
            dense::DenseStage, mesh::MeshStage, texture::TextureStage,
