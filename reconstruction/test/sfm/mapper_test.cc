@@ -115,5 +115,51 @@ TEST(IncrementalMapper, RejectsBadOptionsAndInputAtConstruction) {
   EXPECT_THROW(IncrementalMapper(broken, MapperOptions{}), std::invalid_argument);
 }
 
+
+TEST(IncrementalMapper, SelfCalibratesTheFocalOfAnUncalibratedCameraAndResetsARunaway) {
+  testing::SyntheticOptions o;
+  o.cameras = 1;
+  o.stations = 12;
+  o.noise_px = 0.3;
+  testing::SyntheticScene s = testing::makeSyntheticScene(o);
+  const double true_focal = s.input.cameras.at(1).fx;  // 800 px
+  scene::Camera& prior = s.input.cameras.at(1);
+  prior.fx *= 1.15;  // an EXIF prior 15 % off
+  prior.fy *= 1.15;
+  s.input.uncalibrated = {1};
+
+  MapperOptions options;
+  MapperResult result = IncrementalMapper(s.input, options).run();
+  ASSERT_EQ(result.status, MapperStatus::SUCCESS) << result.message;
+  const scene::Camera& refined = result.reconstruction.cameras.at(1);
+  EXPECT_NEAR(refined.fx / true_focal, 1.0, 0.01);
+  EXPECT_DOUBLE_EQ(refined.fy / refined.fx, 1.0);  // aspect kept
+  EXPECT_DOUBLE_EQ(refined.cx, prior.cx);           // principal point not refined by default
+  EXPECT_TRUE(result.intrinsics_reset.empty());
+  EXPECT_LT(result.reconstruction.meanReprojectionError(), 0.6);
+
+  // Not refined when told so: the prior stays, and the error shows it.
+  options.refine_focal_length = false;
+  result = IncrementalMapper(s.input, options).run();
+  ASSERT_EQ(result.status, MapperStatus::SUCCESS) << result.message;
+  EXPECT_DOUBLE_EQ(result.reconstruction.cameras.at(1).fx, prior.fx);
+
+  // A refinement beyond max_focal_ratio of the prior is a runaway: reset, kept, flagged.
+  options.refine_focal_length = true;
+  options.max_focal_ratio = 1.05;
+  result = IncrementalMapper(s.input, options).run();
+  ASSERT_EQ(result.status, MapperStatus::SUCCESS) << result.message;
+  EXPECT_DOUBLE_EQ(result.reconstruction.cameras.at(1).fx, prior.fx);
+  ASSERT_EQ(result.intrinsics_reset.count(1), 1u);
+  EXPECT_NE(result.intrinsics_reset.at(1).find("ran away"), std::string::npos);
+
+  // A calibrated camera is never refined.
+  s.input.uncalibrated.clear();
+  options.max_focal_ratio = 2.0;
+  result = IncrementalMapper(s.input, options).run();
+  ASSERT_EQ(result.status, MapperStatus::SUCCESS) << result.message;
+  EXPECT_DOUBLE_EQ(result.reconstruction.cameras.at(1).fx, prior.fx);
+}
+
 }  // namespace
 }  // namespace auv::recon::sfm

@@ -301,6 +301,7 @@ void writeCalibration(const fs::path& file, const CameraCalibration& c,
   fs << "board_columns" << options.board_columns;
   fs << "board_rows" << options.board_rows;
   fs << "square_size_m" << options.square_size_m;
+  if (!c.prior_source.empty()) fs << "prior_source" << c.prior_source;
   const std::string text = fs.releaseAndGetString();
   std::error_code error;
   if (file.has_parent_path()) fs::create_directories(file.parent_path(), error);
@@ -335,6 +336,7 @@ CameraCalibration readCalibration(const fs::path& file, const std::string& stage
       c.rms_px = static_cast<double>(fs["rms_reprojection_error_px"]);
     }
     if (!fs["views_used"].empty()) c.views_used = static_cast<int>(fs["views_used"]);
+    if (!fs["prior_source"].empty()) fs["prior_source"] >> c.prior_source;
   } catch (const cv::Exception& e) {
     throw StageError(stage, file.string() + ": malformed (" + e.err + ")");
   }

@@ -48,6 +48,9 @@ struct CameraCalibration {
   std::vector<std::string> views;    ///< names of the views used ("frame 12", "left01.jpg")
   std::vector<double> view_rms_px;   ///< per used view
   std::vector<std::string> dropped;  ///< outlier views removed before the final solve
+  /// Set when these intrinsics are a starting guess, not a calibration (`prior_source` of the
+  /// import's calibration/<camera>.prior.yaml: "exif_35mm", "default", ...): SfM refines them.
+  std::string prior_source;
 
   /// A deep copy (copying the struct shares the cv::Mat buffers).
   CameraCalibration clone() const;

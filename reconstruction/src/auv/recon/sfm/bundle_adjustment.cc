@@ -77,6 +77,32 @@ struct ReprojectionError {
   double u, v, fx, fy, cx, cy;
 };
 
+/// The same residual with the camera's focal length and principal point as a parameter block
+/// {f, cx, cy} (fy = aspect * f): self-calibration of cameras that only have a prior.
+struct SelfCalibratingReprojectionError {
+  SelfCalibratingReprojectionError(const Eigen::Vector2d& observed, double aspect)
+      : u(observed.x()), v(observed.y()), aspect(aspect) {}
+
+  template <class T>
+  bool operator()(const T* q, const T* t, const T* x, const T* k, T* residual) const {
+    T p[3];
+    ceres::UnitQuaternionRotatePoint(q, x, p);
+    p[0] += t[0];
+    p[1] += t[1];
+    p[2] += t[2];
+    residual[0] = k[0] * p[0] / p[2] + k[1] - T(u);
+    residual[1] = T(aspect) * k[0] * p[1] / p[2] + k[2] - T(v);
+    return true;
+  }
+
+  static ceres::CostFunction* create(const Eigen::Vector2d& observed, double aspect) {
+    return new ceres::AutoDiffCostFunction<SelfCalibratingReprojectionError, 2, 4, 3, 3, 3>(
+        new SelfCalibratingReprojectionError(observed, aspect));
+  }
+
+  double u, v, aspect;
+};
+
 ceres::LossFunction* makeLoss(const BundleAdjustmentOptions& options) {
   const double s = options.loss_scale_px;
   switch (options.loss) {
@@ -156,6 +182,8 @@ BundleAdjustmentSummary bundleAdjust(scene::Reconstruction& rec,
   };
   std::vector<Residual> residuals;
   std::set<uint32_t> fixed_pose_images;
+  // {f, cx, cy} of the self-calibrated cameras that this problem sees.
+  std::map<uint32_t, std::array<double, 3>> intrinsics;
 
   for (uint64_t point_id : points) {
     auto pit = rec.points.find(point_id);
@@ -169,9 +197,18 @@ BundleAdjustmentSummary bundleAdjust(scene::Reconstruction& rec,
       auto [pose, inserted] = poses.try_emplace(obs.image_id);
       if (inserted) pose->second = toBlock(image.q_cw, image.t_cw);
       const Eigen::Vector2d& observed = image.points2d[obs.point2d_idx];
-      problem.AddResidualBlock(ReprojectionError::create(observed, rec.cameraOf(image)),
-                               makeLoss(options), pose->second.q.data(), pose->second.t.data(),
-                               point.xyz.data());
+      const scene::Camera& camera = rec.cameraOf(image);
+      if (config.refine_focal.count(camera.id)) {
+        auto [k, first] = intrinsics.try_emplace(camera.id);
+        if (first) k->second = {camera.fx, camera.cx, camera.cy};
+        problem.AddResidualBlock(
+            SelfCalibratingReprojectionError::create(observed, camera.fy / camera.fx),
+            makeLoss(options), pose->second.q.data(), pose->second.t.data(), point.xyz.data(),
+            k->second.data());
+      } else {
+        problem.AddResidualBlock(ReprojectionError::create(observed, camera), makeLoss(options),
+                                 pose->second.q.data(), pose->second.t.data(), point.xyz.data());
+      }
       residuals.push_back({obs.image_id, point_id, observed});
     }
     if (config.constant_points.count(point_id)) problem.SetParameterBlockConstant(point.xyz.data());
@@ -224,6 +261,13 @@ BundleAdjustmentSummary bundleAdjust(scene::Reconstruction& rec,
     }
   }
 
+  for (auto& [id, k] : intrinsics) {
+    problem.SetParameterLowerBound(k.data(), 0, 1e-3 * k[0]);  // a focal stays positive
+    if (!config.refine_principal_point) {
+      problem.SetManifold(k.data(), new ceres::SubsetManifold(3, {1, 2}));
+    }
+  }
+
   auto rms = [&]() {
     double sum = 0;
     for (const Residual& r : residuals) {
@@ -251,6 +295,14 @@ BundleAdjustmentSummary bundleAdjust(scene::Reconstruction& rec,
   summary.variable_images = variable.size();
   summary.constant_pose_images = fixed_pose_images.size();
   summary.variable_points = points.size() - config.constant_points.size();
+  for (const auto& [id, k] : intrinsics) {
+    scene::Camera& camera = rec.cameras.at(id);
+    const double aspect = camera.fy / camera.fx;
+    camera.fx = k[0];
+    camera.fy = aspect * k[0];
+    camera.cx = k[1];
+    camera.cy = k[2];
+  }
   summary.final_rms_px = rms();
   for (uint32_t id : variable) {
     scene::Image& image = rec.images.at(id);

@@ -1,7 +1,9 @@
 #pragma once
 // Bundle adjustment with Ceres (paper section 3.4.2): camera poses and 3D points refined to
-// minimise the robustified reprojection error in pixels; the intrinsics stay fixed (they come
-// from the pattern calibration, paper 3.3).
+// minimise the robustified reprojection error in pixels. The intrinsics stay fixed when they
+// come from the pattern calibration (paper 3.3); cameras that only have a prior (EXIF, stated,
+// default: import/README.md) may have their focal length, and optionally their principal point,
+// refined too (self-calibration, shared by every image of the camera).
 
 #include <cstdint>
 #include <set>
@@ -46,6 +48,9 @@ struct BundleAdjustmentConfig {
   /// images have a fixed pose, the first refined image is fixed and one translation component
   /// of the next keeps the scale. Local BA has fixed neighbours and does not need it.
   bool fix_gauge = true;
+  /// Cameras whose focal length is refined (fy/fx kept), shared by their images.
+  std::set<uint32_t> refine_focal;
+  bool refine_principal_point = false;  ///< and, for those, (cx, cy)
 };
 
 struct BundleAdjustmentSummary {

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -37,7 +38,10 @@ struct ViewPair {
 };
 
 struct SfmInput {
-  std::map<uint32_t, scene::Camera> cameras;  ///< fixed intrinsics, one per physical camera
+  std::map<uint32_t, scene::Camera> cameras;  ///< intrinsics, one per physical camera
+  /// Cameras whose intrinsics are a prior, not a calibration: self-calibrated in global bundle
+  /// adjustment (MapperOptions::refine_focal_length); the others stay fixed.
+  std::set<uint32_t> uncalibrated;
   std::vector<View> views;
   std::vector<ViewPair> pairs;
 

@@ -34,6 +34,7 @@ void MapperOptions::check() const {
   AUV_RECON_CHECK_OPTION(global_ba_growth > 0, global_ba_growth, "must be > 0");
   AUV_RECON_CHECK_OPTION(local_ba_max_iterations > 0, local_ba_max_iterations, "must be > 0");
   AUV_RECON_CHECK_OPTION(global_ba_max_iterations > 0, global_ba_max_iterations, "must be > 0");
+  AUV_RECON_CHECK_OPTION(max_focal_ratio > 1, max_focal_ratio, "must be > 1");
   ba.check();
   robust.check();
 }
@@ -459,10 +460,36 @@ void IncrementalMapper::globalBundleAdjustment(MapperResult& result, int max_ite
   config.constant_images.insert(initial_pair_.first != initial_pair_.second
                                     ? initial_pair_.first
                                     : rec_.images.begin()->first);
+  if (options_.refine_focal_length) {
+    for (uint32_t camera : input_.uncalibrated) {
+      if (!result.intrinsics_reset.count(camera)) config.refine_focal.insert(camera);
+    }
+    config.refine_principal_point = options_.refine_principal_point;
+  }
   BundleAdjustmentOptions ba = options_.ba;
   ba.max_iterations = max_iterations;
   bundleAdjust(rec_, config, ba);
   ++result.global_bas;
+  for (uint32_t id : config.refine_focal) resetRunawayIntrinsics(id, result);
+}
+
+void IncrementalMapper::resetRunawayIntrinsics(uint32_t id, MapperResult& result) {
+  scene::Camera& camera = rec_.cameras.at(id);
+  const scene::Camera& prior = input_.cameras.at(id);
+  const double ratio = camera.fx / prior.fx;
+  std::ostringstream reason;
+  if (!std::isfinite(ratio) || ratio > options_.max_focal_ratio ||
+      ratio < 1.0 / options_.max_focal_ratio) {
+    reason << "focal " << camera.fx << " px ran away from the prior's " << prior.fx << " px";
+  } else if (std::abs(camera.cx - 0.5 * (camera.width - 1)) > 0.25 * camera.width ||
+             std::abs(camera.cy - 0.5 * (camera.height - 1)) > 0.25 * camera.height) {
+    reason << "principal point (" << camera.cx << ", " << camera.cy
+           << ") left the middle half of the image";
+  } else {
+    return;
+  }
+  camera = prior;
+  result.intrinsics_reset[id] = reason.str() + ": reset to the prior and kept";
 }
 
 size_t IncrementalMapper::retriangulate() {

@@ -51,6 +51,14 @@ struct MapperOptions {
   int global_ba_max_iterations = 50;  ///< and of a global one
   BundleAdjustmentOptions ba;         ///< loss, scale, tolerance, threads
 
+  // Self-calibration of the input's uncalibrated cameras (global BA only, as COLMAP).
+  bool refine_focal_length = true;      ///< refine their focal length (shared per camera)
+  bool refine_principal_point = false;  ///< and their principal point (weakly observed)
+  /// A refined focal beyond this factor of the prior (either way), or a principal point outside
+  /// the middle half of the image, has run away: it is reset to the prior, flagged, and the
+  /// camera keeps the prior for the rest of the run.
+  double max_focal_ratio = 2.0;
+
   RobustOptions robust;  ///< P3P / essential / homography fits
 
   /// Throws OptionError naming the field and value.
@@ -76,6 +84,8 @@ struct MapperResult {
   TrackStats tracks;
   size_t local_bas = 0, global_bas = 0;
   MapperTimings timings;
+  /// Uncalibrated cameras whose refinement ran away and were reset to the prior, and why.
+  std::map<uint32_t, std::string> intrinsics_reset;
 };
 
 class IncrementalMapper {
@@ -119,6 +129,8 @@ class IncrementalMapper {
   size_t filterPoints(const std::set<uint64_t>& points);
   void localBundleAdjustment(uint32_t id, MapperResult& result);
   /// `timed`: counted as global BA time (the initial pair's two-view BA counts as initial pair).
+  /// Resets camera `id` to its prior when its refinement ran away (MapperOptions).
+  void resetRunawayIntrinsics(uint32_t id, MapperResult& result);
   void globalBundleAdjustment(MapperResult& result, int max_iterations, bool timed = true);
   /// Triangulates every track not yet in the model and completes every point.
   size_t retriangulate();

@@ -82,6 +82,12 @@ void SfmStageOptions::bind(OptionSet& set) {
   set.add("navigation", &navigation,
           "TUM trajectory (e.g. <run>/ground_truth/navigation.tum): metric scale and gravity");
   set.add("threads", &threads, "Ceres threads");
+  set.add("refine_focal_length", &m.refine_focal_length,
+          "self-calibrate the focal length of cameras that only have a prior (import)");
+  set.add("refine_principal_point", &m.refine_principal_point,
+          "and their principal point (weakly observed: off by default)");
+  set.add("max_focal_ratio", &m.max_focal_ratio,
+          "a refined focal beyond this factor of the prior is reset to the prior and flagged");
 }
 
 SfmInput readSfmInput(const Survey& survey) {
@@ -92,7 +98,11 @@ SfmInput readSfmInput(const Survey& survey) {
   for (const std::string& name : cameras) {
     const uint32_t id = static_cast<uint32_t>(camera_ids.size() + 1);
     camera_ids[name] = id;
-    input.cameras[id] = readCorrectedCamera(survey.corrected() / (name + ".yaml"), id);
+    const fs::path yaml = survey.corrected() / (name + ".yaml");
+    input.cameras[id] = readCorrectedCamera(yaml, id);
+    if (!calibration::readCalibration(yaml, kStage).prior_source.empty()) {
+      input.uncalibrated.insert(id);
+    }
   }
   const fs::path features_folder = survey.root() / "features";
   const features::FeatureStore store(features_folder);
@@ -215,6 +225,9 @@ SfmStageResult runSfmStage(const Survey& survey, const SfmStageOptions& options)
 
   std::map<uint32_t, std::string> names;
   for (const View& view : input.views) names[view.id] = view.name;
+  const std::map<uint32_t, scene::Camera> priors = input.cameras;
+  const std::set<uint32_t> uncalibrated = input.uncalibrated;
+  const std::vector<std::string> camera_names = Survey::cameraFolders(survey.corrected(), kStage);
   MapperResult result;
   {
     Progress progress("sfm", "images", input.views.size());
@@ -250,6 +263,33 @@ SfmStageResult runSfmStage(const Survey& survey, const SfmStageOptions& options)
   const auto writing = Clock::now();
   StagedOutput staged(survey.sparse());
   writeSparseModel(rec, staged.path());
+  // The self-calibrated cameras' estimates, as calibration files (no distortion refined).
+  nlohmann::json intrinsics = nlohmann::json::object();
+  for (uint32_t id : uncalibrated) {
+    const scene::Camera& camera = rec.cameras.at(id);
+    const std::string& name = camera_names.at(id - 1);
+    calibration::CameraCalibration estimate;
+    estimate.image_size = cv::Size(camera.width, camera.height);
+    estimate.camera_matrix =
+        (cv::Mat_<double>(3, 3) << camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
+    estimate.distortion = cv::Mat::zeros(1, 5, CV_64F);
+    calibration::writeCalibration(staged.path() / (name + ".yaml"), estimate,
+                                  calibration::CalibrationOptions());
+    const auto reset = result.intrinsics_reset.find(id);
+    intrinsics[name] = {
+        {"prior_fx", priors.at(id).fx},
+        {"fx", camera.fx},
+        {"fy", camera.fy},
+        {"cx", camera.cx},
+        {"cy", camera.cy},
+        {"focal_change_percent", 100.0 * (camera.fx / priors.at(id).fx - 1.0)},
+        {"refined", options.mapper.refine_focal_length && reset == result.intrinsics_reset.end()},
+        {"reset", reset == result.intrinsics_reset.end() ? "" : reset->second}};
+    summary.self_calibrated[name] = camera.fx;
+    if (reset != result.intrinsics_reset.end()) {
+      summary.warnings.push_back("camera '" + name + "': " + reset->second);
+    }
+  }
   staged.commit();
   summary.seconds_writing = since(writing);
 
@@ -296,6 +336,7 @@ SfmStageResult runSfmStage(const Survey& survey, const SfmStageOptions& options)
   std::vector<std::string> unregistered;
   for (uint32_t id : result.unregistered) unregistered.push_back(names.at(id));
   section["unregistered_images"] = unregistered;
+  section["self_calibration"] = intrinsics;
   if (!options.navigation.empty()) {
     section["navigation"] = {{"applied", summary.navigation.applied},
                              {"images", summary.navigation.images},
@@ -319,11 +360,16 @@ StageReport SfmStage::runWith(const Survey& survey, const SfmStageOptions& optio
          << s.navigation.rms_m << " m)";
   }
   line << " in " << s.seconds << " s -> " << survey.sparse().string();
+  for (const auto& [camera, fx] : s.self_calibrated) {
+    line << "\nsfm: " << camera << ": self-calibrated focal " << fx << " px -> "
+         << (survey.sparse() / (camera + ".yaml")).string();
+  }
   std::ostringstream summary;
   summary << s.images_registered << " of " << s.images_total << " images registered, " << s.points
           << " points, " << s.mean_reprojection_error_px << " px";
   StageReport report;
   report.lines.push_back(line.str());
+  report.warnings = s.warnings;
   report.summary = summary.str();
   return report;
 }

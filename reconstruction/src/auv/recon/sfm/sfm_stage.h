@@ -4,6 +4,7 @@
 // the `sfm` section of report.json.
 
 #include <filesystem>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -45,6 +46,9 @@ struct SfmStageResult {
   NavigationAlignment navigation;
   MapperResult mapper;  ///< (reconstruction included)
   double seconds_reading = 0, seconds_writing = 0, seconds = 0;
+  /// Cameras with only a prior: their final focal (px), also in sparse/<camera>.yaml.
+  std::map<std::string, double> self_calibrated;
+  std::vector<std::string> warnings;  ///< runaway refinements reset to the prior
 };
 
 /// The SfM input of a survey: cameras from corrected/<camera>.yaml (PINHOLE, ids 1.. in camera
