@@ -115,7 +115,6 @@ TEST(IncrementalMapper, RejectsBadOptionsAndInputAtConstruction) {
   EXPECT_THROW(IncrementalMapper(broken, MapperOptions{}), std::invalid_argument);
 }
 
-
 TEST(IncrementalMapper, SelfCalibratesTheFocalOfAnUncalibratedCameraAndResetsARunaway) {
   testing::SyntheticOptions o;
   o.cameras = 1;
@@ -134,7 +133,7 @@ TEST(IncrementalMapper, SelfCalibratesTheFocalOfAnUncalibratedCameraAndResetsARu
   const scene::Camera& refined = result.reconstruction.cameras.at(1);
   EXPECT_NEAR(refined.fx / true_focal, 1.0, 0.01);
   EXPECT_DOUBLE_EQ(refined.fy / refined.fx, 1.0);  // aspect kept
-  EXPECT_DOUBLE_EQ(refined.cx, prior.cx);           // principal point not refined by default
+  EXPECT_DOUBLE_EQ(refined.cx, prior.cx);          // principal point not refined by default
   EXPECT_TRUE(result.intrinsics_reset.empty());
   EXPECT_LT(result.reconstruction.meanReprojectionError(), 0.6);
 

@@ -113,6 +113,33 @@ TEST(SfmStage, SceauxCastleRegistersAllElevenImagesBelowOnePixel) {
   EXPECT_NE(no_pair.find("no initial pair"), std::string::npos) << no_pair;
   EXPECT_EQ(fs::last_write_time(survey.sparse() / "images.txt"), before);
   EXPECT_EQ(scene::readColmapText(survey.sparse()).images.size(), summary.images_registered);
+
+  // A partial result: only the initial pair registers. Its model is written to sparse-partial/
+  // and flagged, sparse/ stays; each image left out says why.
+  SfmStageOptions picky = options;
+  picky.mapper.abs_pose_min_inliers = 100000;
+  std::string partial;
+  try {
+    runSfmStage(survey, picky);
+  } catch (const PartialResult& e) {
+    partial = e.what();
+  }
+  EXPECT_NE(partial.find("partial result: 2 of 11 images registered"), std::string::npos)
+      << partial;
+  EXPECT_NE(partial.find("a resection needs >= 100000"), std::string::npos) << partial;
+  EXPECT_NE(partial.find("--accept-partial"), std::string::npos) << partial;
+  EXPECT_EQ(scene::readColmapText(root / "sparse-partial").images.size(), 2u);
+  EXPECT_EQ(fs::last_write_time(survey.sparse() / "images.txt"), before);
+  nlohmann::json sfm = readReport(survey.report())["stages"]["sfm"];
+  EXPECT_TRUE(sfm["partial"].get<bool>());
+  EXPECT_EQ(sfm["unregistered_reasons"].size(), 9u);
+  // Accepted: it becomes sparse/, with a warning.
+  picky.accept_partial = true;
+  const SfmStageResult accepted = runSfmStage(survey, picky);
+  EXPECT_TRUE(accepted.partial);
+  ASSERT_FALSE(accepted.warnings.empty());
+  EXPECT_NE(accepted.warnings.back().find("accepted"), std::string::npos);
+  EXPECT_EQ(scene::readColmapText(survey.sparse()).images.size(), 2u);
   fs::remove_all(root);
 }
 

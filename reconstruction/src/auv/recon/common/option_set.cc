@@ -178,6 +178,11 @@ template void OptionSet::add(const std::string&, bool*, const std::string&);
 template void OptionSet::add(const std::string&, std::string*, const std::string&);
 template void OptionSet::add(const std::string&, std::vector<std::string>*, const std::string&);
 
+bool OptionSet::has(const std::string& name) const {
+  return std::any_of(entries_.begin(), entries_.end(),
+                     [&](const Entry& e) { return e.name == name; });
+}
+
 void OptionSet::positional(const std::string& name, std::string* value, const std::string& help,
                            bool required) {
   positionals_.push_back({name, help, value, required});

@@ -48,6 +48,9 @@ class OptionSet {
   /// std::invalid_argument or config::ConfigError (both exit code 2) naming file and key.
   void applyYaml(const config::YamlSection& section);
 
+  /// True when an option `name` was added.
+  bool has(const std::string& name) const;
+
   /// Options and positionals with help and defaults.
   std::string help() const;
   const std::string& section() const { return section_; }

@@ -23,6 +23,14 @@ class StageError : public config::RuntimeFailure {
   std::string stage_;
 };
 
+/// A stage did part of its work and wrote it, flagged partial (e.g. SfM registered fewer
+/// images than asked for: the model that did register is in sparse-partial/). Exit 1 like any
+/// StageError, so that `auv recon run` stops there unless told to accept partial results.
+class PartialResult : public StageError {
+ public:
+  using StageError::StageError;
+};
+
 /// An option value outside its range: "<field> = <value>: <requirement>". A
 /// std::invalid_argument, like every options check() of the cores: exit code 2
 /// (config::exitCodeFor).

@@ -3,11 +3,14 @@
 // the previous stage's folder and writes its own, so any stage can be re-run or stopped early.
 //
 //   survey/
-//     recordings/<camera>/...        pulled video + frame-time sidecars (`auv recon pull`)
+//     recordings/<camera>/...        pulled (or imported) video + frame-time sidecars
 //     calibration/<camera>.yaml      OpenCV FileStorage intrinsics + distortion
+//     calibration/<camera>.prior.yaml  a starting guess of them (`auv recon import`)
 //     keyframes/<camera>/*.png       selected frames + index.csv
 //     corrected/<camera>/*.png       colour corrected, undistorted (+ corrected/<camera>.yaml)
 //     sparse/                        COLMAP text model, points.ply, cameras.ply
+//                                    (+ <camera>.yaml: self-calibrated intrinsics)
+//     sparse-partial/                the same, of a partial result not accepted (sfm)
 //     dense/                         depth maps, fused.ply
 //     mesh/                          mesh.ply (Poisson, trimmed)
 //     textured/                      model.obj + model.mtl + atlas PNGs

@@ -107,6 +107,8 @@ void PipelineOptions::bind(OptionSet& set) {
   set.add("from", &from, "first stage (" + joined(stageNames(), " ") + ")");
   set.add("to", &to, "last stage");
   set.add("force", &force, "run stages even when their output is newer than their input");
+  set.add("accept_partial", &accept_partial,
+          "go on after a partial result (sfm: fewer images registered than asked for)");
 }
 
 namespace {
@@ -129,11 +131,12 @@ struct ConfiguredStage {
   std::unique_ptr<StageOptions> options;
 };
 
-ConfiguredStage configured(const Stage& stage, const std::string& config) {
+ConfiguredStage configured(const Stage& stage, const std::string& config, bool accept_partial) {
   ConfiguredStage configured{&stage, stage.defaultOptions()};
-  if (config.empty()) return configured;
   OptionSet set(stage.name());
   configured.options->bind(set);
+  if (accept_partial && set.has("accept_partial")) set.parse({"--accept-partial"});
+  if (config.empty()) return configured;
   set.applyConfigFile(config);
   try {
     configured.options->check();
@@ -179,7 +182,9 @@ PipelineResult runPipeline(const Survey& survey, const PipelineOptions& options,
   // Every stage's options first, so that a bad value in any section is an error before the
   // first stage runs, not after hours of work.
   std::vector<ConfiguredStage> chain;
-  for (const Stage* stage : chainedStages()) chain.push_back(configured(*stage, options.config));
+  for (const Stage* stage : chainedStages()) {
+    chain.push_back(configured(*stage, options.config, options.accept_partial));
+  }
   PipelineResult result;
   for (size_t i = stageIndex(options.from); i <= stageIndex(options.to); ++i) {
     const Stage& stage = *chain[i].stage;
@@ -191,7 +196,11 @@ PipelineResult runPipeline(const Survey& survey, const PipelineOptions& options,
       step.note = "output newer than its input: skipped (--force to run it)";
     } else {
       log << "run: " << step.stage << " ..." << std::endl;
-      step.note = stage.run(survey, *chain[i].options).summary;
+      const StageReport report = stage.run(survey, *chain[i].options);
+      step.note = report.summary;
+      for (const std::string& warning : report.warnings) {
+        log << "run: " << step.stage << ": warning: " << warning << std::endl;
+      }
     }
     step.seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - stage_start).count();

@@ -26,6 +26,9 @@ struct PipelineOptions {
   std::string from = "keyframes";  ///< first stage run
   std::string to = "texture";      ///< last stage run
   bool force = false;              ///< run stages even when their output is up to date
+  /// Go on after a stage's partial result (e.g. SfM registering fewer images than its
+  /// min_registered_ratio): sets that stage's own accept_partial.
+  bool accept_partial = false;
   /// recon.yaml: one section per stage (`sfm:`, `dense:`, ...), the same keys as the stages'
   /// flags (each stage's Options::bind). Empty: defaults.
   std::string config;

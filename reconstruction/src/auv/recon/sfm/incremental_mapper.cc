@@ -382,10 +382,12 @@ bool IncrementalMapper::registerImage(uint32_t id) {
   AbsolutePose pose = estimateAbsolutePose(camera, points, pixels, options_.robust);
   if (!pose.found || pose.inliers.size() < options_.abs_pose_min_inliers ||
       pose.inliers.size() < options_.abs_pose_min_inlier_ratio * points.size()) {
-    std::ostringstream line;
-    line << "sfm: " << view.name << " not registered: " << pose.inliers.size() << " inliers of "
-         << points.size() << " 2D-3D correspondences";
-    logLine(line.str());
+    std::ostringstream why;
+    why << pose.inliers.size() << " inliers of " << points.size()
+        << " 2D-3D correspondences (needs >= " << options_.abs_pose_min_inliers
+        << " and >= " << 100.0 * options_.abs_pose_min_inlier_ratio << " %)";
+    last_failure_[id] = why.str();
+    logLine("sfm: " + view.name + " not registered: " + why.str());
     return false;
   }
   refineAbsolutePose(camera, points, pixels, pose.inliers, options_.ba, pose.q_cw, pose.t_cw);
@@ -473,6 +475,22 @@ void IncrementalMapper::globalBundleAdjustment(MapperResult& result, int max_ite
   for (uint32_t id : config.refine_focal) resetRunawayIntrinsics(id, result);
 }
 
+std::string IncrementalMapper::whyUnregistered(uint32_t id) const {
+  const auto failed = last_failure_.find(id);
+  if (failed != last_failure_.end()) return failed->second;
+  bool paired = false;
+  for (const ViewPair& pair : input_.pairs) paired |= pair.image_a == id || pair.image_b == id;
+  if (!paired) return "no verified pair: it matched no other image";
+  size_t visible = 0;
+  for (int64_t t : tracks_.tracksOfImage(id)) {
+    visible += t != Tracks::kNoTrack && rec_.points.count(static_cast<uint64_t>(t));
+  }
+  std::ostringstream why;
+  why << "only " << visible << " of its keypoints see points of the model (a resection needs >= "
+      << options_.abs_pose_min_inliers << ")";
+  return why.str();
+}
+
 void IncrementalMapper::resetRunawayIntrinsics(uint32_t id, MapperResult& result) {
   scene::Camera& camera = rec_.cameras.at(id);
   const scene::Camera& prior = input_.cameras.at(id);
@@ -518,6 +536,7 @@ MapperResult IncrementalMapper::run(Progress* progress,
   rec_.images.clear();
   rec_.points.clear();
   failed_trials_.clear();
+  last_failure_.clear();
   if (input_.views.size() < 2 || input_.pairs.empty()) {
     result.status = MapperStatus::NO_INPUT;
     result.message = std::to_string(input_.views.size()) + " images and " +
@@ -615,7 +634,9 @@ MapperResult IncrementalMapper::run(Progress* progress,
   }
   rec_.updatePointErrors();
   for (const View& view : input_.views) {
-    if (!rec_.images.count(view.id)) result.unregistered.push_back(view.id);
+    if (rec_.images.count(view.id)) continue;
+    result.unregistered.push_back(view.id);
+    result.unregistered_reasons[view.id] = whyUnregistered(view.id);
   }
   result.status = MapperStatus::SUCCESS;
   result.reconstruction = rec_;

@@ -80,6 +80,9 @@ struct MapperResult {
   scene::Reconstruction reconstruction;
   size_t images_total = 0;
   std::vector<uint32_t> unregistered;  ///< image ids left out
+  /// Why each one was left out ("no verified pair", "12 inliers of 51 2D-3D correspondences
+  /// (needs >= 20 and >= 20 %)", ...): what a user changes next.
+  std::map<uint32_t, std::string> unregistered_reasons;
   std::pair<uint32_t, uint32_t> initial_pair{0, 0};
   TrackStats tracks;
   size_t local_bas = 0, global_bas = 0;
@@ -131,6 +134,8 @@ class IncrementalMapper {
   /// `timed`: counted as global BA time (the initial pair's two-view BA counts as initial pair).
   /// Resets camera `id` to its prior when its refinement ran away (MapperOptions).
   void resetRunawayIntrinsics(uint32_t id, MapperResult& result);
+  /// Why view `id` is not registered, for MapperResult::unregistered_reasons.
+  std::string whyUnregistered(uint32_t id) const;
   void globalBundleAdjustment(MapperResult& result, int max_iterations, bool timed = true);
   /// Triangulates every track not yet in the model and completes every point.
   size_t retriangulate();
@@ -146,6 +151,7 @@ class IncrementalMapper {
   std::map<uint32_t, const View*> views_;
   scene::Reconstruction rec_;
   std::map<uint32_t, int> failed_trials_;
+  std::map<uint32_t, std::string> last_failure_;  ///< of registerImage, per view
   std::vector<PairCandidate> pair_candidates_;
   std::pair<uint32_t, uint32_t> initial_pair_{0, 0};
   MapperTimings* timings_ = nullptr;

@@ -78,7 +78,10 @@ void SfmStageOptions::bind(OptionSet& set) {
   set.add("loss", &loss, "bundle adjustment loss: trivial, huber, cauchy, soft_l1");
   set.add("loss_scale", &m.ba.loss_scale_px, "px: scale of the robust loss");
   set.add("min_registered_ratio", &min_registered_ratio,
-          "fail when fewer images than this fraction register");
+          "below this fraction registered the model is partial: written to sparse-partial/ and "
+          "the stage fails (exit 1), unless --accept-partial");
+  set.add("accept_partial", &accept_partial,
+          "a partial model goes to sparse/ and the stage succeeds with a warning");
   set.add("navigation", &navigation,
           "TUM trajectory (e.g. <run>/ground_truth/navigation.tum): metric scale and gravity");
   set.add("threads", &threads, "Ceres threads");
@@ -237,12 +240,20 @@ SfmStageResult runSfmStage(const Survey& survey, const SfmStageOptions& options)
   if (result.status != MapperStatus::SUCCESS) throw StageError(kStage, result.message);
   scene::Reconstruction& rec = result.reconstruction;
   const size_t registered = rec.images.size();
-  if (registered < options.min_registered_ratio * summary.images_total) {
-    throw StageError(kStage, "only " + std::to_string(registered) + " of " +
-                                 std::to_string(summary.images_total) +
-                                 " images registered (min_registered_ratio " +
-                                 std::to_string(options.min_registered_ratio) +
-                                 "); sparse/ not written");
+  summary.partial = registered < options.min_registered_ratio * summary.images_total;
+  std::ostringstream partial_message;
+  if (summary.partial) {
+    partial_message << "partial result: " << registered << " of " << summary.images_total
+                    << " images registered (min_registered_ratio " << options.min_registered_ratio
+                    << ")";
+    size_t listed = 0;
+    for (const auto& [id, why] : result.unregistered_reasons) {
+      if (listed++ == 3) {
+        partial_message << "; ... (all in report.json)";
+        break;
+      }
+      partial_message << "; " << names.at(id) << ": " << why;
+    }
   }
   for (auto& [id, point] : rec.points) {
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
@@ -261,7 +272,12 @@ SfmStageResult runSfmStage(const Survey& survey, const SfmStageOptions& options)
   }
 
   const auto writing = Clock::now();
-  StagedOutput staged(survey.sparse());
+  // A partial model does not replace a whole one unless accepted: the stages after sfm read
+  // sparse/, and `auv recon run` would go on with a model the user did not choose.
+  const fs::path model_folder = summary.partial && !options.accept_partial
+                                    ? survey.root() / "sparse-partial"
+                                    : survey.sparse();
+  StagedOutput staged(model_folder);
   writeSparseModel(rec, staged.path());
   // The self-calibrated cameras' estimates, as calibration files (no distortion refined).
   nlohmann::json intrinsics = nlohmann::json::object();
@@ -337,6 +353,11 @@ SfmStageResult runSfmStage(const Survey& survey, const SfmStageOptions& options)
   for (uint32_t id : result.unregistered) unregistered.push_back(names.at(id));
   section["unregistered_images"] = unregistered;
   section["self_calibration"] = intrinsics;
+  section["partial"] = summary.partial;
+  section["model_folder"] = model_folder.string();
+  nlohmann::json reasons = nlohmann::json::object();
+  for (const auto& [id, why] : result.unregistered_reasons) reasons[names.at(id)] = why;
+  section["unregistered_reasons"] = reasons;
   if (!options.navigation.empty()) {
     section["navigation"] = {{"applied", summary.navigation.applied},
                              {"images", summary.navigation.images},
@@ -346,6 +367,14 @@ SfmStageResult runSfmStage(const Survey& survey, const SfmStageOptions& options)
   }
   updateReport(survey.report(), kStage, section);
   summary.mapper = std::move(result);
+  if (summary.partial) {
+    if (!options.accept_partial) {
+      throw PartialResult(kStage, partial_message.str() + "; the model is in " +
+                                      model_folder.string() + ", " + survey.sparse().string() +
+                                      " is unchanged (--accept-partial takes it)");
+    }
+    summary.warnings.push_back(partial_message.str() + ": accepted (--accept-partial)");
+  }
   return summary;
 }
 

@@ -23,8 +23,12 @@ namespace auv::recon::sfm {
 struct SfmStageOptions {
   MapperOptions mapper;
   std::string loss = "cauchy";  ///< bundle adjustment loss: trivial, huber, cauchy, soft_l1
-  /// The stage fails (earlier sparse/ kept) when fewer images than this fraction register.
+  /// Fewer images than this fraction registered: a partial result. The model that did register
+  /// is written to sparse-partial/ (sparse/ kept) and the stage fails with PartialResult,
+  /// naming why each image failed; with accept_partial it goes to sparse/ and the stage
+  /// succeeds with a warning.
   double min_registered_ratio = 0.5;
+  bool accept_partial = false;
   /// TUM trajectory of the vehicle's navigation (e.g. <run>/ground_truth/navigation.tum):
   /// when set, the model is scaled to metres and turned into its frame (navigation.h). Empty:
   /// the model keeps SfM's arbitrary frame and scale.
@@ -48,7 +52,8 @@ struct SfmStageResult {
   double seconds_reading = 0, seconds_writing = 0, seconds = 0;
   /// Cameras with only a prior: their final focal (px), also in sparse/<camera>.yaml.
   std::map<std::string, double> self_calibrated;
-  std::vector<std::string> warnings;  ///< runaway refinements reset to the prior
+  std::vector<std::string> warnings;  ///< runaway refinements reset, partial result accepted
+  bool partial = false;               ///< fewer than min_registered_ratio registered
 };
 
 /// The SfM input of a survey: cameras from corrected/<camera>.yaml (PINHOLE, ids 1.. in camera

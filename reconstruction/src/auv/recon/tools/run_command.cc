@@ -27,6 +27,8 @@ int runMain(const std::vector<std::string>& args) {
       std::cout << "Stages:" << names
                 << ". A stage\n"
                    "whose output is newer than its input is skipped (--force runs it).\n"
+                   "A partial result (sfm: fewer images registered than min_registered_ratio) "
+                   "stops the run, exit 1, unless --accept-partial.\n"
                    "--config recon.yaml: one section per stage, the keys of its flags.\n";
       return tools::kExitOk;
     }
