@@ -5,6 +5,7 @@
 #include <cmath>
 #include <map>
 #include <memory>
+#include <sstream>
 #include <stdexcept>
 
 #include <ceres/ceres.h>
@@ -147,6 +148,20 @@ void configureSolver(ceres::Solver::Options& solver, const BundleAdjustmentOptio
 }
 
 }  // namespace
+
+std::string runawayIntrinsics(const scene::Camera& refined, const scene::Camera& prior,
+                              double max_focal_ratio) {
+  const double ratio = refined.fx / prior.fx;
+  std::ostringstream reason;
+  if (!std::isfinite(ratio) || ratio > max_focal_ratio || ratio < 1.0 / max_focal_ratio) {
+    reason << "focal " << refined.fx << " px ran away from the prior's " << prior.fx << " px";
+  } else if (std::abs(refined.cx - 0.5 * (refined.width - 1)) > 0.25 * refined.width ||
+             std::abs(refined.cy - 0.5 * (refined.height - 1)) > 0.25 * refined.height) {
+    reason << "principal point (" << refined.cx << ", " << refined.cy
+           << ") left the middle half of the image";
+  }
+  return reason.str();
+}
 
 BundleAdjustmentSummary bundleAdjust(scene::Reconstruction& rec,
                                      const BundleAdjustmentConfig& config,

@@ -61,6 +61,12 @@ struct BundleAdjustmentSummary {
   double seconds = 0;
 };
 
+/// Why a self-calibrated camera has run away from its prior (a focal beyond `max_focal_ratio`
+/// of the prior's either way, or a principal point outside the middle half of the image), or
+/// empty when it has not.
+std::string runawayIntrinsics(const scene::Camera& refined, const scene::Camera& prior,
+                              double max_focal_ratio);
+
 /// Adjusts `reconstruction` in place. Throws std::invalid_argument for ids not in it.
 BundleAdjustmentSummary bundleAdjust(scene::Reconstruction& reconstruction,
                                      const BundleAdjustmentConfig& config,

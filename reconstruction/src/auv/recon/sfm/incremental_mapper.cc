@@ -494,20 +494,10 @@ std::string IncrementalMapper::whyUnregistered(uint32_t id) const {
 void IncrementalMapper::resetRunawayIntrinsics(uint32_t id, MapperResult& result) {
   scene::Camera& camera = rec_.cameras.at(id);
   const scene::Camera& prior = input_.cameras.at(id);
-  const double ratio = camera.fx / prior.fx;
-  std::ostringstream reason;
-  if (!std::isfinite(ratio) || ratio > options_.max_focal_ratio ||
-      ratio < 1.0 / options_.max_focal_ratio) {
-    reason << "focal " << camera.fx << " px ran away from the prior's " << prior.fx << " px";
-  } else if (std::abs(camera.cx - 0.5 * (camera.width - 1)) > 0.25 * camera.width ||
-             std::abs(camera.cy - 0.5 * (camera.height - 1)) > 0.25 * camera.height) {
-    reason << "principal point (" << camera.cx << ", " << camera.cy
-           << ") left the middle half of the image";
-  } else {
-    return;
-  }
+  const std::string runaway = runawayIntrinsics(camera, prior, options_.max_focal_ratio);
+  if (runaway.empty()) return;
   camera = prior;
-  result.intrinsics_reset[id] = reason.str() + ": reset to the prior and kept";
+  result.intrinsics_reset[id] = runaway + ": reset to the prior and kept";
 }
 
 size_t IncrementalMapper::retriangulate() {
