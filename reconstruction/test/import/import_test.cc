@@ -270,6 +270,13 @@ TEST(ImportStage, PhotosLandUprightInOneCameraPerGroupAndBadFilesAreSkipped) {
   fs::remove_all(root);
 }
 
+TEST(ImportStage, CameraIdsFromNamesAreFolderNamesAndCsvFields) {
+  EXPECT_EQ(cameraIdFrom("dive_42"), "dive_42");
+  EXPECT_EQ(cameraIdFrom("reef, north"), "reef_ north");
+  EXPECT_EQ(cameraIdFrom(".hidden"), "_hidden");
+  EXPECT_EQ(cameraIdFrom(""), "camera");
+}
+
 TEST(ImportStage, RefusesToOverwriteAndLeavesTheSurveyAsItWas) {
   const fs::path root = freshFolder("refuse");
   fs::create_directories(root / "a");

@@ -43,6 +43,15 @@ nlohmann::json cameraJson(const ImportedCamera& c, const ImportStageOptions& opt
 
 }  // namespace
 
+std::string cameraIdFrom(const std::string& name) {
+  std::string id = name.empty() ? "camera" : name;
+  for (char& c : id) {
+    if (c == ',' || c == '/') c = '_';
+  }
+  if (id[0] == '.') id[0] = '_';
+  return id;
+}
+
 void ImportStageOptions::check() const {
   if (images.empty() == video.empty()) {
     throw std::invalid_argument("give one of --images <folder> and --video <file>");

@@ -40,6 +40,10 @@ struct ImportStageOptions {
   void bind(OptionSet& set);
 };
 
+/// A camera id made from a folder name or a video stem: ',' and '/' become '_', a leading '.'
+/// too, and an empty name is "camera" (camera ids are folder names and CSV fields).
+std::string cameraIdFrom(const std::string& name);
+
 /// One file that was not imported, and why.
 struct SkippedFile {
   std::string file;

@@ -165,9 +165,11 @@ void importPhotos(const Survey& survey, const ImportStageOptions& options,
   std::stable_sort(groups.begin(), groups.end(),
                    [](const auto& a, const auto& b) { return a.second.size() > b.second.size(); });
   std::string base = options.camera;
-  if (base.empty()) base = fs::absolute(folder).lexically_normal().filename().string();
-  if (base.empty())
-    base = fs::absolute(folder).lexically_normal().parent_path().filename().string();
+  if (base.empty()) {
+    fs::path normal = fs::absolute(folder).lexically_normal();
+    if (normal.filename().empty()) normal = normal.parent_path();  // "photos/" -> "photos"
+    base = cameraIdFrom(normal.filename().string());
+  }
 
   // 3. Every destination is checked before anything is written.
   std::vector<std::string> names;

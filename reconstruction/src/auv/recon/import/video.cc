@@ -34,7 +34,8 @@ void importVideo(const Survey& survey, const ImportStageOptions& options,
     throw StageError(
         kStage, source.string() + ": not a video the keyframes stage reads (.mp4 .avi .mov .mkv)");
   }
-  const std::string camera_name = options.camera.empty() ? source.stem().string() : options.camera;
+  const std::string camera_name =
+      options.camera.empty() ? cameraIdFrom(source.stem().string()) : options.camera;
   const fs::path folder = survey.recordings() / camera_name;
   const fs::path destination = folder / (source.stem().string() + extension);
   if (!options.replace && fs::exists(destination, error)) {
