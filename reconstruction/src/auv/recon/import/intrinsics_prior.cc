@@ -3,6 +3,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "auv/recon/calibration/calibration.h"
 #include "auv/recon/common/stage_error.h"
 #include "auv/recon/common/staged_output.h"
 
@@ -106,29 +107,13 @@ void writeIntrinsicsPrior(const fs::path& file, const IntrinsicsPrior& prior) {
 }
 
 IntrinsicsPrior readIntrinsicsPrior(const fs::path& file, const std::string& stage) {
-  cv::FileStorage storage;
-  try {
-    if (!storage.open(file.string(), cv::FileStorage::READ)) {
-      throw StageError(stage, file.string() + ": not an OpenCV FileStorage file");
-    }
-  } catch (const cv::Exception& e) {
-    throw StageError(stage, file.string() + ": not an OpenCV FileStorage file (" + e.err + ")");
-  }
+  const calibration::CameraCalibration c = calibration::readCalibration(file, stage);
   IntrinsicsPrior prior;
-  cv::Mat K;
-  storage["image_width"] >> prior.image_size.width;
-  storage["image_height"] >> prior.image_size.height;
-  storage["camera_matrix"] >> K;
-  storage["prior_source"] >> prior.source;
-  if (prior.image_size.width <= 0 || prior.image_size.height <= 0) {
-    throw StageError(stage, file.string() + ": image_width/image_height missing or not positive");
-  }
-  if (K.rows != 3 || K.cols != 3 || K.type() != CV_64F || !(K.at<double>(0, 0) > 0.0)) {
-    throw StageError(stage, file.string() + ": camera_matrix missing or not a 3x3 with fx > 0");
-  }
-  prior.focal_px = K.at<double>(0, 0);
-  prior.cx = K.at<double>(0, 2);
-  prior.cy = K.at<double>(1, 2);
+  prior.image_size = c.image_size;
+  prior.focal_px = c.camera_matrix.at<double>(0, 0);
+  prior.cx = c.camera_matrix.at<double>(0, 2);
+  prior.cy = c.camera_matrix.at<double>(1, 2);
+  prior.source = c.prior_source;
   return prior;
 }
 

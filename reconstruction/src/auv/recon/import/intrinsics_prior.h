@@ -45,7 +45,8 @@ IntrinsicsPrior intrinsicsPrior(const ExifInfo& exif, const cv::Size& size,
 double fieldOfViewDeg(double focal_px, const cv::Size& size);
 
 void writeIntrinsicsPrior(const std::filesystem::path& file, const IntrinsicsPrior& prior);
-/// Throws StageError(stage, ...) naming the file and key when it cannot be read.
+/// Read with the calibration reader (same format). Throws StageError(stage, ...) naming the file
+/// and key when it cannot be read.
 IntrinsicsPrior readIntrinsicsPrior(const std::filesystem::path& file, const std::string& stage);
 
 }  // namespace auv::recon::import

@@ -6,6 +6,7 @@
 
 #include "auv/recon/common/stage_error.h"
 #include "auv/recon/common/staged_output.h"
+#include "auv/recon/keyframes/video.h"
 
 namespace fs = std::filesystem;
 
@@ -13,9 +14,6 @@ namespace auv::recon::import {
 namespace {
 
 constexpr const char* kStage = "import";
-
-// The containers the keyframes stage reads.
-const std::vector<std::string> kVideoExtensions = {".mp4", ".avi", ".mov", ".mkv"};
 
 }  // namespace
 
@@ -29,8 +27,8 @@ void importVideo(const Survey& survey, const ImportStageOptions& options,
   std::string extension = source.extension().string();
   std::transform(extension.begin(), extension.end(), extension.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  if (std::find(kVideoExtensions.begin(), kVideoExtensions.end(), extension) ==
-      kVideoExtensions.end()) {
+  const std::vector<std::string>& containers = keyframes::videoExtensions();
+  if (std::find(containers.begin(), containers.end(), extension) == containers.end()) {
     throw StageError(
         kStage, source.string() + ": not a video the keyframes stage reads (.mp4 .avi .mov .mkv)");
   }
@@ -93,7 +91,7 @@ void importVideo(const Survey& survey, const ImportStageOptions& options,
   const fs::path partial = temporaryPathFor(destination);
   fs::copy_file(source, partial, fs::copy_options::overwrite_existing, error);
   if (!error) {
-    writeFileAtomically(destination.string() + ".frames.csv", sidecar.str());
+    writeFileAtomically(keyframes::sidecarOf(destination), sidecar.str());
     fs::rename(partial, destination, error);
   }
   if (error) {

@@ -173,7 +173,7 @@ void KeyframesStageOptions::bind(OptionSet& set) {
 }
 
 std::vector<fs::path> listVideos(const fs::path& folder) {
-  return listFiles(folder, {".mp4", ".avi", ".mov", ".mkv"});
+  return listFiles(folder, videoExtensions());
 }
 
 KeyframesStageResult runKeyframesStage(const Survey& survey, const KeyframesStageOptions& options) {

@@ -38,6 +38,11 @@ std::string keyframeName(const fs::path& video, int frame) {
 }
 }  // namespace
 
+const std::vector<std::string>& videoExtensions() {
+  static const std::vector<std::string> extensions = {".mp4", ".avi", ".mov", ".mkv"};
+  return extensions;
+}
+
 fs::path sidecarOf(const fs::path& video) { return video.string() + ".frames.csv"; }
 
 std::vector<FrameTime> readFrameTimes(const fs::path& sidecar) {

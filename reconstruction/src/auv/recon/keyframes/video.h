@@ -23,6 +23,9 @@ struct FrameTime {
 /// for a wrong header, a malformed row or frames out of order.
 std::vector<FrameTime> readFrameTimes(const std::filesystem::path& sidecar);
 
+/// The video containers the keyframes stage reads (lower case, with the dot).
+const std::vector<std::string>& videoExtensions();
+
 /// `<video>.frames.csv` beside the video.
 std::filesystem::path sidecarOf(const std::filesystem::path& video);
 
