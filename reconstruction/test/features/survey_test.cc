@@ -79,11 +79,26 @@ TEST(Sift, KeypointsFollowAKnownHomographyAndDescriptorsAreRootSift) {
     good += ((he * p1.homogeneous()).hnormalized() - p2).norm() < 1.0 ? 1 : 0;
   }
   EXPECT_GT(good, 0.9 * matches.size());
-  // The cap keeps the strongest.
+  // The cap keeps the largest scales by default (as COLMAP), still sorted by response...
   options.max_features = 100;
-  const ImageFeatures capped = extractSift(image, "a.png", options);
-  EXPECT_EQ(capped.size(), 100u);
-  EXPECT_EQ(capped.keypoints[0].response, f1.keypoints[0].response);
+  const ImageFeatures largest = extractSift(image, "a.png", options);
+  ASSERT_EQ(largest.size(), 100u);
+  float smallest_kept = largest.keypoints[0].size;
+  for (const Keypoint& k : largest.keypoints) smallest_kept = std::min(smallest_kept, k.size);
+  size_t larger_in_all = 0;
+  for (const Keypoint& k : f1.keypoints) larger_in_all += k.size >= smallest_kept;
+  EXPECT_GE(larger_in_all, 100u);
+  EXPECT_LE(larger_in_all, 110u);  // ties at the smallest kept size only
+  for (size_t i = 1; i < largest.size(); ++i) {
+    EXPECT_GE(largest.keypoints[i - 1].response, largest.keypoints[i].response);
+  }
+  // ... or the strongest responses on request.
+  options.keep = "strongest";
+  const ImageFeatures strongest = extractSift(image, "a.png", options);
+  EXPECT_EQ(strongest.size(), 100u);
+  EXPECT_EQ(strongest.keypoints[0].response, f1.keypoints[0].response);
+  options.keep = "biggest";
+  EXPECT_THROW(options.check(), OptionError);
 }
 
 // A cap fit for video frames is too tight for a large photo: it keeps proportionally more.

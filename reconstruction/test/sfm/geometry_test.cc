@@ -11,6 +11,7 @@
 #include "auv/recon/sfm/correspondences.h"
 #include "auv/recon/sfm/robust_geometry.h"
 #include "auv/recon/sfm/triangulation.h"
+#include "auv/recon/sfm/undistorted_model.h"
 #include "synthetic_scene.h"
 
 namespace auv::recon::sfm {
@@ -385,6 +386,57 @@ TEST(BundleAdjustment, OptionsRejectBadValuesNamingTheField) {
   }
   EXPECT_EQ(lossFunctionFromName("huber"), LossFunction::HUBER);
   EXPECT_THROW(lossFunctionFromName("L2"), std::invalid_argument);
+}
+
+TEST(BundleAdjustment, ALensThatFoldsTheImageHasRunAway) {
+  const scene::Camera prior = scene::Camera::pinhole(1, 1000, 750, 800, 800, 499.5, 374.5);
+  scene::Camera lens = prior;
+  lens.model = scene::CameraModel::OPENCV;
+  lens.distortion = {-0.25, 0.08, 0, 0};  // an ordinary barrel lens
+  EXPECT_EQ(runawayIntrinsics(lens, prior, 2.0), "");
+  lens.distortion = {-1.2, 0.0, 0, 0};  // r (1 - 1.2 r^2) turns back before the corner
+  EXPECT_NE(runawayIntrinsics(lens, prior, 2.0).find("radial distortion"), std::string::npos);
+  lens.distortion = {1.5, 0.0, 0, 0};  // corners stretched by more than 50 %
+  EXPECT_NE(runawayIntrinsics(lens, prior, 2.0).find("radial distortion"), std::string::npos);
+}
+
+TEST(UndistortedModel, PinholeCamerasWhoseKeypointsStillSeeTheirPoints) {
+  testing::SyntheticOptions o;
+  o.cameras = 2;
+  o.stations = 3;
+  o.distractors = 0;
+  o.noise_px = 0;
+  o.k1 = -0.2;
+  o.k2 = 0.05;
+  const testing::SyntheticScene s = testing::makeSyntheticScene(o);
+  scene::Reconstruction model;
+  model.cameras = s.input.cameras;
+  scene::Camera& distorted = model.cameras.at(1);  // camera 2 stays pinhole
+  distorted.model = scene::CameraModel::OPENCV;
+  distorted.distortion = {o.k1, o.k2, 0, 0};
+  for (const View& view : s.input.views) {
+    if (view.camera_id == 2) continue;
+    scene::Image image = s.truth.at(view.id);
+    image.points2d = view.keypoints;
+    image.point3d_ids.assign(view.keypoints.size(), scene::kNoPoint3D);
+    model.images[image.id] = image;
+  }
+  const scene::Reconstruction pinhole = undistortedModel(model);
+  EXPECT_FALSE(pinhole.cameras.at(1).hasDistortion());
+  EXPECT_EQ(pinhole.cameras.at(1).model, scene::CameraModel::PINHOLE);
+  EXPECT_EQ(pinhole.cameras.at(2).fx, model.cameras.at(2).fx);  // untouched
+  double worst = 0;
+  size_t checked = 0;
+  for (const auto& [id, image] : pinhole.images) {
+    for (const auto& [keypoint, point] : s.keypoint_point.at(id)) {
+      const Eigen::Vector2d projected =
+          pinhole.cameras.at(1).project(image.toCamera(s.points[point]));
+      worst = std::max(worst, (projected - image.points2d[keypoint]).norm());
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 100u);
+  EXPECT_LT(worst, 1e-3);  // px: exact keypoints stay exact in the pinhole images
 }
 
 }  // namespace

@@ -160,5 +160,73 @@ TEST(IncrementalMapper, SelfCalibratesTheFocalOfAnUncalibratedCameraAndResetsARu
   EXPECT_DOUBLE_EQ(result.reconstruction.cameras.at(1).fx, prior.fx);
 }
 
+TEST(IncrementalMapper, SelfCalibratesTheRadialDistortionOfAnUncalibratedLens) {
+  testing::SyntheticOptions o;
+  o.cameras = 1;
+  o.stations = 12;
+  o.noise_px = 0.3;
+  o.k1 = -0.25;  // a barrel lens like a phone's: 11 % at the corners
+  o.k2 = 0.08;
+  testing::SyntheticScene s = testing::makeSyntheticScene(o);
+  const double true_focal = s.input.cameras.at(1).fx;
+  scene::Camera& prior = s.input.cameras.at(1);
+  prior.fx *= 1.1;
+  prior.fy *= 1.1;
+  s.input.uncalibrated = {1};
+
+  MapperOptions options;
+  MapperResult result = IncrementalMapper(s.input, options).run();
+  ASSERT_EQ(result.status, MapperStatus::SUCCESS) << result.message;
+  const scene::Camera& refined = result.reconstruction.cameras.at(1);
+  EXPECT_EQ(refined.model, scene::CameraModel::OPENCV);
+  ASSERT_EQ(refined.distortion.size(), 4u);
+  EXPECT_NEAR(refined.fx / true_focal, 1.0, 0.01);
+  EXPECT_NEAR(refined.distortion[0], o.k1, 0.03);
+  EXPECT_DOUBLE_EQ(refined.distortion[2], 0.0);  // tangential not refined by default
+  EXPECT_TRUE(result.intrinsics_reset.empty());
+  EXPECT_LT(result.reconstruction.meanReprojectionError(), 0.6);
+  EXPECT_EQ(result.reconstruction.images.size(), s.input.views.size());
+
+  // The focal alone absorbs the lens: further off, and the error shows it.
+  options.refine_radial_distortion = false;
+  MapperResult focal_only = IncrementalMapper(s.input, options).run();
+  ASSERT_EQ(focal_only.status, MapperStatus::SUCCESS) << focal_only.message;
+  EXPECT_FALSE(focal_only.reconstruction.cameras.at(1).hasDistortion());
+  EXPECT_GT(std::abs(focal_only.reconstruction.cameras.at(1).fx / true_focal - 1.0),
+            std::abs(refined.fx / true_focal - 1.0));
+  EXPECT_GT(focal_only.reconstruction.meanReprojectionError(),
+            result.reconstruction.meanReprojectionError() + 0.2);
+}
+
+TEST(IncrementalMapper, LeavesTwoViewTracksOutsideTheInitialPairUntriangulated) {
+  testing::SyntheticOptions o;
+  o.cameras = 1;
+  o.stations = 10;
+  const testing::SyntheticScene s = testing::makeSyntheticScene(o);
+  auto twoViewPoints = [](const MapperResult& r) {
+    size_t n = 0;
+    for (const auto& [id, point] : r.reconstruction.points) {
+      const bool initial =
+          point.track.size() == 2 && ((point.track[0].image_id == r.initial_pair.first &&
+                                       point.track[1].image_id == r.initial_pair.second) ||
+                                      (point.track[0].image_id == r.initial_pair.second &&
+                                       point.track[1].image_id == r.initial_pair.first));
+      n += point.track.size() == 2 && !initial;
+    }
+    return n;
+  };
+  MapperOptions options;
+  const MapperResult ignored = IncrementalMapper(s.input, options).run();
+  ASSERT_EQ(ignored.status, MapperStatus::SUCCESS) << ignored.message;
+  options.ignore_two_view_tracks = false;
+  const MapperResult kept = IncrementalMapper(s.input, options).run();
+  ASSERT_EQ(kept.status, MapperStatus::SUCCESS) << kept.message;
+  // Only the initial pair (or a track that lost observations as outliers) keeps two views.
+  EXPECT_GT(twoViewPoints(kept), 50u);
+  EXPECT_LT(twoViewPoints(ignored), twoViewPoints(kept) / 5);
+  EXPECT_GT(ignored.reconstruction.meanTrackLength(), kept.reconstruction.meanTrackLength());
+  EXPECT_EQ(ignored.reconstruction.images.size(), kept.reconstruction.images.size());
+}
+
 }  // namespace
 }  // namespace auv::recon::sfm

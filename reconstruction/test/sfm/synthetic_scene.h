@@ -26,6 +26,9 @@ struct SyntheticOptions {
   int distractors = 50;         ///< unmatched keypoints per image
   size_t min_pair_matches = 30;
   unsigned seed = 1;
+  /// Radial distortion (k1, k2) of every camera's lens: the keypoints are projected through
+  /// it, the input's cameras are the pinhole part (what a user without a calibration has).
+  double k1 = 0, k2 = 0;
 };
 
 struct SyntheticScene {
@@ -82,7 +85,11 @@ inline SyntheticScene makeSyntheticScene(const SyntheticOptions& o) {
     vehicle.linear() =
         Eigen::AngleAxisd(0.1 * std::sin(5 * f), Eigen::Vector3d::UnitY()).toRotationMatrix();
     for (int c = 0; c < o.cameras; ++c) {
-      const scene::Camera& camera = s.input.cameras.at(static_cast<uint32_t>(c + 1));
+      scene::Camera camera = s.input.cameras.at(static_cast<uint32_t>(c + 1));
+      if (o.k1 != 0 || o.k2 != 0) {
+        camera.model = scene::CameraModel::OPENCV;
+        camera.distortion = {o.k1, o.k2, 0, 0};
+      }
       const Eigen::Isometry3d camera_to_world = vehicle * rigMount(c);
       scene::Image truth;
       truth.id = next_id++;

@@ -14,6 +14,14 @@ namespace auv::recon {
 
 Survey::Survey(fs::path root) : root_(std::move(root)) {}
 
+Survey::PinholeWorkspace Survey::pinholeWorkspace() const {
+  std::error_code error;
+  if (fs::exists(undistorted() / "sparse" / "images.txt", error)) {
+    return {undistorted() / "sparse", undistorted()};
+  }
+  return {sparse(), corrected()};
+}
+
 std::vector<std::string> Survey::cameraFolders(const fs::path& folder, const std::string& stage) {
   std::error_code error;
   if (!fs::is_directory(folder, error)) {

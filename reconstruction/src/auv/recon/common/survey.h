@@ -11,6 +11,8 @@
 //     sparse/                        COLMAP text model, points.ply, cameras.ply
 //                                    (+ <camera>.yaml: self-calibrated intrinsics)
 //     sparse-partial/                the same, of a partial result not accepted (sfm)
+//     undistorted/                   pinhole images + sparse/ when sfm estimated a lens
+//                                    distortion (sfm/undistorted_model.h)
 //     dense/                         depth maps, fused.ply
 //     mesh/                          mesh.ply (Poisson, trimmed)
 //     textured/                      model.obj + model.mtl + atlas PNGs
@@ -36,10 +38,18 @@ class Survey {
   std::filesystem::path keyframes() const { return root_ / "keyframes"; }
   std::filesystem::path corrected() const { return root_ / "corrected"; }
   std::filesystem::path sparse() const { return root_ / "sparse"; }
+  std::filesystem::path undistorted() const { return root_ / "undistorted"; }
   std::filesystem::path dense() const { return root_ / "dense"; }
   std::filesystem::path mesh() const { return root_ / "mesh"; }
   std::filesystem::path textured() const { return root_ / "textured"; }
   std::filesystem::path report() const { return root_ / "report.json"; }
+
+  /// The pinhole model and its images that dense matching and texturing read: undistorted/
+  /// (its sparse/ and images) when sfm wrote it, else sparse/ and corrected/.
+  struct PinholeWorkspace {
+    std::filesystem::path model, images;
+  };
+  PinholeWorkspace pinholeWorkspace() const;
 
   /// The camera ids of a stage folder: its sub-folders, sorted (hidden ones skipped).
   /// Throws StageError(stage, ...) when `folder` is missing or has none.

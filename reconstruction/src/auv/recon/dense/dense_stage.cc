@@ -351,15 +351,16 @@ DenseStageResult densify(const scene::Reconstruction& model, const fs::path& ima
 
 DenseStageResult runDenseStage(const Survey& survey, const DenseStageOptions& options) {
   options.check();
-  Survey::requireExists(survey.sparse() / "images.txt", kStage, "sfm");
-  Survey::requireExists(survey.corrected(), kStage, "correct");
+  const Survey::PinholeWorkspace workspace = survey.pinholeWorkspace();
+  Survey::requireExists(workspace.model / "images.txt", kStage, "sfm");
+  Survey::requireExists(workspace.images, kStage, "correct");
   scene::Reconstruction model;
   try {
-    model = scene::readColmapText(survey.sparse());
+    model = scene::readColmapText(workspace.model);
   } catch (const std::exception& e) {
     throw StageError(kStage, std::string("cannot read the sparse model: ") + e.what());
   }
-  const DenseStageResult summary = densify(model, survey.corrected(), survey.dense(), options);
+  const DenseStageResult summary = densify(model, workspace.images, survey.dense(), options);
   nlohmann::json section = summary.toJson();
   section["options"] = options.toJson();
   updateReport(survey.report(), kStage, section);

@@ -37,6 +37,8 @@ void FeaturesStageOptions::check() const {
 
 void FeaturesStageOptions::bind(OptionSet& set) {
   set.add("max_features", &sift.max_features, "most SIFT keypoints per image (0: all)");
+  set.add("keep", &sift.keep,
+          "which keypoints max_features keeps: largest (coarsest scales first) or strongest");
   set.add("max_features_megapixels", &sift.max_features_megapixels,
           "MP: max_features holds up to this image size, larger images keep proportionally more "
           "(0: fixed)");
@@ -154,6 +156,7 @@ FeaturesStageResult runFeaturesStage(const Survey& survey, const FeaturesStageOp
                            {"threads", threads},
                            {"options",
                             {{"max_features", options.sift.max_features},
+                             {"keep", options.sift.keep},
                              {"max_features_megapixels", options.sift.max_features_megapixels},
                              {"contrast_threshold", options.sift.contrast_threshold},
                              {"edge_threshold", options.sift.edge_threshold},

@@ -35,6 +35,8 @@ cv::Mat quantizeDescriptors(const cv::Mat& descriptors, bool root_sift) {
 
 void SiftOptions::check() const {
   AUV_RECON_CHECK_OPTION(max_features >= 0, max_features, "must be >= 0 (0: all)");
+  AUV_RECON_CHECK_OPTION(keep == "largest" || keep == "strongest", keep,
+                         "must be 'largest' or 'strongest'");
   AUV_RECON_CHECK_OPTION(max_features_megapixels >= 0, max_features_megapixels,
                          "must be >= 0 MP (0: a fixed cap)");
   AUV_RECON_CHECK_OPTION(contrast_threshold > 0 && contrast_threshold < 1, contrast_threshold,
@@ -80,21 +82,31 @@ ImageFeatures extractSift(const cv::Mat& image, const std::string& image_name,
     max_features =
         static_cast<int>(std::lround(max_features * megapixels / options.max_features_megapixels));
   }
+  const bool strongest = options.keep == "strongest";
+  // OpenCV's nfeatures keeps the strongest; for the largest, detect all and choose below.
   const cv::Ptr<cv::SIFT> sift =
-      cv::SIFT::create(max_features, options.octave_layers, options.contrast_threshold,
-                       options.edge_threshold, options.sigma);
+      cv::SIFT::create(strongest ? max_features : 0, options.octave_layers,
+                       options.contrast_threshold, options.edge_threshold, options.sigma);
   std::vector<cv::KeyPoint> keypoints;
   cv::Mat descriptors;
   sift->detectAndCompute(gray, cv::noArray(), keypoints, descriptors);
 
-  // Strongest first, capped (OpenCV may keep ties beyond nfeatures).
   std::vector<int> order(keypoints.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
-  std::stable_sort(order.begin(), order.end(),
-                   [&](int a, int b) { return keypoints[a].response > keypoints[b].response; });
+  auto byResponse = [&](int a, int b) { return keypoints[a].response > keypoints[b].response; };
+  if (!strongest) {
+    std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+      return keypoints[a].size != keypoints[b].size ? keypoints[a].size > keypoints[b].size
+                                                    : byResponse(a, b);
+    });
+  } else {
+    std::stable_sort(order.begin(), order.end(), byResponse);
+  }
+  // Capped (OpenCV may keep ties beyond nfeatures), then strongest first.
   if (max_features > 0 && order.size() > static_cast<size_t>(max_features)) {
     order.resize(max_features);
   }
+  std::stable_sort(order.begin(), order.end(), byResponse);
 
   ImageFeatures features;
   features.image = image_name;

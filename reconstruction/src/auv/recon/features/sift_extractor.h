@@ -21,8 +21,13 @@ class OptionSet;
 namespace auv::recon::features {
 
 struct SiftOptions {
-  /// Most keypoints kept per image (strongest DoG response first); 0: all.
+  /// Most keypoints kept per image (which ones: `keep`); 0: all.
   int max_features = 8000;
+  /// Which keypoints max_features keeps: "largest" (coarsest scales first, as COLMAP does) or
+  /// "strongest" (highest DoG response first, OpenCV's nfeatures). The strongest responses
+  /// are mostly the finest scales, which are the least repeatable across viewpoint and scale
+  /// changes.
+  std::string keep = "largest";
   /// max_features holds for images up to this many megapixels (of the detection image); larger
   /// ones keep proportionally more (0: a fixed cap). The strongest responses of a 6 MP photo are
   /// mostly its finest scales, which match badly across viewpoints: Sceaux castle at 2832x2128
@@ -47,8 +52,9 @@ struct SiftOptions {
   void check() const;
 };
 
-/// SIFT of one image (BGR or grey, 8 bit). `image_name` goes into the result. Keypoints sorted
-/// by decreasing response, capped at max_features (scaled by max_features_megapixels).
+/// SIFT of one image (BGR or grey, 8 bit). `image_name` goes into the result. Keypoints capped
+/// at max_features (scaled by max_features_megapixels; chosen by `keep`), sorted by decreasing
+/// response.
 ImageFeatures extractSift(const cv::Mat& image, const std::string& image_name,
                           const SiftOptions& options);
 

@@ -78,31 +78,57 @@ struct ReprojectionError {
   double u, v, fx, fy, cx, cy;
 };
 
-/// The same residual with the camera's focal length and principal point as a parameter block
-/// {f, cx, cy} (fy = aspect * f): self-calibration of cameras that only have a prior.
-struct SelfCalibratingReprojectionError {
-  SelfCalibratingReprojectionError(const Eigen::Vector2d& observed, double aspect)
+/// The same residual through the OpenCV lens model with the camera's intrinsics as one
+/// parameter block {f, cx, cy, k1, k2, p1, p2} (fy = aspect * f), shared by the camera's
+/// images: self-calibration of cameras that only have a prior, and the fixed intrinsics of a
+/// camera whose distortion an earlier adjustment estimated.
+struct LensReprojectionError {
+  LensReprojectionError(const Eigen::Vector2d& observed, double aspect)
       : u(observed.x()), v(observed.y()), aspect(aspect) {}
 
   template <class T>
   bool operator()(const T* q, const T* t, const T* x, const T* k, T* residual) const {
     T p[3];
     ceres::UnitQuaternionRotatePoint(q, x, p);
-    p[0] += t[0];
-    p[1] += t[1];
-    p[2] += t[2];
-    residual[0] = k[0] * p[0] / p[2] + k[1] - T(u);
-    residual[1] = T(aspect) * k[0] * p[1] / p[2] + k[2] - T(v);
+    const T xn = (p[0] + t[0]) / (p[2] + t[2]);
+    const T yn = (p[1] + t[1]) / (p[2] + t[2]);
+    const T r2 = xn * xn + yn * yn;
+    const T radial = T(1) + k[3] * r2 + k[4] * r2 * r2;
+    const T xd = xn * radial + T(2) * k[5] * xn * yn + k[6] * (r2 + T(2) * xn * xn);
+    const T yd = yn * radial + k[5] * (r2 + T(2) * yn * yn) + T(2) * k[6] * xn * yn;
+    residual[0] = k[0] * xd + k[1] - T(u);
+    residual[1] = T(aspect) * k[0] * yd + k[2] - T(v);
     return true;
   }
 
   static ceres::CostFunction* create(const Eigen::Vector2d& observed, double aspect) {
-    return new ceres::AutoDiffCostFunction<SelfCalibratingReprojectionError, 2, 4, 3, 3, 3>(
-        new SelfCalibratingReprojectionError(observed, aspect));
+    return new ceres::AutoDiffCostFunction<LensReprojectionError, 2, 4, 3, 3, kLensParameters>(
+        new LensReprojectionError(observed, aspect));
   }
 
   double u, v, aspect;
 };
+
+using LensBlock = std::array<double, kLensParameters>;
+
+LensBlock toLensBlock(const scene::Camera& camera) {
+  LensBlock k{camera.fx, camera.cx, camera.cy, 0, 0, 0, 0};
+  for (size_t i = 0; i < 4 && i < camera.distortion.size(); ++i) k[3 + i] = camera.distortion[i];
+  return k;
+}
+
+/// The adjusted block back into the camera; OPENCV once it has a distortion.
+void fromLensBlock(const LensBlock& k, scene::Camera& camera) {
+  const double aspect = camera.fy / camera.fx;
+  camera.fx = k[0];
+  camera.fy = aspect * k[0];
+  camera.cx = k[1];
+  camera.cy = k[2];
+  if (k[3] != 0 || k[4] != 0 || k[5] != 0 || k[6] != 0) {
+    camera.model = scene::CameraModel::OPENCV;
+    camera.distortion = {k[3], k[4], k[5], k[6]};
+  }
+}
 
 ceres::LossFunction* makeLoss(const BundleAdjustmentOptions& options) {
   const double s = options.loss_scale_px;
@@ -153,8 +179,25 @@ std::string runawayIntrinsics(const scene::Camera& refined, const scene::Camera&
                               double max_focal_ratio) {
   const double ratio = refined.fx / prior.fx;
   std::ostringstream reason;
+  // Radial distortion over the image: r_d = r (1 + k1 r^2 + k2 r^4) up to the farthest corner
+  // must keep growing with r (else two image points share one ray) and stay within +-50 %.
+  const double k1 = refined.distortion.size() > 1 ? refined.distortion[0] : 0.0;
+  const double k2 = refined.distortion.size() > 1 ? refined.distortion[1] : 0.0;
+  const double corner_x = std::max(refined.cx, refined.width - 1 - refined.cx) / refined.fx;
+  const double corner_y = std::max(refined.cy, refined.height - 1 - refined.cy) / refined.fy;
+  const double r2_max = corner_x * corner_x + corner_y * corner_y;
+  bool lens_folds = false;
+  for (int i = 1; i <= 20; ++i) {
+    const double r2 = r2_max * i / 20.0;
+    const double factor = 1 + k1 * r2 + k2 * r2 * r2;
+    const double slope = 1 + 3 * k1 * r2 + 5 * k2 * r2 * r2;
+    lens_folds |= !(slope > 0) || !(factor > 0.5 && factor < 1.5);
+  }
   if (!std::isfinite(ratio) || ratio > max_focal_ratio || ratio < 1.0 / max_focal_ratio) {
     reason << "focal " << refined.fx << " px ran away from the prior's " << prior.fx << " px";
+  } else if (lens_folds) {
+    reason << "radial distortion (k1 " << k1 << ", k2 " << k2
+           << ") folds or scales the image corners beyond 50 %";
   } else if (std::abs(refined.cx - 0.5 * (refined.width - 1)) > 0.25 * refined.width ||
              std::abs(refined.cy - 0.5 * (refined.height - 1)) > 0.25 * refined.height) {
     reason << "principal point (" << refined.cx << ", " << refined.cy
@@ -197,8 +240,9 @@ BundleAdjustmentSummary bundleAdjust(scene::Reconstruction& rec,
   };
   std::vector<Residual> residuals;
   std::set<uint32_t> fixed_pose_images;
-  // {f, cx, cy} of the self-calibrated cameras that this problem sees.
-  std::map<uint32_t, std::array<double, 3>> intrinsics;
+  // The lens blocks of the cameras that this problem sees through the lens model: the
+  // self-calibrated ones, and those with a distortion (held fixed unless self-calibrated).
+  std::map<uint32_t, LensBlock> intrinsics;
 
   for (uint64_t point_id : points) {
     auto pit = rec.points.find(point_id);
@@ -213,13 +257,12 @@ BundleAdjustmentSummary bundleAdjust(scene::Reconstruction& rec,
       if (inserted) pose->second = toBlock(image.q_cw, image.t_cw);
       const Eigen::Vector2d& observed = image.points2d[obs.point2d_idx];
       const scene::Camera& camera = rec.cameraOf(image);
-      if (config.refine_focal.count(camera.id)) {
+      if (config.refine_focal.count(camera.id) || camera.hasDistortion()) {
         auto [k, first] = intrinsics.try_emplace(camera.id);
-        if (first) k->second = {camera.fx, camera.cx, camera.cy};
-        problem.AddResidualBlock(
-            SelfCalibratingReprojectionError::create(observed, camera.fy / camera.fx),
-            makeLoss(options), pose->second.q.data(), pose->second.t.data(), point.xyz.data(),
-            k->second.data());
+        if (first) k->second = toLensBlock(camera);
+        problem.AddResidualBlock(LensReprojectionError::create(observed, camera.fy / camera.fx),
+                                 makeLoss(options), pose->second.q.data(), pose->second.t.data(),
+                                 point.xyz.data(), k->second.data());
       } else {
         problem.AddResidualBlock(ReprojectionError::create(observed, camera), makeLoss(options),
                                  pose->second.q.data(), pose->second.t.data(), point.xyz.data());
@@ -277,10 +320,17 @@ BundleAdjustmentSummary bundleAdjust(scene::Reconstruction& rec,
   }
 
   for (auto& [id, k] : intrinsics) {
-    problem.SetParameterLowerBound(k.data(), 0, 1e-3 * k[0]);  // a focal stays positive
-    if (!config.refine_principal_point) {
-      problem.SetManifold(k.data(), new ceres::SubsetManifold(3, {1, 2}));
+    if (!config.refine_focal.count(id)) {
+      problem.SetParameterBlockConstant(k.data());
+      continue;
     }
+    problem.SetParameterLowerBound(k.data(), 0, 1e-3 * k[0]);  // a focal stays positive
+    std::vector<int> fixed;
+    if (!config.refine_principal_point) fixed.insert(fixed.end(), {1, 2});
+    if (!config.refine_radial_distortion) fixed.insert(fixed.end(), {3, 4});
+    if (!config.refine_tangential_distortion) fixed.insert(fixed.end(), {5, 6});
+    if (!fixed.empty())
+      problem.SetManifold(k.data(), new ceres::SubsetManifold(kLensParameters, fixed));
   }
 
   auto rms = [&]() {
@@ -311,12 +361,7 @@ BundleAdjustmentSummary bundleAdjust(scene::Reconstruction& rec,
   summary.constant_pose_images = fixed_pose_images.size();
   summary.variable_points = points.size() - config.constant_points.size();
   for (const auto& [id, k] : intrinsics) {
-    scene::Camera& camera = rec.cameras.at(id);
-    const double aspect = camera.fy / camera.fx;
-    camera.fx = k[0];
-    camera.fy = aspect * k[0];
-    camera.cx = k[1];
-    camera.cy = k[2];
+    if (config.refine_focal.count(id)) fromLensBlock(k, rec.cameras.at(id));
   }
   summary.final_rms_px = rms();
   for (uint32_t id : variable) {
@@ -337,12 +382,21 @@ bool refineAbsolutePose(const scene::Camera& camera, const std::vector<Eigen::Ve
   PoseBlock pose = toBlock(q_cw, t_cw);
   std::vector<Eigen::Vector3d> fixed(inliers.size());
   ceres::Problem problem;
+  LensBlock lens = toLensBlock(camera);
   for (size_t i = 0; i < inliers.size(); ++i) {
     fixed[i] = points.at(inliers[i]);
-    problem.AddResidualBlock(ReprojectionError::create(pixels.at(inliers[i]), camera),
-                             makeLoss(options), pose.q.data(), pose.t.data(), fixed[i].data());
+    const Eigen::Vector2d& observed = pixels.at(inliers[i]);
+    if (camera.hasDistortion()) {
+      problem.AddResidualBlock(LensReprojectionError::create(observed, camera.fy / camera.fx),
+                               makeLoss(options), pose.q.data(), pose.t.data(), fixed[i].data(),
+                               lens.data());
+    } else {
+      problem.AddResidualBlock(ReprojectionError::create(observed, camera), makeLoss(options),
+                               pose.q.data(), pose.t.data(), fixed[i].data());
+    }
     problem.SetParameterBlockConstant(fixed[i].data());
   }
+  if (camera.hasDistortion()) problem.SetParameterBlockConstant(lens.data());
   problem.SetManifold(pose.q.data(), new ceres::QuaternionManifold);
   ceres::Solver::Options solver;
   solver.max_num_iterations = options.max_iterations;

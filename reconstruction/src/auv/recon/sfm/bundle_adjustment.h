@@ -2,8 +2,9 @@
 // Bundle adjustment with Ceres (paper section 3.4.2): camera poses and 3D points refined to
 // minimise the robustified reprojection error in pixels. The intrinsics stay fixed when they
 // come from the pattern calibration (paper 3.3); cameras that only have a prior (EXIF, stated,
-// default: import/README.md) may have their focal length, and optionally their principal point,
-// refined too (self-calibration, shared by every image of the camera).
+// default: import/README.md) may have their focal length, radial (and optionally tangential)
+// distortion and optionally their principal point refined too (self-calibration through the
+// OpenCV lens model, shared by every image of the camera).
 
 #include <cstdint>
 #include <set>
@@ -50,8 +51,13 @@ struct BundleAdjustmentConfig {
   bool fix_gauge = true;
   /// Cameras whose focal length is refined (fy/fx kept), shared by their images.
   std::set<uint32_t> refine_focal;
-  bool refine_principal_point = false;  ///< and, for those, (cx, cy)
+  bool refine_principal_point = false;        ///< and, for those, (cx, cy)
+  bool refine_radial_distortion = false;      ///< and k1, k2 (the camera becomes OPENCV)
+  bool refine_tangential_distortion = false;  ///< and p1, p2
 };
+
+/// Parameters of the lens block of a self-calibrated camera: f, cx, cy, k1, k2, p1, p2.
+constexpr int kLensParameters = 7;
 
 struct BundleAdjustmentSummary {
   bool usable = false;  ///< Ceres reached a usable solution
@@ -62,8 +68,9 @@ struct BundleAdjustmentSummary {
 };
 
 /// Why a self-calibrated camera has run away from its prior (a focal beyond `max_focal_ratio`
-/// of the prior's either way, or a principal point outside the middle half of the image), or
-/// empty when it has not.
+/// of the prior's either way, a radial distortion that folds the image or scales its corners
+/// beyond 50 %, or a principal point outside the middle half of the image), or empty when it
+/// has not.
 std::string runawayIntrinsics(const scene::Camera& refined, const scene::Camera& prior,
                               double max_focal_ratio);
 

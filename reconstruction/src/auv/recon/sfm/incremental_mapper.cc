@@ -135,8 +135,9 @@ void IncrementalMapper::deletePoint(uint64_t point) {
   rec_.points.erase(it);
 }
 
-bool IncrementalMapper::triangulateTrack(uint64_t track) {
+bool IncrementalMapper::triangulateTrack(uint64_t track, bool initial) {
   if (rec_.points.count(track)) return false;
+  if (options_.ignore_two_view_tracks && !initial && tracks_.track(track).size() < 3) return false;
   std::vector<scene::TrackElement> elements;
   std::vector<PosedObservation> observations;
   for (const auto& e : tracks_.track(track)) {
@@ -284,7 +285,7 @@ void IncrementalMapper::buildInitialPair(const PairCandidate& pair) {
   addImage(pair.a, Eigen::Quaterniond::Identity(), Eigen::Vector3d::Zero());
   addImage(pair.b, Eigen::Quaterniond(pair.pose.rotation), pair.pose.translation);
   for (int64_t t : tracks_.tracksOfImage(pair.a)) {
-    if (t != Tracks::kNoTrack) triangulateTrack(static_cast<uint64_t>(t));
+    if (t != Tracks::kNoTrack) triangulateTrack(static_cast<uint64_t>(t), true);
   }
   std::ostringstream line;
   line << "sfm: initial pair " << views_.at(pair.a)->name << " + " << views_.at(pair.b)->name
@@ -365,7 +366,8 @@ std::vector<uint32_t> IncrementalMapper::nextCandidates() const {
 
 bool IncrementalMapper::registerImage(uint32_t id) {
   const View& view = *views_.at(id);
-  const scene::Camera& camera = input_.cameras.at(view.camera_id);
+  // The model's intrinsics: self-calibration may have refined the input's prior.
+  const scene::Camera& camera = rec_.cameras.at(view.camera_id);
   std::vector<Eigen::Vector3d> points;
   std::vector<Eigen::Vector2d> pixels;
   std::vector<uint32_t> keypoints;
@@ -467,6 +469,8 @@ void IncrementalMapper::globalBundleAdjustment(MapperResult& result, int max_ite
       if (!result.intrinsics_reset.count(camera)) config.refine_focal.insert(camera);
     }
     config.refine_principal_point = options_.refine_principal_point;
+    config.refine_radial_distortion = options_.refine_radial_distortion;
+    config.refine_tangential_distortion = options_.refine_tangential_distortion;
   }
   BundleAdjustmentOptions ba = options_.ba;
   ba.max_iterations = max_iterations;

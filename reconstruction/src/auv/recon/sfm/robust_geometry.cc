@@ -24,6 +24,26 @@ estimators::AcRansacOptions acRansacOptions(const RobustOptions& options) {
   return ac;
 }
 
+/// The estimators work on pinhole pixels: a camera with lens distortion (self-calibrated) is
+/// replaced by its pinhole part and its pixels undistorted into it.
+scene::Camera pinholePart(const scene::Camera& camera) {
+  scene::Camera pinhole = camera;
+  pinhole.model = scene::CameraModel::PINHOLE;
+  pinhole.distortion.clear();
+  return pinhole;
+}
+
+std::vector<Eigen::Vector2d> undistortedPixels(const scene::Camera& camera,
+                                               const std::vector<Eigen::Vector2d>& pixels) {
+  std::vector<Eigen::Vector2d> out;
+  out.reserve(pixels.size());
+  for (const Eigen::Vector2d& pixel : pixels) {
+    const Eigen::Vector2d n = camera.pixelToNormalized(pixel);
+    out.emplace_back(camera.fx * n.x() + camera.cx, camera.fy * n.y() + camera.cy);
+  }
+  return out;
+}
+
 /// Decomposes E, keeps the pose with most inliers in front, and those inliers.
 RelativePose poseFromInliers(const Eigen::Matrix3d& essential, const scene::Camera& camera_a,
                              const scene::Camera& camera_b,
@@ -106,7 +126,10 @@ AbsolutePose estimateAbsolutePose(const scene::Camera& camera,
   AbsolutePose result;
   if (points.size() < 4 || points.size() != pixels.size()) return result;
   const auto pose =
-      estimators::estimateAbsolutePose(pixels, points, camera, acRansacOptions(options));
+      camera.hasDistortion()
+          ? estimators::estimateAbsolutePose(undistortedPixels(camera, pixels), points,
+                                             pinholePart(camera), acRansacOptions(options))
+          : estimators::estimateAbsolutePose(pixels, points, camera, acRansacOptions(options));
   if (!pose.success()) return result;
   result.q_cw = Eigen::Quaterniond(pose.model.rotation).normalized();
   result.t_cw = pose.model.translation;

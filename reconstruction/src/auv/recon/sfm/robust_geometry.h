@@ -66,7 +66,8 @@ struct AbsolutePose {
 };
 
 /// Pose of a calibrated camera from 2D-3D correspondences: minimal P3P samples in AC-RANSAC,
-/// the best model refined on its inliers.
+/// the best model refined on its inliers. A camera with lens distortion is handled through its
+/// undistorted pixels (the threshold then applies to those).
 AbsolutePose estimateAbsolutePose(const scene::Camera& camera,
                                   const std::vector<Eigen::Vector3d>& points,
                                   const std::vector<Eigen::Vector2d>& pixels,

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -20,6 +21,7 @@
 #include "auv/recon/features/match_store.h"
 #include "auv/recon/scene/colmap_text.h"
 #include "auv/recon/scene/ply.h"
+#include "auv/recon/sfm/undistorted_model.h"
 
 namespace auv::recon::sfm {
 
@@ -70,6 +72,8 @@ void SfmStageOptions::bind(OptionSet& set) {
   set.add("abs_pose_min_inlier_ratio", &m.abs_pose_min_inlier_ratio,
           "inliers / 2D-3D correspondences to register a view");
   set.add("min_tri_angle", &m.min_tri_angle_deg, "deg: smallest triangulation angle of a point");
+  set.add("ignore_two_view_tracks", &m.ignore_two_view_tracks,
+          "leave tracks of only two images untriangulated (except the initial pair's)");
   set.add("max_reprojection_error", &m.max_reprojection_error_px,
           "px: observations beyond are outliers (also the bound of AC-RANSAC's threshold)");
   set.add("local_ba_images", &m.local_ba_images, "images refined by a local bundle adjustment");
@@ -89,6 +93,10 @@ void SfmStageOptions::bind(OptionSet& set) {
           "self-calibrate the focal length of cameras that only have a prior (import)");
   set.add("refine_principal_point", &m.refine_principal_point,
           "and their principal point (weakly observed: off by default)");
+  set.add("refine_radial_distortion", &m.refine_radial_distortion,
+          "and their radial distortion k1, k2 (OpenCV model)");
+  set.add("refine_tangential_distortion", &m.refine_tangential_distortion,
+          "and their tangential distortion p1, p2 (weakly observed: off by default)");
   set.add("max_focal_ratio", &m.max_focal_ratio,
           "a refined focal beyond this factor of the prior is reset to the prior and flagged");
 }
@@ -279,7 +287,7 @@ SfmStageResult runSfmStage(const Survey& survey, const SfmStageOptions& options)
                                     : survey.sparse();
   StagedOutput staged(model_folder);
   writeSparseModel(rec, staged.path());
-  // The self-calibrated cameras' estimates, as calibration files (no distortion refined).
+  // The self-calibrated cameras' estimates, as calibration files.
   nlohmann::json intrinsics = nlohmann::json::object();
   for (uint32_t id : uncalibrated) {
     const scene::Camera& camera = rec.cameras.at(id);
@@ -288,7 +296,10 @@ SfmStageResult runSfmStage(const Survey& survey, const SfmStageOptions& options)
     estimate.image_size = cv::Size(camera.width, camera.height);
     estimate.camera_matrix =
         (cv::Mat_<double>(3, 3) << camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
-    estimate.distortion = cv::Mat::zeros(1, 5, CV_64F);
+    estimate.distortion = cv::Mat::zeros(1, 5, CV_64F);  // OpenCV order: k1 k2 p1 p2 k3
+    for (size_t i = 0; i < 4 && i < camera.distortion.size(); ++i) {
+      estimate.distortion.at<double>(0, static_cast<int>(i)) = camera.distortion[i];
+    }
     calibration::writeCalibration(staged.path() / (name + ".yaml"), estimate,
                                   calibration::CalibrationOptions());
     const auto reset = result.intrinsics_reset.find(id);
@@ -298,6 +309,8 @@ SfmStageResult runSfmStage(const Survey& survey, const SfmStageOptions& options)
         {"fy", camera.fy},
         {"cx", camera.cx},
         {"cy", camera.cy},
+        {"distortion",
+         camera.distortion.empty() ? std::vector<double>{0, 0, 0, 0} : camera.distortion},
         {"focal_change_percent", 100.0 * (camera.fx / priors.at(id).fx - 1.0)},
         {"refined", options.mapper.refine_focal_length && reset == result.intrinsics_reset.end()},
         {"reset", reset == result.intrinsics_reset.end() ? "" : reset->second}};
@@ -306,7 +319,22 @@ SfmStageResult runSfmStage(const Survey& survey, const SfmStageOptions& options)
       summary.warnings.push_back("camera '" + name + "': " + reset->second);
     }
   }
+  // Dense matching and texturing need pinhole images: when a lens distortion was estimated,
+  // the undistorted workspace is written before anything is committed, so a failure leaves
+  // both folders of the earlier run as they were.
+  const bool lens_distortion = std::any_of(rec.cameras.begin(), rec.cameras.end(),
+                                           [](const auto& c) { return c.second.hasDistortion(); });
+  std::optional<StagedOutput> undistorted;
+  if (model_folder == survey.sparse() && lens_distortion) {
+    undistorted.emplace(survey.undistorted());
+    writeUndistortedWorkspace(rec, survey.corrected(), undistorted->path());
+  }
   staged.commit();
+  if (undistorted) {
+    undistorted->commit();
+  } else if (model_folder == survey.sparse()) {
+    fs::remove_all(survey.undistorted());  // an earlier run's, for another model
+  }
   summary.seconds_writing = since(writing);
 
   summary.images_registered = registered;
@@ -346,6 +374,7 @@ SfmStageResult runSfmStage(const Survey& survey, const SfmStageOptions& options)
         {"abs_pose_min_inliers", options.mapper.abs_pose_min_inliers},
         {"min_tri_angle_deg", options.mapper.min_tri_angle_deg},
         {"max_reprojection_error_px", options.mapper.max_reprojection_error_px},
+        {"ignore_two_view_tracks", options.mapper.ignore_two_view_tracks},
         {"loss", options.loss},
         {"loss_scale_px", options.mapper.ba.loss_scale_px},
         {"navigation", options.navigation}}}};

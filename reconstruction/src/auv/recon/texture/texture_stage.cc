@@ -55,16 +55,17 @@ TextureStageResult runTextureStage(const Survey& survey, const TextureStageOptio
   const auto start = std::chrono::steady_clock::now();
   const fs::path mesh_file = survey.mesh() / "mesh.ply";
   const open3d::geometry::TriangleMesh input = scene::readMesh(mesh_file, "texture");
-  Survey::requireExists(survey.sparse() / "images.txt", "texture", "sfm");
+  const Survey::PinholeWorkspace workspace = survey.pinholeWorkspace();
+  Survey::requireExists(workspace.model / "images.txt", "texture", "sfm");
   scene::Reconstruction model;
   try {
-    model = scene::readColmapText(survey.sparse());
+    model = scene::readColmapText(workspace.model);
   } catch (const std::exception& e) {
     throw StageError("texture", e.what());
   }
   if (model.images.empty()) {
     throw StageError("texture",
-                     (survey.sparse() / "images.txt").string() + ": no registered images");
+                     (workspace.model / "images.txt").string() + ": no registered images");
   }
 
   std::vector<ViewGeometry> views;
@@ -75,12 +76,12 @@ TextureStageResult runTextureStage(const Survey& survey, const TextureStageOptio
     const scene::Camera& camera = model.cameraOf(image);
     if (camera.hasDistortion()) {
       throw StageError("texture", "camera " + std::to_string(camera.id) + " of " +
-                                      (survey.sparse() / "cameras.txt").string() + " is " +
+                                      (workspace.model / "cameras.txt").string() + " is " +
                                       scene::cameraModelName(camera.model) +
                                       " with distortion: texturing needs the undistorted "
                                       "pinhole cameras of the corrected images");
     }
-    const fs::path file = survey.corrected() / image.name;
+    const fs::path file = workspace.images / image.name;
     if (!fs::exists(file)) {
       throw StageError("texture", file.string() + ": image of " + image.name +
                                       " not found (run `auv recon correct` first)");
