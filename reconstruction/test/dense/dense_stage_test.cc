@@ -8,6 +8,7 @@
 #include <fstream>
 
 #include <open3d/io/PointCloudIO.h>
+#include <opencv2/imgcodecs.hpp>
 
 #include "auv/recon/common/option_set.h"
 #include "auv/recon/common/report.h"
@@ -127,6 +128,35 @@ TEST_F(DenseStage, FusedCloudLiesOnTheTrueSurface) {
   ASSERT_TRUE(report["stages"].contains("dense"));
   EXPECT_EQ(report["stages"]["dense"]["points"].get<size_t>(), summary.points);
   EXPECT_GT(report["stages"]["dense"]["matching"]["peak_memory_mb"].get<double>(), 0);
+}
+
+// Masks (masks/mask.h): a masked pixel gets no depth; a wrong-size mask is named.
+TEST_F(DenseStage, MaskedPixelsGetNoDepth) {
+  const Survey survey = makeSurvey(testing::Scene());
+  const cv::Size size = cv::imread((survey.corrected() / "cam" / "image_5.png").string()).size();
+  ASSERT_FALSE(size.empty());
+  cv::Mat mask(size, CV_8U, cv::Scalar(255));
+  mask(cv::Rect(0, 0, size.width / 2, size.height)).setTo(0);
+  fs::create_directories(survey.root() / "masks");
+  ASSERT_TRUE(cv::imwrite((survey.root() / "masks" / "cam.png").string(), mask));
+  const DenseStageResult summary = runDenseStage(survey, options_);
+  EXPECT_EQ(summary.masked_depth_maps, summary.depth_maps);
+  const cv::Mat depth = readDenseArray(survey.dense() / "depth_maps" / "cam" / "image_5.depth.bin");
+  const int half = depth.cols / 2;
+  EXPECT_EQ(cv::countNonZero(depth(cv::Rect(0, 0, half, depth.rows))), 0);
+  EXPECT_GT(cv::countNonZero(depth(cv::Rect(half, 0, depth.cols - half, depth.rows))),
+            depth.total() / 4);
+  EXPECT_EQ(readReport(survey.report())["stages"]["dense"]["masked_depth_maps"].get<size_t>(),
+            summary.depth_maps);
+
+  cv::imwrite((survey.root() / "masks" / "cam.png").string(), cv::Mat(10, 10, CV_8U));
+  try {
+    runDenseStage(survey, options_);
+    FAIL() << "a wrong-size mask was accepted";
+  } catch (const StageError& e) {
+    EXPECT_NE(std::string(e.what()).find("masks/cam.png"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("10x10"), std::string::npos) << e.what();
+  }
 }
 
 TEST_F(DenseStage, MaxImageSizeScalesTheDepthMaps) {

@@ -147,6 +147,36 @@ TEST(TextureStage, TexturesASurveyAndKeepsEarlierOutputsOnFailure) {
   EXPECT_EQ(readObj(survey.textured() / "model.obj").faces.size(), mesh.faces.size());
 }
 
+// Masks (masks/mask.h): a view whose mask hides everything textures no face; a wrong-size
+// mask is named before anything is written.
+TEST(TextureStage, MaskedPixelsGiveNoColour) {
+  TempDir dir;
+  const Survey survey(dir.path / "survey");
+  FaceMesh mesh;
+  writeSurvey(survey, mesh);
+  const std::string hidden = "left_0001_000002.png";
+  fs::create_directories(survey.root() / "masks" / "left");
+  ASSERT_TRUE(cv::imwrite((survey.root() / "masks" / "left" / (hidden + ".png")).string(),
+                          cv::Mat(120, 160, CV_8U, cv::Scalar(0))));
+  TextureStageOptions options;
+  options.texture.atlas.max_page_size = 1024;
+  const TextureStageResult summary = runTextureStage(survey, options);
+  EXPECT_EQ(summary.stats.faces_unseen, 0u);  // the other three views see the floor
+  std::ifstream csv(survey.textured() / "face_views.csv");
+  const std::string text((std::istreambuf_iterator<char>(csv)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(text.find(hidden), std::string::npos);
+  EXPECT_NE(text.find("left_0001_000001.png"), std::string::npos);
+  EXPECT_EQ(readReport(survey.report())["stages"]["texture"]["masked_views"].get<size_t>(), 1u);
+
+  const auto obj_size = fs::file_size(survey.textured() / "model.obj");
+  ASSERT_TRUE(cv::imwrite((survey.root() / "masks" / "left.png").string(),
+                          cv::Mat(60, 80, CV_8U, cv::Scalar(255))));
+  const std::string error = expectStageError(survey, options);
+  EXPECT_NE(error.find("masks/left.png"), std::string::npos) << error;
+  EXPECT_NE(error.find("80x60"), std::string::npos) << error;
+  EXPECT_EQ(fs::file_size(survey.textured() / "model.obj"), obj_size);
+}
+
 TEST(TextureStage, ChainsWithTheMeshStageOnASyntheticSurvey) {
   // dense/fused.ply sampled from a gentle terrain -> auv recon mesh (Poisson, trimming) ->
   // auv recon texture from images of the true terrain: the Poisson mesh's orientation and

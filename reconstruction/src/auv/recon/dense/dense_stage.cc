@@ -8,6 +8,8 @@
 #include <sstream>
 #include <unordered_map>
 
+#include <opencv2/imgproc.hpp>
+
 #include "auv/recon/common/option_set.h"
 #include "auv/recon/common/progress.h"
 #include "auv/recon/common/report.h"
@@ -15,6 +17,7 @@
 #include "auv/recon/common/staged_output.h"
 #include "auv/recon/dense/depth_map.h"
 #include "auv/recon/dense/memory.h"
+#include "auv/recon/masks/mask.h"
 #include "auv/recon/scene/colmap_text.h"
 #include "auv/recon/scene/ply.h"
 
@@ -187,6 +190,7 @@ nlohmann::json DenseStageResult::toJson() const {
           {"depths_fused", depths_fused},
           {"depths_inconsistent", depths_inconsistent},
           {"points", points},
+          {"masked_depth_maps", masked_depth_maps},
           {"seconds", seconds},
           {"neighbours", figures(neighbours)},
           {"matching", figures(matching)},
@@ -195,7 +199,8 @@ nlohmann::json DenseStageResult::toJson() const {
 }
 
 DenseStageResult densify(const scene::Reconstruction& model, const fs::path& image_folder,
-                         const fs::path& output_folder, const DenseStageOptions& options) {
+                         const fs::path& output_folder, const DenseStageOptions& options,
+                         const ImageMasks& masks) {
   options.check();
   const auto start = Clock::now();
   DenseStageResult summary;
@@ -266,8 +271,19 @@ DenseStageResult densify(const scene::Reconstruction& model, const fs::path& ima
       std::vector<View> neighbours;
       for (const uint32_t id : s.neighbours) neighbours.push_back(loadedView(id));
       const View& master = loadedView(s.master);
-      const DepthMapResult result =
+      // Loaded (and size-checked) before the matching: a bad mask fails at once.
+      const cv::Mat mask =
+          masks ? masks(master.name, {master.source_width, master.source_height}) : cv::Mat();
+      DepthMapResult result =
           computeDepthMap(master, neighbours, s.depth_min, s.depth_max, options.matcher);
+      if (!mask.empty()) {  // no depth, hence no fused point, from a masked pixel
+        cv::Mat scaled;
+        cv::resize(mask, scaled, result.depth.size(), 0, 0, cv::INTER_NEAREST);
+        result.depth.setTo(0, scaled == 0);
+        if (!result.confidence.empty()) result.confidence.setTo(0, scaled == 0);
+        result.valid_pixels = static_cast<size_t>(cv::countNonZero(result.depth));
+        ++summary.masked_depth_maps;
+      }
       const fs::path file = depthMapPath(output.path(), master.name);
       fs::create_directories(file.parent_path());
       writeDenseArray(file, result.depth);
@@ -360,7 +376,10 @@ DenseStageResult runDenseStage(const Survey& survey, const DenseStageOptions& op
   } catch (const std::exception& e) {
     throw StageError(kStage, std::string("cannot read the sparse model: ") + e.what());
   }
-  const DenseStageResult summary = densify(model, workspace.images, survey.dense(), options);
+  const masks::SurveyMasks survey_masks(survey, kStage);
+  const DenseStageResult summary = densify(
+      model, workspace.images, survey.dense(), options,
+      [&](const std::string& name, cv::Size size) { return survey_masks.forImage(name, size); });
   nlohmann::json section = summary.toJson();
   section["options"] = options.toJson();
   updateReport(survey.report(), kStage, section);

@@ -10,6 +10,8 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <functional>
+#include <string>
 
 #include <nlohmann/json.hpp>
 
@@ -58,21 +60,27 @@ struct DenseStageResult {
   size_t depths_fused = 0;         ///< depths considered by fusion (not already part of a point)
   size_t depths_inconsistent = 0;  ///< of these, dropped by the consistency check
   size_t points = 0;
-  int width = 0, height = 0;  ///< size of the first depth map, px
+  size_t masked_depth_maps = 0;  ///< depth maps cleared where their image's mask is 0
+  int width = 0, height = 0;     ///< size of the first depth map, px
   SubStageFigures neighbours, matching, fusion, writing;
   double seconds = 0;
 
   nlohmann::json toJson() const;
 };
 
+/// The mask of an image (name as in the model, size of the image file): CV_8U, 0 where the
+/// image must give no depth (masks/mask.h); empty when it has none.
+using ImageMasks = std::function<cv::Mat(const std::string& name, cv::Size size)>;
+
 /// Dense matching of `model` (PINHOLE cameras) with images under `image_folder` (the model's
 /// image names are relative to it), written through a StagedOutput to `output_folder`.
+/// Masked pixels (`masks`, optional) get no depth, hence no fused point.
 /// Throws StageError("dense", ...) for too few registered images, no image to match or a
 /// cloud below min_points (the previous `output_folder` then stays as it was).
 DenseStageResult densify(const scene::Reconstruction& model,
                          const std::filesystem::path& image_folder,
                          const std::filesystem::path& output_folder,
-                         const DenseStageOptions& options);
+                         const DenseStageOptions& options, const ImageMasks& masks = nullptr);
 
 /// The survey's sparse/ and corrected/ -> dense/, and the "dense" section of report.json.
 DenseStageResult runDenseStage(const Survey& survey, const DenseStageOptions& options);

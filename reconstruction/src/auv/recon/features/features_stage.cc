@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <map>
+#include <memory>
 #include <mutex>
 #include <sstream>
 #include <thread>
@@ -15,6 +17,7 @@
 #include "auv/recon/common/report.h"
 #include "auv/recon/common/stage_error.h"
 #include "auv/recon/common/staged_output.h"
+#include "auv/recon/masks/mask.h"
 
 namespace fs = std::filesystem;
 
@@ -86,6 +89,13 @@ FeaturesStageResult runFeaturesStage(const Survey& survey, const FeaturesStageOp
         kStage, "no images (.png/.jpg) in the camera folders of " + survey.corrected().string());
   }
 
+  // Masks (masks/mask.h): no keypoint on a burned-in overlay or the vehicle's own parts.
+  std::map<std::string, std::unique_ptr<masks::CameraMasks>> camera_masks;
+  for (const std::string& camera : cameras) {
+    camera_masks[camera] = std::make_unique<masks::CameraMasks>(survey, camera, kStage);
+  }
+  std::atomic<size_t> masked_images{0};
+
   StagedOutput output(survey.root() / "features");
   for (const std::string& camera : cameras) fs::create_directories(output.path() / camera);
 
@@ -109,7 +119,10 @@ FeaturesStageResult runFeaturesStage(const Survey& survey, const FeaturesStageOp
                                    "truncated or not an image)");
         }
         const std::string name = job.camera + "/" + job.image.filename().string();
-        const ImageFeatures features = extractSift(image, name, options.sift);
+        const cv::Mat mask =
+            camera_masks.at(job.camera)->forImage(job.image.filename().string(), image.size());
+        if (!mask.empty()) ++masked_images;
+        const ImageFeatures features = extractSift(image, name, options.sift, mask);
         FeatureIndexEntry& e = entries[i];
         e.image = name;
         e.camera = job.camera;
@@ -139,6 +152,7 @@ FeaturesStageResult runFeaturesStage(const Survey& survey, const FeaturesStageOp
 
   FeaturesStageResult summary;
   summary.images = entries.size();
+  summary.masked_images = masked_images.load();
   summary.min_features = entries.front().count;
   for (const FeatureIndexEntry& e : entries) {
     summary.features += e.count;
@@ -152,6 +166,7 @@ FeaturesStageResult runFeaturesStage(const Survey& survey, const FeaturesStageOp
                             {{"min", summary.min_features},
                              {"mean", static_cast<double>(summary.features) / summary.images},
                              {"max", summary.max_features}}},
+                           {"masked_images", masked_images.load()},
                            {"seconds", summary.seconds},
                            {"threads", threads},
                            {"options",
@@ -173,8 +188,9 @@ StageReport FeaturesStage::runWith(const Survey& survey,
   const FeaturesStageResult result = runFeaturesStage(survey, options);
   std::ostringstream line;
   line << "features: " << result.images << " images, " << result.features << " keypoints ("
-       << result.min_features << "-" << result.max_features << " per image) in " << result.seconds
-       << " s -> " << (survey.root() / "features").string();
+       << result.min_features << "-" << result.max_features << " per image"
+       << (result.masked_images ? ", " + std::to_string(result.masked_images) + " masked" : "")
+       << ") in " << result.seconds << " s -> " << (survey.root() / "features").string();
   StageReport report;
   report.lines.push_back(line.str());
   report.summary =

@@ -32,6 +32,7 @@ struct FeaturesStageResult {
   size_t images = 0;
   size_t features = 0;  ///< total over the images
   size_t min_features = 0, max_features = 0;
+  size_t masked_images = 0;  ///< images with a mask (masks/mask.h)
   double seconds = 0;
 };
 

@@ -50,11 +50,14 @@ void SiftOptions::check() const {
 }
 
 ImageFeatures extractSift(const cv::Mat& image, const std::string& image_name,
-                          const SiftOptions& options) {
+                          const SiftOptions& options, const cv::Mat& mask) {
   options.check();
   if (image.empty() || image.depth() != CV_8U ||
       (image.channels() != 1 && image.channels() != 3 && image.channels() != 4)) {
     throw std::invalid_argument(image_name + ": not an 8-bit grey or colour image");
+  }
+  if (!mask.empty() && (mask.type() != CV_8UC1 || mask.size() != image.size())) {
+    throw std::invalid_argument(image_name + ": the mask is not 8-bit grey of the image's size");
   }
   cv::Mat gray;
   if (image.channels() == 1) {
@@ -83,13 +86,19 @@ ImageFeatures extractSift(const cv::Mat& image, const std::string& image_name,
         static_cast<int>(std::lround(max_features * megapixels / options.max_features_megapixels));
   }
   const bool strongest = options.keep == "strongest";
-  // OpenCV's nfeatures keeps the strongest; for the largest, detect all and choose below.
+  // OpenCV's nfeatures keeps the strongest, and caps before it applies a mask: for the largest,
+  // or with a mask (masked keypoints must not take the places of kept ones), detect all and
+  // cap below.
   const cv::Ptr<cv::SIFT> sift =
-      cv::SIFT::create(strongest ? max_features : 0, options.octave_layers,
+      cv::SIFT::create(strongest && mask.empty() ? max_features : 0, options.octave_layers,
                        options.contrast_threshold, options.edge_threshold, options.sigma);
   std::vector<cv::KeyPoint> keypoints;
   cv::Mat descriptors;
-  sift->detectAndCompute(gray, cv::noArray(), keypoints, descriptors);
+  cv::Mat detection_mask = mask;  // at the detection scale; OpenCV drops keypoints where 0
+  if (!mask.empty() && mask.size() != gray.size()) {
+    cv::resize(mask, detection_mask, gray.size(), 0, 0, cv::INTER_NEAREST);
+  }
+  sift->detectAndCompute(gray, detection_mask, keypoints, descriptors);
 
   std::vector<int> order(keypoints.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);

@@ -54,8 +54,9 @@ struct SiftOptions {
 
 /// SIFT of one image (BGR or grey, 8 bit). `image_name` goes into the result. Keypoints capped
 /// at max_features (scaled by max_features_megapixels; chosen by `keep`), sorted by decreasing
-/// response.
+/// response. `mask` (optional, CV_8U of the image's size, masks/mask.h): no keypoint where it
+/// is 0.
 ImageFeatures extractSift(const cv::Mat& image, const std::string& image_name,
-                          const SiftOptions& options);
+                          const SiftOptions& options, const cv::Mat& mask = cv::Mat());
 
 }  // namespace auv::recon::features

@@ -13,6 +13,7 @@
 #include "auv/recon/common/report.h"
 #include "auv/recon/common/stage_error.h"
 #include "auv/recon/common/staged_output.h"
+#include "auv/recon/masks/mask.h"
 
 namespace fs = std::filesystem;
 
@@ -206,9 +207,17 @@ KeyframesStageResult runKeyframesStage(const Survey& survey, const KeyframesStag
     outputs.push_back(std::make_unique<StagedOutput>(survey.keyframes() / cameras[c]));
     CameraKeyframes camera;
     camera.camera = cameras[c];
+    // A camera mask (masks/mask.h) keeps the tracked corners off a burned-in overlay.
+    VideoOptions video_options = options.video;
+    const fs::path mask_file = masks::cameraMaskFile(survey, cameras[c]);
+    std::error_code mask_error;
+    if (fs::is_regular_file(mask_file, mask_error)) {
+      video_options.mask = masks::loadMask(mask_file, cv::Size(), kStage);
+      video_options.mask_file = mask_file.string();
+    }
     for (const auto& video : videos[c]) {
       VideoKeyframes v = selectVideoKeyframes(video, outputs.back()->path(), options.selection,
-                                              options.video, [&] { progress.advance(); });
+                                              video_options, [&] { progress.advance(); });
       camera.frames += v.frames_read;
       camera.keyframes += static_cast<int>(v.keyframes.size());
       camera.rejected += static_cast<int>(v.rejected.size());

@@ -145,6 +145,14 @@ std::optional<Keyframe> KeyframeSelector::addFrame(int frame, const cv::Mat& ima
     scale_ = options_.analysis_width > 0 && image.cols > options_.analysis_width
                  ? static_cast<double>(options_.analysis_width) / image.cols
                  : 1.0;
+    if (!mask_.empty()) {
+      if (mask_.size() != image.size() || mask_.type() != CV_8UC1) {
+        throw std::invalid_argument(
+            "KeyframeSelector: the mask is not 8-bit grey of the frames' "
+            "size");
+      }
+      cv::resize(mask_, small_mask_, cv::Size(), scale_, scale_, cv::INTER_NEAREST);
+    }
   } else if (image.cols != full_width_) {
     throw std::invalid_argument("KeyframeSelector: frame " + std::to_string(frame) + " is " +
                                 std::to_string(image.cols) + " px wide, the first was " +
@@ -268,7 +276,7 @@ std::optional<Keyframe> KeyframeSelector::select(size_t best, Trigger trigger, d
   std::vector<cv::Point2f> corners;
   const double min_distance = std::max(1.0, options_.feature_min_distance * chosen.small.cols);
   cv::goodFeaturesToTrack(chosen.small, corners, options_.max_features, options_.feature_quality,
-                          min_distance);
+                          min_distance, small_mask_.empty() ? cv::noArray() : small_mask_);
   if (static_cast<int>(corners.size()) < options_.min_features) {
     // Tracking goes on against the previous keyframe (if any): the next frame opens a new
     // window.

@@ -107,6 +107,11 @@ class KeyframeSelector {
   const std::vector<RejectedFrame>& rejected() const { return rejected_; }
   const SelectorCounts& counts() const { return counts_; }
 
+  /// A mask of the frames (CV_8U of their full size, 0: ignore; masks/mask.h): no corner is
+  /// tracked there, so a burned-in overlay, which never moves, neither holds the median motion
+  /// at zero nor keeps features "tracked" through a new scene. Set before the first frame.
+  void setMask(const cv::Mat& mask) { mask_ = mask; }
+
   /// Variance of the Laplacian of an 8-bit grey image (the paper's blur score).
   static double sharpness(const cv::Mat& gray);
 
@@ -128,6 +133,8 @@ class KeyframeSelector {
   KeyframeOptions options_;
   double scale_ = 1;    ///< analysis px per full-resolution px
   int full_width_ = 0;  ///< px of the first frame
+  cv::Mat mask_;        ///< full resolution, empty: none
+  cv::Mat small_mask_;  ///< at the analysis resolution
   // Tracking state: features of the last keyframe (reference_) and where they are now.
   bool has_reference_ = false;
   std::vector<cv::Point2f> reference_, points_;

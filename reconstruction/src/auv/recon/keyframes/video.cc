@@ -175,6 +175,17 @@ VideoKeyframes selectVideoKeyframes(const fs::path& video, const fs::path& out_f
     if (!ok || frame.empty()) break;
     if (!result.has_sidecar) positions.push_back(capture.get(cv::CAP_PROP_POS_MSEC) / 1000.0);
     const int index = result.frames_read++;
+    if (index == 0 && !video_options.mask.empty()) {
+      if (video_options.mask.size() != frame.size()) {
+        throw StageError(kStage, video_options.mask_file + ": mask is " +
+                                     std::to_string(video_options.mask.cols) + "x" +
+                                     std::to_string(video_options.mask.rows) +
+                                     " px but the frames of " + video.string() + " are " +
+                                     std::to_string(frame.cols) + "x" + std::to_string(frame.rows) +
+                                     " px");
+      }
+      selector.setMask(video_options.mask);
+    }
     std::optional<Keyframe> keyframe;
     try {
       keyframe = selector.addFrame(index, frame);

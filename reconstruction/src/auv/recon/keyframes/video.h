@@ -46,6 +46,10 @@ struct VideoOptions {
   /// A video that ends before its sidecar's (or container's) frame count: false = stage
   /// failure naming the file; true = keep the keyframes read up to the damage and report it.
   bool keep_damaged = false;
+  /// The camera's mask (masks/<camera>.png, 0: ignore; CV_8U of the frames' size) and its
+  /// file, for the message when its size is not the frames'. Empty: none.
+  cv::Mat mask;
+  std::string mask_file;
 };
 
 struct VideoKeyframes {

@@ -12,6 +12,7 @@
 #include "auv/recon/import/import_stage.h"
 #include "auv/recon/keyframes/keyframes_stage.h"
 #include "auv/recon/mesh/mesh_stage.h"
+#include "auv/recon/overlay/masks_stage.h"
 #include "auv/recon/sfm/sfm_stage.h"
 #include "auv/recon/texture/texture_stage.h"
 
@@ -33,6 +34,7 @@ const std::vector<const Stage*>& stages() {
   static const std::vector<std::unique_ptr<const Stage>> owned =
       make<import::ImportStage,          // not chained: footage from outside the survey
            calibration::CalibrateStage,  // not chained: a chessboard recording
+           overlay::MasksStage,          // not chained: masks are for the user to inspect
            keyframes::KeyframesStage,    // the chain of `auv recon run`, docs/paper.md §3.1-3.7
            color::CorrectStage, features::FeaturesStage, features::MatchStage, sfm::SfmStage,
            dense::DenseStage, mesh::MeshStage, texture::TextureStage,

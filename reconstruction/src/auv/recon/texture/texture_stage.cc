@@ -9,6 +9,7 @@
 #include "auv/recon/common/report.h"
 #include "auv/recon/common/stage_error.h"
 #include "auv/recon/common/staged_output.h"
+#include "auv/recon/masks/mask.h"
 #include "auv/recon/mesh/mesh_stage.h"
 #include "auv/recon/scene/colmap_text.h"
 #include "auv/recon/scene/mesh_io.h"
@@ -104,9 +105,20 @@ TextureStageResult runTextureStage(const Survey& survey, const TextureStageOptio
 
   ImageCache cache(files, sizes, options.image_cache);
   const ImageLoader loader = [&cache](int view) { return cv::Mat(cache.get(view)); };
+  // Masks (masks/mask.h): no colour from a burned-in overlay or the vehicle's parts. Checked
+  // here, so that a bad mask fails at once; read again on demand (not all held in memory).
+  const masks::SurveyMasks survey_masks(survey, "texture");
+  for (size_t v = 0; v < names.size(); ++v) survey_masks.forImage(names[v], sizes[v]);
+  const ImageLoader mask_loader = [&](int view) {
+    try {
+      return survey_masks.forImage(names.at(view), sizes.at(view));
+    } catch (const std::exception&) {  // checked above; never throw in the parallel loop
+      return cv::Mat(sizes.at(view), CV_8U, cv::Scalar(0));  // the view gives no colour
+    }
+  };
   TextureResult result;
   try {
-    result = textureMesh(mesh, views, loader, options.texture);
+    result = textureMesh(mesh, views, loader, options.texture, mask_loader);
   } catch (const StageError& e) {
     if (!cache.errors().empty()) throw StageError("texture", cache.errors().front());
     const std::string cause = std::string(e.what()).substr(e.stage().size() + 2);
@@ -161,6 +173,7 @@ TextureStageResult runTextureStage(const Survey& survey, const TextureStageOptio
       {"blended_texels", s.atlas.blended_texels},
       {"texel_scale", s.atlas.texel_scale},
       {"image_reads", cache.reads()},
+      {"masked_views", survey_masks.masked()},
       {"seconds",
        {{"visibility", s.seconds_visibility},
         {"selection", s.seconds_selection},

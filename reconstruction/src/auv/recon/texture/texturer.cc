@@ -16,7 +16,8 @@ double since(std::chrono::steady_clock::time_point start) {
 }  // namespace
 
 TextureResult textureMesh(const FaceMesh& mesh, const std::vector<ViewGeometry>& views,
-                          const ImageLoader& images, const TextureOptions& options) {
+                          const ImageLoader& images, const TextureOptions& options,
+                          const ImageLoader& masks) {
   options.check();
   if (mesh.faces.empty()) throw StageError("texture", "the mesh has no faces");
   if (views.empty()) throw StageError("texture", "no views to texture from");
@@ -37,7 +38,7 @@ TextureResult textureMesh(const FaceMesh& mesh, const std::vector<ViewGeometry>&
       progress.advance();
       return image;
     };
-    result.observations = observeFaces(mesh, views, counted, options.selection);
+    result.observations = observeFaces(mesh, views, counted, options.selection, masks);
   }
   for (const auto& face : result.observations) stats.observations += face.size();
   if (options.selection.photo_consistency) {

@@ -45,9 +45,11 @@ struct TextureResult {
   TextureStats stats;
 };
 
-/// Textures `mesh` from `views`. Throws StageError("texture", ...) for an empty mesh, no views,
-/// or when no view sees any face.
+/// Textures `mesh` from `views`; `masks` (optional, observeFaces): masked pixels give no
+/// colour. Throws StageError("texture", ...) for an empty mesh, no views, or when no view sees
+/// any face.
 TextureResult textureMesh(const FaceMesh& mesh, const std::vector<ViewGeometry>& views,
-                          const ImageLoader& images, const TextureOptions& options);
+                          const ImageLoader& images, const TextureOptions& options,
+                          const ImageLoader& masks = nullptr);
 
 }  // namespace auv::recon::texture

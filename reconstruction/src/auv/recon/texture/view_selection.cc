@@ -90,6 +90,7 @@ void forPixelsIn(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen
 std::vector<std::pair<int, FaceObservation>> observeInView(const FaceMesh& mesh,
                                                            const ViewGeometry& view, int view_id,
                                                            const cv::Mat3b& image,
+                                                           const cv::Mat1b& mask,
                                                            const ViewSelectionOptions& options) {
   std::vector<std::pair<int, FaceObservation>> seen;
   const RasterBuffers buffers = rasterize(mesh.vertices, mesh.faces, view);
@@ -149,7 +150,9 @@ std::vector<std::pair<int, FaceObservation>> observeInView(const FaceMesh& mesh,
     double gmi = 0;
     Eigen::Vector3d color_sum = Eigen::Vector3d::Zero();
     int pixels = 0;
+    bool masked = false;
     forPixelsIn(p0, p1, p2, size, [&](int x, int y) {
+      if (!mask.empty() && mask(y, x) == 0) masked = true;
       gmi += gradient(y, x);
       const cv::Vec3b& c = image(y, x);
       color_sum += Eigen::Vector3d(c[0], c[1], c[2]);
@@ -157,6 +160,9 @@ std::vector<std::pair<int, FaceObservation>> observeInView(const FaceMesh& mesh,
     });
     if (pixels == 0) {  // smaller than a pixel: sample its centre
       const Eigen::Vector2d m = (p0 + p1 + p2) / 3.0;
+      const int mx = std::clamp(static_cast<int>(std::lround(m.x())), 0, size.width - 1);
+      const int my = std::clamp(static_cast<int>(std::lround(m.y())), 0, size.height - 1);
+      if (!mask.empty() && mask(my, mx) == 0) masked = true;
       color_sum = sampleBilinear(image, m.x(), m.y()).cast<double>();
       gmi = observation.area_px *
             gradient(static_cast<int>(std::lround(m.y())), static_cast<int>(std::lround(m.x())));
@@ -164,6 +170,7 @@ std::vector<std::pair<int, FaceObservation>> observeInView(const FaceMesh& mesh,
     } else {
       gmi *= observation.area_px / pixels;  // the integral over the exact projected area
     }
+    if (masked) continue;
     observation.mean_color = (color_sum / pixels).cast<float>();
     observation.quality =
         options.data_term == "area"
@@ -180,7 +187,8 @@ std::vector<std::pair<int, FaceObservation>> observeInView(const FaceMesh& mesh,
 std::vector<std::vector<FaceObservation>> observeFaces(const FaceMesh& mesh,
                                                        const std::vector<ViewGeometry>& views,
                                                        const ImageLoader& images,
-                                                       const ViewSelectionOptions& options) {
+                                                       const ViewSelectionOptions& options,
+                                                       const ImageLoader& masks) {
   options.check();
   std::vector<std::vector<std::pair<int, FaceObservation>>> per_view(views.size());
 #pragma omp parallel for schedule(dynamic, 1)
@@ -190,7 +198,9 @@ std::vector<std::vector<FaceObservation>> observeFaces(const FaceMesh& mesh,
         image.rows != views[v].height()) {
       continue;  // the loader reports bad images; a view without image sees nothing
     }
-    per_view[v] = observeInView(mesh, views[v], static_cast<int>(v), image, options);
+    cv::Mat mask = masks ? masks(static_cast<int>(v)) : cv::Mat();
+    if (!mask.empty() && (mask.type() != CV_8UC1 || mask.size() != image.size())) mask.release();
+    per_view[v] = observeInView(mesh, views[v], static_cast<int>(v), image, mask, options);
   }
   std::vector<std::vector<FaceObservation>> observations(mesh.faces.size());
   for (auto& seen : per_view) {  // in view order: each face's list is sorted by view

@@ -83,10 +83,14 @@ struct ViewSelectionOptions {
 using ImageLoader = std::function<cv::Mat(int view)>;
 
 /// Per face, the views that see it with their quality and mean colour (sorted by view).
+/// `masks` (optional): per view a CV_8U mask of the image's size, 0 where the image must give
+/// no colour (masks/mask.h), or empty; a view does not observe a face that covers a masked
+/// pixel, so no colour of the face comes from there.
 std::vector<std::vector<FaceObservation>> observeFaces(const FaceMesh& mesh,
                                                        const std::vector<ViewGeometry>& views,
                                                        const ImageLoader& images,
-                                                       const ViewSelectionOptions& options);
+                                                       const ViewSelectionOptions& options,
+                                                       const ImageLoader& masks = nullptr);
 
 /// Removes the observations whose colour is inconsistent with the face's other views
 /// (mean-shift mode, Waechter section 3.2), after dividing each view's colours by its exposure
