@@ -32,12 +32,13 @@ fs::path freshFolder(const std::string& name) {
 }
 
 void writeCorrectedYaml(const fs::path& file, int width, int height, double f, double cx,
-                        double cy) {
+                        double cy, const std::string& prior_source = "") {
   cv::FileStorage storage(file.string(), cv::FileStorage::WRITE);
   storage << "image_width" << width << "image_height" << height;
   storage << "camera_matrix" << (cv::Mat_<double>(3, 3) << f, 0, cx, 0, f, cy, 0, 0, 1);
   storage << "distortion_coefficients" << cv::Mat::zeros(1, 5, CV_64F);
   storage << "rms_reprojection_error_px" << 0.0;
+  if (!prior_source.empty()) storage << "prior_source" << prior_source;
 }
 
 std::string errorOf(const std::function<void()>& f) {
@@ -140,6 +141,33 @@ TEST(SfmStage, SceauxCastleRegistersAllElevenImagesBelowOnePixel) {
   ASSERT_FALSE(accepted.warnings.empty());
   EXPECT_NE(accepted.warnings.back().find("accepted"), std::string::npos);
   EXPECT_EQ(scene::readColmapText(survey.sparse()).images.size(), 2u);
+
+  // Uncalibrated: only the EXIF prior (35 mm equivalent: 2865.6 px at full size, -1.4 %).
+  // Focal and radial distortion are self-calibrated, and the pinhole workspace is written for
+  // dense and texture. Full-size figures (+2.9 % focal, k1 -0.25) in import/README.md.
+  writeCorrectedYaml(survey.corrected() / "castle.yaml", 1416, 1064, 2865.58 / 2, 707.75, 531.75,
+                     "exif_35mm");
+  const SfmStageResult self = runSfmStage(survey, options);
+  EXPECT_EQ(self.images_registered, 11u);
+  EXPECT_LT(self.mean_reprojection_error_px, 1.0);
+  const scene::Reconstruction lens = scene::readColmapText(survey.sparse());
+  const scene::Camera& castle = lens.cameras.at(1);
+  EXPECT_EQ(castle.model, scene::CameraModel::OPENCV);
+  EXPECT_NEAR(castle.fx / (2905.88 / 2), 1.0, 0.04);
+  ASSERT_EQ(castle.distortion.size(), 4u);
+  EXPECT_LT(castle.distortion[0], -0.1);  // the Kodak's barrel distortion
+  const scene::Reconstruction pinhole = scene::readColmapText(survey.undistorted() / "sparse");
+  EXPECT_EQ(pinhole.cameras.at(1).model, scene::CameraModel::PINHOLE);
+  EXPECT_EQ(pinhole.images.size(), 11u);
+  EXPECT_EQ(survey.pinholeWorkspace().images, survey.undistorted());
+  for (const auto& [id, image] : pinhole.images) {
+    EXPECT_TRUE(fs::exists(survey.undistorted() / image.name)) << image.name;
+  }
+  // Calibrated again: no distortion, the workspace goes.
+  writeCorrectedYaml(survey.corrected() / "castle.yaml", 1416, 1064, 2905.88 / 2, 707.75, 531.75);
+  runSfmStage(survey, options);
+  EXPECT_FALSE(fs::exists(survey.undistorted()));
+  EXPECT_EQ(survey.pinholeWorkspace().model, survey.sparse());
   fs::remove_all(root);
 }
 
