@@ -43,7 +43,7 @@ results=bench_results/canyon_pipeline_$stamp
 rows=$results.rows
 : > "$rows"
 
-stages=(keyframes correct features match sfm dense mesh texture evaluate figures)
+stages=(keyframes correct features match sfm dense mesh restore texture evaluate figures)
 started=0
 [ -z "$from" ] && started=1
 status=0
@@ -124,6 +124,10 @@ if evaluation:
     tex = evaluation.get("texture", {})
     md.append(f"Texture: {tex.get('status')}; median PSNR {tex.get('median_psnr_db')} dB, "
               f"after per-channel gain/offset {tex.get('median_psnr_gain_offset_db')} dB.")
+    if "median_psnr_true_texture_db" in tex:
+        md.append(f"Against the true texture: median PSNR {tex.get('median_psnr_true_texture_db')} dB, "
+                  f"after per-channel gain/offset {tex.get('median_psnr_true_texture_gain_offset_db')} dB, "
+                  f"CIEDE2000 {tex.get('median_delta_e_2000_true_texture')}.")
 open(results + ".md", "w").write("\n".join(md) + "\n")
 print("\n".join(md))
 print(f"\nresults: {results}.md, {results}.json")

@@ -105,3 +105,32 @@ TEST(ReadVideoFrames, FramesByNumber) {
 
 }  // namespace
 }  // namespace auv::recon::evaluate
+
+// Sharma, Wu and Dalal (2005), "The CIEDE2000 color-difference formula: implementation notes,
+// supplementary test data": pairs 1, 7, 17, 25 and 34 of their table (expected to 4 decimals).
+TEST(DeltaE, Ciede2000MatchesSharmasTestData) {
+  using auv::recon::evaluate::ciede2000;
+  EXPECT_NEAR(ciede2000({50.0, 2.6772, -79.7751}, {50.0, 0.0, -82.7485}), 2.0425, 1e-4);
+  EXPECT_NEAR(ciede2000({50.0, 0.0, 0.0}, {50.0, -1.0, 2.0}), 2.3669, 1e-4);
+  EXPECT_NEAR(ciede2000({50.0, 2.5, 0.0}, {73.0, 25.0, -18.0}), 27.1492, 1e-4);
+  EXPECT_NEAR(ciede2000({60.2574, -34.0099, 36.2677}, {60.4626, -34.1751, 39.4387}), 1.2644, 1e-4);
+  EXPECT_NEAR(ciede2000({2.0776, 0.0795, -1.1350}, {0.9033, -0.0636, -0.5514}), 0.9082, 1e-4);
+  EXPECT_DOUBLE_EQ(ciede2000({40, 10, -5}, {40, 10, -5}), 0.0);
+}
+
+TEST(DeltaE, ImagesOverAMask) {
+  using auv::recon::evaluate::deltaE2000;
+  cv::Mat3b a(10, 10, cv::Vec3b(100, 120, 140)), b = a.clone();
+  b(cv::Rect(0, 0, 5, 10)).setTo(cv::Vec3b(100, 120, 200));
+  cv::Mat1b left(10, 10, uchar(0)), right(10, 10, uchar(0));
+  left(cv::Rect(0, 0, 5, 10)).setTo(255);
+  right(cv::Rect(5, 0, 5, 10)).setTo(255);
+  EXPECT_NEAR(deltaE2000(a, b, right).mean, 0.0, 1e-6);
+  const auto changed = deltaE2000(a, b, left);
+  EXPECT_EQ(changed.pixels, 50u);
+  EXPECT_GT(changed.mean, 5.0);
+  const auto whole = deltaE2000(a, b);  // empty mask: every pixel, half of them changed
+  EXPECT_EQ(whole.pixels, 100u);
+  EXPECT_NEAR(whole.mean, changed.mean / 2, 1e-9);
+  EXPECT_THROW(deltaE2000(a, cv::Mat3b(5, 5)), std::invalid_argument);
+}

@@ -37,7 +37,7 @@ void touch(const fs::path& file, fs::file_time_type when) {
 
 TEST(Pipeline, StagesComeInThePapersOrder) {
   EXPECT_EQ(stageNames(), (std::vector<std::string>{"keyframes", "correct", "features", "match",
-                                                    "sfm", "dense", "mesh", "texture"}));
+                                                    "sfm", "dense", "mesh", "restore", "texture"}));
 }
 
 TEST(Pipeline, OutputIsUpToDateOnlyWhenNewerThanEveryInput) {

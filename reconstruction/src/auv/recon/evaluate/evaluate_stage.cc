@@ -119,7 +119,8 @@ StageReport EvaluateStage::runWith(const Survey& survey,
   if (texture.contains("median_psnr_true_texture_db")) {
     line << "; " << fixed(texture["median_psnr_true_texture_db"], 2) << " dB ("
          << fixed(texture["median_psnr_true_texture_gain_offset_db"], 2)
-         << " dB) against the true texture";
+         << " dB) against the true texture, CIEDE2000 "
+         << fixed(texture["median_delta_e_2000_true_texture"], 2);
   }
   report.lines.push_back(line.str());
   report.lines.push_back("evaluate: " + fixed(result["seconds"], 1) + " s -> " +

@@ -371,7 +371,7 @@ json evaluateSurvey(const Survey& survey, const fs::path& ground_truth_run,
     }
     const size_t per_video = std::max<size_t>(
         1, static_cast<size_t>(options.psnr_views) / std::max<size_t>(1, keyframes_of.size()));
-    std::vector<double> raw, gain, true_raw, true_gain;
+    std::vector<double> raw, gain, true_raw, true_gain, true_delta_e;
     const fs::path true_texture_run = options.true_texture_run.empty()
                                           ? recordedRun(survey, "true_texture_run")
                                           : fs::path(options.true_texture_run);
@@ -429,6 +429,9 @@ json evaluateSurvey(const Survey& survey, const fs::path& ground_truth_run,
             true_gain.push_back(q.psnr_gain_db);
             entry["psnr_true_texture_db"] = number(q.psnr_db);
             entry["psnr_true_texture_gain_offset_db"] = number(q.psnr_gain_db);
+            const DeltaEResult e = deltaE2000(true_image, image, mask);
+            true_delta_e.push_back(e.mean);
+            entry["delta_e_2000_true_texture"] = number(e.mean);
           }
         }
         if (options.write_views) {
@@ -457,6 +460,7 @@ json evaluateSurvey(const Survey& survey, const fs::path& ground_truth_run,
     if (!true_raw.empty()) {
       texture["median_psnr_true_texture_db"] = number(median(true_raw));
       texture["median_psnr_true_texture_gain_offset_db"] = number(median(true_gain));
+      texture["median_delta_e_2000_true_texture"] = number(median(true_delta_e));
     }
   }
   result["texture"] = texture;

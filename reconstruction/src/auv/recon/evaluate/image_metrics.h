@@ -30,6 +30,20 @@ struct PsnrResult {
 /// std::invalid_argument for mismatched images; pixels = 0 and psnr 0 when the mask is empty.
 PsnrResult psnr(const cv::Mat& reference, const cv::Mat& test, const cv::Mat& mask = cv::Mat());
 
+/// CIEDE2000 colour difference of two CIELAB colours (L 0-100; Sharma, Wu and Dalal 2005).
+double ciede2000(const cv::Vec3d& lab1, const cv::Vec3d& lab2);
+
+struct DeltaEResult {
+  double mean = 0, median = 0;  ///< CIEDE2000 over the pixels
+  size_t pixels = 0;
+};
+
+/// CIEDE2000 between two 8-bit BGR sRGB images (same size, CV_8UC3) over the non-zero pixels of
+/// `mask` (CV_8U, empty = all), through OpenCV's sRGB -> CIELAB (D65). Throws
+/// std::invalid_argument for mismatched images.
+DeltaEResult deltaE2000(const cv::Mat& reference, const cv::Mat& test,
+                        const cv::Mat& mask = cv::Mat());
+
 /// Frame `frame` (from 0) of a video, read by decoding from the start (seeking in H.264 is
 /// not frame-exact); throws StageError("evaluate", ...) naming the video when it has fewer
 /// frames or cannot be opened.

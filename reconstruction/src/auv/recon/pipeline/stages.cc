@@ -4,6 +4,7 @@
 
 #include "auv/recon/calibration/calibrate_stage.h"
 #include "auv/recon/color/correct_stage.h"
+#include "auv/recon/color/restore_stage.h"
 #include "auv/recon/dense/dense_stage.h"
 #include "auv/recon/evaluate/evaluate_stage.h"
 #include "auv/recon/evaluate/figures_stage.h"
@@ -37,7 +38,7 @@ const std::vector<const Stage*>& stages() {
            overlay::MasksStage,          // not chained: masks are for the user to inspect
            keyframes::KeyframesStage,    // the chain of `auv recon run`, docs/paper.md §3.1-3.7
            color::CorrectStage, features::FeaturesStage, features::MatchStage, sfm::SfmStage,
-           dense::DenseStage, mesh::MeshStage, texture::TextureStage,
+           dense::DenseStage, mesh::MeshStage, color::RestoreStage, texture::TextureStage,
            evaluate::EvaluateStage,  // not chained: the simulated run (docs/paper.md §4.3)
            evaluate::FiguresStage>();
   static const std::vector<const Stage*> all = [] {

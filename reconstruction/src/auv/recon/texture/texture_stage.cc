@@ -22,6 +22,8 @@ namespace auv::recon::texture {
 void TextureStageOptions::check() const {
   texture.check();
   AUV_RECON_CHECK_OPTION(image_cache >= 1, image_cache, "must be >= 1");
+  AUV_RECON_CHECK_OPTION(images == "auto" || images == "corrected" || images == "restored", images,
+                         "must be auto, corrected or restored");
 }
 
 void TextureStageOptions::bind(OptionSet& set) {
@@ -49,6 +51,8 @@ void TextureStageOptions::bind(OptionSet& set) {
   set.add("max_atlas_megapixels", &a.max_atlas_megapixels,
           "texel budget of the atlas (patches scaled down beyond it)");
   set.add("image_cache", &image_cache, "images kept in memory at once");
+  set.add("images", &images,
+          "corrected, restored (auv recon restore) or auto: restored/ when it has a water.yaml");
 }
 
 TextureStageResult runTextureStage(const Survey& survey, const TextureStageOptions& options) {
@@ -69,6 +73,15 @@ TextureStageResult runTextureStage(const Survey& survey, const TextureStageOptio
                      (workspace.model / "images.txt").string() + ": no registered images");
   }
 
+  // The images: the range-aware restoration when asked for (or, with `auto`, when it was run).
+  const fs::path restored = survey.root() / "restored";
+  const bool use_restored = options.images == "restored" ||
+                            (options.images == "auto" && fs::exists(restored / "water.yaml"));
+  if (options.images == "restored")
+    Survey::requireExists(restored / "water.yaml", "texture", "restore");
+  const fs::path image_folder = use_restored ? restored : workspace.images;
+  const std::string image_producer = use_restored ? "restore" : "correct";
+
   std::vector<ViewGeometry> views;
   std::vector<std::string> names;
   std::vector<fs::path> files;
@@ -82,10 +95,10 @@ TextureStageResult runTextureStage(const Survey& survey, const TextureStageOptio
                                       " with distortion: texturing needs the undistorted "
                                       "pinhole cameras of the corrected images");
     }
-    const fs::path file = workspace.images / image.name;
+    const fs::path file = image_folder / image.name;
     if (!fs::exists(file)) {
       throw StageError("texture", file.string() + ": image of " + image.name +
-                                      " not found (run `auv recon correct` first)");
+                                      " not found (run `auv recon " + image_producer + "` first)");
     }
     ViewGeometry view;
     view.camera = camera;
@@ -150,7 +163,10 @@ TextureStageResult runTextureStage(const Survey& survey, const TextureStageOptio
   const TextureStats& s = summary.stats;
   const ViewSelectionOptions& o = options.texture.selection;
   nlohmann::json section = {
-      {"input", {{"mesh", "mesh/mesh.ply"}, {"sparse", "sparse/"}, {"images", "corrected/"}}},
+      {"input",
+       {{"mesh", "mesh/mesh.ply"},
+        {"sparse", "sparse/"},
+        {"images", use_restored ? "restored/" : "corrected/"}}},
       {"faces", s.faces},
       {"faces_seen", s.faces_seen},
       {"faces_unseen", s.faces_unseen},

@@ -4,6 +4,7 @@
 // image that textures each face, for the per-camera figure); report.json section "texture".
 
 #include <cstddef>
+#include <string>
 
 #include "auv/recon/common/option_set.h"
 #include "auv/recon/common/stage.h"
@@ -16,6 +17,9 @@ struct TextureStageOptions {
   TextureOptions texture;
   /// Images kept in memory at once (each 2704x2028 BGR is 16 MB).
   size_t image_cache = 24;
+  /// Images textured from: `corrected` (lαβ, corrected/), `restored` (range-aware, restored/ of
+  /// `auv recon restore`), or `auto`: restored/ when it holds a water.yaml, else corrected/.
+  std::string images = "auto";
 
   void check() const;
   /// Binds every option to `--flag value` and to the `texture:` section of a config file.
@@ -41,7 +45,8 @@ class TextureStage final : public StageWith<TextureStageOptions> {
     return "<survey>   textured model (view selection, seam levelling)";
   }
   std::string surveyHelp() const override {
-    return "survey folder (reads mesh/mesh.ply, sparse/, corrected/; writes textured/)";
+    return "survey folder (reads mesh/mesh.ply, sparse/, restored/ or corrected/; writes "
+           "textured/)";
   }
   std::vector<std::filesystem::path> inputs(const Survey& survey) const override {
     return {survey.mesh(), survey.sparse()};
