@@ -337,6 +337,25 @@ TEST(Restore, BadInputIsNamedAndEarlierOutputStays) {
   }
 }
 
+// Water that cannot be estimated (here: no surface point seen by enough views) is not a
+// failure of the run: nothing restored, the earlier restored/ goes, texture uses corrected/.
+TEST(Restore, WaterThatCannotBeEstimatedLeavesTheCorrectedImagesToTexture) {
+  TempDir dir;
+  const Survey survey(dir.path / "survey");
+  writeSurvey(survey);
+  RestoreStageOptions options;
+  runRestoreStage(survey, options);
+  ASSERT_TRUE(fs::exists(restoredFolder(survey) / "water.yaml"));
+  options.water.min_views = 100000;
+  const RestoreStageResult result = runRestoreStage(survey, options);
+  EXPECT_NE(result.not_restored.find("mesh.ply"), std::string::npos) << result.not_restored;
+  EXPECT_EQ(result.images, 0u);
+  EXPECT_FALSE(fs::exists(restoredFolder(survey)));
+  const StageReport report = RestoreStage().runWith(survey, options);
+  ASSERT_EQ(report.warnings.size(), 1u);
+  EXPECT_NE(report.warnings[0].find("corrected/"), std::string::npos) << report.warnings[0];
+}
+
 TEST(Restore, RangeMapOfAnotherSizeIsRefused) {
   const cv::Mat3b image(120, 160, cv::Vec3b(50, 60, 70));
   const cv::Mat1f range(60, 80, 2.0f);

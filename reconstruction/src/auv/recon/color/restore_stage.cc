@@ -310,12 +310,21 @@ RestoreStageResult runRestoreStage(const Survey& survey, const RestoreStageOptio
 
   RestoreStageResult result;
   WaterModel& water = result.model;
+  auto notRestored = [&](const std::string& why) {
+    result.not_restored = why;
+    fs::remove_all(restoredFolder(survey));
+    result.seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    updateReport(survey.report(), kStage,
+                 {{"images", 0}, {"not_restored", why}, {"seconds", result.seconds}});
+    return result;
+  };
   try {
     result.backscatter = fitBackscatter(samples, options.water, water);
     result.attenuation = fitAttenuation(observations, options.water, water);
   } catch (const std::invalid_argument& e) {
-    throw StageError(kStage, mesh_file.string() + " and " + std::to_string(keyframes.size()) +
-                                 " keyframes: " + e.what());
+    return notRestored(mesh_file.string() + " and " + std::to_string(keyframes.size()) +
+                       " keyframes: " + e.what());
   }
   // The light's trend across the scene (daylight fading with depth below the surface), relative
   // to where the cameras are.
@@ -329,7 +338,7 @@ RestoreStageResult runRestoreStage(const Survey& survey, const RestoreStageOptio
     try {
       fitIlluminantGradient(result.attenuation.colors, positions, origin, options.water, water);
     } catch (const std::invalid_argument& e) {
-      throw StageError(kStage, mesh_file.string() + ": " + e.what());
+      return notRestored(mesh_file.string() + ": " + e.what());
     }
   }
   // Grey world over the restored surface points: the average light left on the scene is not
@@ -380,6 +389,13 @@ RestoreStageResult runRestoreStage(const Survey& survey, const RestoreStageOptio
 
 StageReport RestoreStage::runWith(const Survey& survey, const RestoreStageOptions& options) const {
   const RestoreStageResult r = runRestoreStage(survey, options);
+  if (!r.not_restored.empty()) {
+    StageReport report;
+    report.warnings.push_back("colour not restored: " + r.not_restored +
+                              "; texture uses the corrected/ images");
+    report.summary = "not restored (water not estimable)";
+    return report;
+  }
   const auto rgb = [](const Eigen::Array3d& v) {
     std::ostringstream s;
     s << "(" << v[0] << ", " << v[1] << ", " << v[2] << ")";

@@ -38,14 +38,19 @@ struct RestoreStageResult {
   AttenuationFitStats attenuation;
   size_t images = 0;
   double seconds = 0;
+  /// Why the water could not be estimated (too few dark pixels or surface points seen at
+  /// several ranges, ...): nothing restored, restored/ removed, texture uses corrected/.
+  std::string not_restored;
 };
 
 /// restored/ of a survey.
 std::filesystem::path restoredFolder(const Survey& survey);
 
 /// Runs the stage. StageError("restore", ...) naming the file for a missing mesh, sparse model
-/// or keyframe, a keyframe of another size than its camera, a distorted camera in sparse/, or a
-/// fit without enough data; restored/ is then left as it was.
+/// or keyframe, a keyframe of another size than its camera or a distorted camera in sparse/;
+/// restored/ is then left as it was. A survey whose images and ranges do not hold enough to
+/// estimate the water is not an error: `not_restored` says why, restored/ (of an earlier model)
+/// is removed, so that texture falls back to corrected/, and `auv recon run` goes on.
 RestoreStageResult runRestoreStage(const Survey& survey, const RestoreStageOptions& options);
 
 class RestoreStage final : public StageWith<RestoreStageOptions> {
