@@ -366,6 +366,18 @@ CameraCalibration readCalibration(const fs::path& file, const std::string& stage
   return c;
 }
 
+CameraCalibration calibrationOf(const scene::Camera& camera) {
+  CameraCalibration c;
+  c.image_size = cv::Size(camera.width, camera.height);
+  c.camera_matrix =
+      (cv::Mat_<double>(3, 3) << camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
+  c.distortion = cv::Mat::zeros(1, 5, CV_64F);
+  for (size_t i = 0; i < camera.distortion.size() && i < 5; ++i) {
+    c.distortion.at<double>(0, static_cast<int>(i)) = camera.distortion[i];
+  }
+  return c;
+}
+
 scene::Camera readUndistortedCamera(const fs::path& file, uint32_t id, const std::string& stage) {
   const CameraCalibration c = readCalibration(file, stage);
   if (cv::countNonZero(c.distortion != 0) > 0) {

@@ -90,6 +90,10 @@ CameraCalibration readCalibration(const std::filesystem::path& file, const std::
 /// The pinhole camera of undistorted images (`corrected/<camera>.yaml`, which the correct
 /// stage writes) with id `id`. Throws StageError(stage, ...) naming the file when it cannot be
 /// read (readCalibration) or has non-zero distortion_coefficients.
+/// The calibration of a model's camera: its matrix and (up to five) OpenCV distortion
+/// coefficients, e.g. a lens that sfm self-calibrated.
+CameraCalibration calibrationOf(const scene::Camera& camera);
+
 scene::Camera readUndistortedCamera(const std::filesystem::path& file, uint32_t id,
                                     const std::string& stage);
 

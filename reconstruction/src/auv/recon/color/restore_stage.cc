@@ -121,24 +121,18 @@ std::vector<Keyframe> listKeyframes(const Survey& survey, const scene::Reconstru
     k.view.camera = camera;
     k.view.world_to_camera = image.worldToCamera();
     const std::string folder = fs::path(image.name).parent_path().string();
-    const fs::path calibration_file = survey.calibrationFile(folder);
-    const cv::Mat K =
-        (cv::Mat_<double>(3, 3) << camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
-    if (!maps.count(folder) && self_calibrated != lenses.cameras.end() &&
-        self_calibrated->second.hasDistortion()) {
-      const scene::Camera& lens = self_calibrated->second;
-      const cv::Mat lens_K =
-          (cv::Mat_<double>(3, 3) << lens.fx, 0, lens.cx, 0, lens.fy, lens.cy, 0, 0, 1);
-      cv::Mat map1, map2;
-      cv::initUndistortRectifyMap(lens_K, cv::Mat(lens.distortion, true).reshape(1, 1), cv::Mat(),
-                                  K, cv::Size(camera.width, camera.height), CV_16SC2, map1, map2);
-      maps[folder] = {map1, map2};
-    } else if (!maps.count(folder) && fs::exists(calibration_file)) {
-      const calibration::CameraCalibration lens =
-          calibration::readCalibration(calibration_file, kStage);
-      if (cv::countNonZero(lens.distortion != 0) > 0) {
+    if (!maps.count(folder)) {
+      const fs::path calibration_file = survey.calibrationFile(folder);
+      calibration::CameraCalibration lens;
+      if (self_calibrated != lenses.cameras.end() && self_calibrated->second.hasDistortion()) {
+        lens = calibration::calibrationOf(self_calibrated->second);
+      } else if (fs::exists(calibration_file)) {
+        lens = calibration::readCalibration(calibration_file, kStage);
+      }
+      if (!lens.distortion.empty() && cv::countNonZero(lens.distortion != 0) > 0) {
         cv::Mat map1, map2;
-        cv::initUndistortRectifyMap(lens.camera_matrix, lens.distortion, cv::Mat(), K,
+        cv::initUndistortRectifyMap(lens.camera_matrix, lens.distortion, cv::Mat(),
+                                    calibration::calibrationOf(camera).camera_matrix,
                                     cv::Size(camera.width, camera.height), CV_16SC2, map1, map2);
         maps[folder] = {map1, map2};
       }

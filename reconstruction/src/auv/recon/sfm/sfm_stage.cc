@@ -292,14 +292,7 @@ SfmStageResult runSfmStage(const Survey& survey, const SfmStageOptions& options)
   for (uint32_t id : uncalibrated) {
     const scene::Camera& camera = rec.cameras.at(id);
     const std::string& name = camera_names.at(id - 1);
-    calibration::CameraCalibration estimate;
-    estimate.image_size = cv::Size(camera.width, camera.height);
-    estimate.camera_matrix =
-        (cv::Mat_<double>(3, 3) << camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
-    estimate.distortion = cv::Mat::zeros(1, 5, CV_64F);  // OpenCV order: k1 k2 p1 p2 k3
-    for (size_t i = 0; i < 4 && i < camera.distortion.size(); ++i) {
-      estimate.distortion.at<double>(0, static_cast<int>(i)) = camera.distortion[i];
-    }
+    const calibration::CameraCalibration estimate = calibration::calibrationOf(camera);
     calibration::writeCalibration(staged.path() / (name + ".yaml"), estimate,
                                   calibration::CalibrationOptions());
     const auto reset = result.intrinsics_reset.find(id);

@@ -17,18 +17,6 @@ namespace auv::recon::sfm {
 
 namespace {
 
-calibration::CameraCalibration calibrationOf(const scene::Camera& camera) {
-  calibration::CameraCalibration c;
-  c.image_size = cv::Size(camera.width, camera.height);
-  c.camera_matrix =
-      (cv::Mat_<double>(3, 3) << camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
-  c.distortion = cv::Mat::zeros(1, 5, CV_64F);
-  for (size_t i = 0; i < camera.distortion.size() && i < 5; ++i) {
-    c.distortion.at<double>(0, static_cast<int>(i)) = camera.distortion[i];
-  }
-  return c;
-}
-
 /// One undistorter per distorted camera (its maps are computed once).
 std::map<uint32_t, std::unique_ptr<calibration::Undistorter>> undistorters(
     const scene::Reconstruction& model) {
@@ -40,7 +28,7 @@ std::map<uint32_t, std::unique_ptr<calibration::Undistorter>> undistorters(
                                   scene::cameraModelName(camera.model) +
                                   ": only the OPENCV lens (k1 k2 p1 p2) can be undistorted here");
     }
-    out[id] = std::make_unique<calibration::Undistorter>(calibrationOf(camera),
+    out[id] = std::make_unique<calibration::Undistorter>(calibration::calibrationOf(camera),
                                                          calibration::UndistortOptions());
   }
   return out;
