@@ -46,6 +46,32 @@ TEST(LowLevelControllerTest, WaypointIsReachedAndHeld) {
   EXPECT_EQ(loop.status().state, ControllerState::HOLDING);
 }
 
+TEST(LowLevelControllerTest, DepthChangesAlongTheLegNotBeforeIt) {
+  // A climb of 3 m over 15 m (11 deg, as the planner checks it): flown along the straight leg,
+  // not as a climb on the spot and a level run after it (under an overhang the first would
+  // rise into rock above the leg). Depth mode; the vehicle starts pointing at the target.
+  ClosedLoop loop;
+  loop.state.position = {0, 0, 6};
+  const Eigen::Vector3d start = loop.state.position, target(15, 0, 3);
+  ASSERT_TRUE(loop.send(waypoint(1, target)).accepted());
+  double worst = 0, shallowest_early = 10;
+  loop.runUntil(
+      [&] {
+        const double progress = std::clamp(loop.state.position.x() / target.x(), 0.0, 1.0);
+        const double leg_depth = start.z() + progress * (target.z() - start.z());
+        worst = std::max(worst, std::abs(loop.state.position.z() - leg_depth));
+        if (loop.state.position.x() < 3.0)
+          shallowest_early = std::min(shallowest_early, loop.state.position.z());
+        return loop.status().reached;
+      },
+      120);
+  ASSERT_TRUE(loop.status().reached);
+  EXPECT_LT(worst, 0.4);             // on the leg within decimetres
+  EXPECT_GT(shallowest_early, 4.6);  // the first 3 m climb about 1 m (0.6 m + the lead), not 3
+  loop.run(10);
+  EXPECT_NEAR(loop.state.position.z(), 3.0, 0.1);
+}
+
 TEST(LowLevelControllerTest, WaypointBehindTurnsAroundFirst) {
   ClosedLoop loop;
   loop.state.position = {0, 0, 3};

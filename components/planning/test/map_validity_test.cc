@@ -115,6 +115,29 @@ TEST(MapValidity, MinAltitudeKeepsStatesAboveKnownSeabedOnly) {
   EXPECT_FALSE(world.si->checkMotion(low.get(), world.state(19.0, 0.0, 5.75).get()));
 }
 
+TEST(MapValidity, MotionsNoSteeperThanTheClimbAngle) {
+  testing::FlatWorld world;  // open water, default max_climb_angle 20 deg
+  world.three_d = true;
+  world.build();
+  const auto from = world.state(5.0, 0.0, 5.0);
+  // 2 m of depth over 10 m (11 deg) either way: valid; over 4 m (27 deg) or straight up: not.
+  EXPECT_TRUE(world.si->checkMotion(from.get(), world.state(15.0, 0.0, 3.0).get()));
+  EXPECT_TRUE(world.si->checkMotion(from.get(), world.state(15.0, 0.0, 7.0).get()));
+  EXPECT_FALSE(world.si->checkMotion(from.get(), world.state(9.0, 0.0, 3.0).get()));
+  EXPECT_FALSE(world.si->checkMotion(from.get(), world.state(9.0, 0.0, 7.0).get()));
+  EXPECT_FALSE(world.si->checkMotion(from.get(), world.state(5.0, 0.0, 3.0).get()));
+  std::pair<ompl::base::State*, double> last_valid(nullptr, 1.0);
+  EXPECT_FALSE(world.si->checkMotion(from.get(), world.state(5.0, 0.0, 3.0).get(), last_valid));
+  EXPECT_EQ(last_valid.second, 0.0);  // none of it is valid
+  // 90 deg lifts the limit.
+  testing::FlatWorld free_climb;
+  free_climb.three_d = true;
+  free_climb.clearance.max_climb_angle = 90.0;
+  free_climb.build();
+  EXPECT_TRUE(free_climb.si->checkMotion(free_climb.state(5.0, 0.0, 5.0).get(),
+                                         free_climb.state(5.0, 0.0, 3.0).get()));
+}
+
 TEST(MapValidity, RejectsBadOptions) {
   PlanningSpaceOptions space;
   space.fixed_depth = 100.0;
@@ -125,6 +148,11 @@ TEST(MapValidity, RejectsBadOptions) {
   clearance = ClearanceOptions();
   clearance.min_altitude = -0.5;
   EXPECT_THROW(clearance.check(), PlanningConfigError);
+  for (double angle : {0.0, 91.0}) {
+    clearance = ClearanceOptions();
+    clearance.max_climb_angle = angle;
+    EXPECT_THROW(clearance.check(), PlanningConfigError) << angle;
+  }
 }
 
 }  // namespace

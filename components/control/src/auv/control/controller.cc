@@ -16,7 +16,10 @@ constexpr double kYawRateIntegralBand = 0.03;   // rad/s
 constexpr double kDepthIntegralBand = 0.25;     // m
 constexpr double kHeaveIntegralBand = 0.03;     // m/s
 constexpr double kDepthRateTimeConstant = 0.3;  // s, low-pass of the depth's own rate
-constexpr double kSurgeIntegralBand = 0.05;     // m/s
+// m, how far ahead along a leg its depth is taken: the depth loop lags a ramp by ~2-3 s at
+// cruise speed, so the target leads by about that much and the vehicle stays on the leg.
+constexpr double kLegDepthLead = 2.0;
+constexpr double kSurgeIntegralBand = 0.05;  // m/s
 // Longest step the integrals take, so a stalled caller does not jolt them.
 constexpr double kMaxControlStep = 0.2;  // s
 
@@ -281,6 +284,8 @@ CommandResult LowLevelController::setCommand(const ControlCommand& command, doub
   hold_pending_ = false;
   returning_ = false;
   altitude_depth_.reset();
+  leg_start_.reset();
+  if (navigation_) leg_start_ = navigation_->position;
   resetIntegrals(false);  // the depth integral estimates the buoyancy error: keep it
 
   switch (command_.mode) {
@@ -397,7 +402,9 @@ LowLevelController::Targets LowLevelController::guidance(double dt) {
         startHolding(target, command_.tolerance, nav.yaw);
         return holdTargets();
       }
-      Targets targets{nav.yaw, target.z(), 0.0};
+      if (!leg_start_) leg_start_ = nav.position;  // the command came before any navigation
+      const bool depth_mode = command_.altitude <= 0.0;
+      Targets targets{nav.yaw, depth_mode ? depthAlongLeg(target) : target.z(), 0.0};
       const Eigen::Vector2d horizontal = (target - nav.position).head<2>();
       const double range = horizontal.norm();
       // Right above or below the target the line of sight is undefined: only change depth.
@@ -413,6 +420,16 @@ LowLevelController::Targets LowLevelController::guidance(double dt) {
     default:
       return {nav.yaw, nav.position.z(), 0.0};
   }
+}
+
+double LowLevelController::depthAlongLeg(const Eigen::Vector3d& target) const {
+  const Eigen::Vector2d leg = (target - *leg_start_).head<2>();
+  const double length = leg.norm();
+  // A leg that is mostly a depth change (or one begun at the target) is flown as one.
+  if (length <= 0.5 * command_.tolerance) return target.z();
+  const double along = leg.dot((navigation_->position - *leg_start_).head<2>()) / length;
+  const double progress = std::clamp((along + kLegDepthLead) / length, 0.0, 1.0);
+  return leg_start_->z() + progress * (target.z() - leg_start_->z());
 }
 
 LowLevelController::Targets LowLevelController::holdTargets() {

@@ -212,7 +212,9 @@ struct ControllerOptions {
 /// Modes and states:
 ///   WAYPOINT  ACTIVE: line-of-sight heading to the target, speed ramped down inside
 ///             slow_down_radius and scaled down with the heading error, to zero beyond
-///             turn_in_place_angle (it turns before it goes);
+///             turn_in_place_angle (it turns before it goes); in depth mode the depth follows
+///             the straight leg from where the command began to the target, by horizontal
+///             progress (the planner checked that leg, not a climb first and a run after);
 ///             within `tolerance` (3-D) -> reached, HOLDING at the target.
 ///   HOLD      HOLDING at the position of the moment: stopped, heading and depth kept; drifted
 ///             further than default_tolerance it drives back at hold_speed.
@@ -269,6 +271,8 @@ class LowLevelController {
   Targets guidance(double dt);
   /// The depth to keep for a command depth of `commanded` (altitude mode, or `commanded`).
   double depthTarget(double commanded, double dt);
+  /// The depth of the leg from leg_start_ to `target` at the vehicle's horizontal progress.
+  double depthAlongLeg(const Eigen::Vector3d& target) const;
   Targets holdTargets();
   /// Fraction of the speed to make good with `heading_error` (see turn_in_place_angle).
   double underwayFraction(double heading_error) const;
@@ -300,7 +304,8 @@ class LowLevelController {
   double surge_integral_ = 0.0;    // m
   double depth_rate_ = 0.0;        // m/s, from successive depths (setNavigation)
 
-  std::optional<double> altitude_depth_;  // m, smoothed depth target of altitude mode
+  std::optional<double> altitude_depth_;      // m, smoothed depth target of altitude mode
+  std::optional<Eigen::Vector3d> leg_start_;  // where the active WAYPOINT command began
 
   // Safety manoeuvres.
   OverheadProbe overhead_probe_;

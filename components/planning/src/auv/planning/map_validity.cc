@@ -20,6 +20,9 @@ const config::OptionTable<ClearanceOptions>& ClearanceOptions::table() {
        Range::closed(0.0, 20.0)},
       {"safety_margin", &O::safety_margin, "clearance kept on top of hull_radius", "m",
        Range::closed(0.0, 20.0)},
+      {"max_climb_angle", &O::max_climb_angle,
+       "steepest climb or dive of a path; keep below the forward sonar's vertical half-aperture",
+       "deg", Range::closed(1.0, 90.0)},
   };
   return kTable;
 }
@@ -77,9 +80,21 @@ double MapValidityChecker::altitudeMargin(const Eigen::Vector3d& position, doubl
   return field_->altitude(position, reach) - reach;
 }
 
-MapMotionValidator::MapMotionValidator(const ob::SpaceInformationPtr& si, double step)
+MapMotionValidator::MapMotionValidator(const ob::SpaceInformationPtr& si, double step,
+                                       double max_climb_angle)
     : ob::MotionValidator(si), step_(step) {
   if (!(step_ > 0.0)) throw PlanningConfigError("motion validator: step must be > 0");
+  if (!(max_climb_angle > 0.0 && max_climb_angle <= 90.0)) {
+    throw PlanningConfigError("motion validator: max_climb_angle must be in (0, 90] deg");
+  }
+  max_climb_slope_ = max_climb_angle >= 90.0 ? std::numeric_limits<double>::infinity()
+                                             : std::tan(max_climb_angle * M_PI / 180.0);
+}
+
+bool MapMotionValidator::withinClimbAngle(const ob::State* from, const ob::State* to) const {
+  if (std::isinf(max_climb_slope_)) return true;
+  const Eigen::Vector3d step = statePosition(to) - statePosition(from);
+  return std::abs(step.z()) <= max_climb_slope_ * step.head<2>().norm() + 1e-9;
 }
 
 bool MapMotionValidator::checkMotion(const ob::State* from, const ob::State* to) const {
@@ -95,6 +110,12 @@ bool MapMotionValidator::checkMotion(const ob::State* from, const ob::State* to,
   // the end. Without it a vehicle inside the margin could never plan its way out.
   const ob::StateValidityChecker& checker = *si_->getStateValidityChecker();
   bool escaping = !si_->isValid(from);
+  if (!escaping && !withinClimbAngle(from, to)) {
+    ++invalid_;
+    last_valid.second = 0.0;
+    if (last_valid.first != nullptr) si_->copyState(last_valid.first, from);
+    return false;
+  }
   double previous_clearance = escaping ? checker.clearance(from) : 0.0;
   const double length = si_->distance(from, to);
   const int segments = std::max(1, static_cast<int>(std::ceil(length / step_)));
@@ -153,7 +174,7 @@ ob::SpaceInformationPtr makeSpaceInformation(const PlanningSpaceOptions& space,
   state_space->setLongestValidSegmentFraction(
       std::min(1.0, step / std::max(step, state_space->getMaximumExtent())));
   si->setStateValidityChecker(std::make_shared<MapValidityChecker>(si, field, clearance));
-  si->setMotionValidator(std::make_shared<MapMotionValidator>(si, step));
+  si->setMotionValidator(std::make_shared<MapMotionValidator>(si, step, clearance.max_climb_angle));
   si->setup();
   return si;
 }

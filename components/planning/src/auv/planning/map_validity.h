@@ -22,6 +22,11 @@ struct ClearanceOptions {
   /// m, extra distance kept on top of the hull radius (navigation drift between visits, map
   /// quantisation). Small enough that the narrowest canyon passage (4.2 m) stays open.
   double safety_margin = 0.4;
+  /// deg, steepest climb or dive of a motion (from the horizontal). Keep it below the forward
+  /// sonar's vertical half-aperture: a path no steeper than what the sonar looks at runs into
+  /// nothing it has not looked at (an arch's underside above a climb, a boulder below a dive).
+  /// 90 = no limit. Motions leaving an invalid state (escapes) are exempt.
+  double max_climb_angle = 20.0;
   /// m, motion check step; <= 0 means half the map resolution. Never above half of it.
   double motion_check_step = 0.0;
   /// m, water kept between the clearance sphere (hull_radius + safety_margin) and known
@@ -30,8 +35,8 @@ struct ClearanceOptions {
   /// (PlannerQuery.min_altitude), not a parameter.
   double min_altitude = 0.0;
 
-  /// hull_radius and safety_margin with meaning, unit and range (the planning component's
-  /// parameters of those names); motion_check_step is not a parameter.
+  /// hull_radius, safety_margin and max_climb_angle with meaning, unit and range (the planning
+  /// component's parameters of those names); motion_check_step is not a parameter.
   static const config::OptionTable<ClearanceOptions>& table();
   /// Throws PlanningConfigError naming the field.
   void check() const;
@@ -60,10 +65,12 @@ class MapValidityChecker : public ompl::base::StateValidityChecker {
 };
 
 /// Checks straight segments at a fixed metric step (<= half the map resolution), independent
-/// of OMPL's longest_valid_segment_fraction, so thin obstacles are never stepped over.
+/// of OMPL's longest_valid_segment_fraction, so thin obstacles are never stepped over; a
+/// segment steeper than max_climb_angle (deg) is invalid unless it leaves an invalid state.
 class MapMotionValidator : public ompl::base::MotionValidator {
  public:
-  MapMotionValidator(const ompl::base::SpaceInformationPtr& si, double step);
+  MapMotionValidator(const ompl::base::SpaceInformationPtr& si, double step,
+                     double max_climb_angle = 90.0);
 
   bool checkMotion(const ompl::base::State* from, const ompl::base::State* to) const override;
   bool checkMotion(const ompl::base::State* from, const ompl::base::State* to,
@@ -71,7 +78,11 @@ class MapMotionValidator : public ompl::base::MotionValidator {
   double step() const { return step_; }
 
  private:
+  /// Whether the segment climbs or dives no steeper than the limit.
+  bool withinClimbAngle(const ompl::base::State* from, const ompl::base::State* to) const;
+
   double step_;
+  double max_climb_slope_;  // |dz| / horizontal distance; infinity = no limit
 };
 
 struct PlanningSpaceOptions {
