@@ -18,6 +18,8 @@
 #include "auv/recon/features/features_stage.h"
 #include "auv/recon/features/sift_extractor.h"
 #include "auv/recon/masks/mask.h"
+#include "auv/recon/scene/colmap_text.h"
+#include "auv/recon/sfm/undistorted_model.h"
 
 namespace fs = std::filesystem;
 using namespace auv::recon;
@@ -201,6 +203,51 @@ TEST_F(MaskTest, MasksOfUndistortedImagesAreRemappedLikeTheImages) {
   // Still binary (nearest neighbour).
   EXPECT_EQ(cv::countNonZero(mask == 0) + cv::countNonZero(mask == 255),
             static_cast<int>(mask.total()));
+}
+
+TEST_F(MaskTest, MasksFollowTheSelfCalibratedLensIntoUndistorted) {
+  // No calibration: corrected/ has the raw geometry and sfm self-calibrated a barrel lens; dense
+  // and texture read undistorted/, so a mask must move with the lens as its image did.
+  const Survey survey(root_);
+  const cv::Size size(320, 240);
+  scene::Reconstruction model;
+  scene::Camera lens = scene::Camera::pinhole(1, size.width, size.height, 300, 300, 160, 120);
+  lens.model = scene::CameraModel::OPENCV;
+  lens.distortion = {-0.3, 0.1, 0, 0};
+  model.cameras[1] = lens;
+  scene::Image image;
+  image.id = 1;
+  image.camera_id = 1;
+  image.name = "cam/a.png";
+  model.images[1] = image;
+  fs::create_directories(survey.sparse());
+  scene::writeColmapText(model, survey.sparse());
+  fs::create_directories(survey.corrected() / "cam");
+  ASSERT_TRUE(cv::imwrite((survey.corrected() / "cam" / "a.png").string(), texturedImage(size, 3)));
+  sfm::writeUndistortedWorkspace(model, survey.corrected(), survey.undistorted());
+  ASSERT_EQ(survey.pinholeWorkspace().images, survey.undistorted());
+  const cv::Rect box(16, 16, 8, 8);  // near a corner, where the lens moves pixels most
+  writeMask(masks::cameraMaskFile(survey, "cam"), size, box);
+
+  const masks::SurveyMasks masks(survey, "test");
+  const cv::Mat mask = masks.forImage("cam/a.png", size);
+  ASSERT_EQ(mask.size(), size);
+  // Where the box's centre lands in the undistorted image (the pinhole of undistorted/sparse).
+  const scene::Reconstruction pinhole = scene::readColmapText(survey.undistorted() / "sparse");
+  const scene::Camera& undistorted = pinhole.cameras.at(1);
+  const Eigen::Vector2d n = lens.pixelToNormalized({19.5, 19.5});
+  const cv::Point p(static_cast<int>(std::lround(undistorted.fx * n.x() + undistorted.cx)),
+                    static_cast<int>(std::lround(undistorted.fy * n.y() + undistorted.cy)));
+  ASSERT_GT(std::max(std::abs(p.x - 19), std::abs(p.y - 19)), 5) << "the lens must move the box";
+  EXPECT_EQ(mask.at<uint8_t>(p), 0) << "box centre at " << p;
+  EXPECT_EQ(mask.at<uint8_t>(19, 19), 255) << "the mask as drawn would be misplaced";
+  EXPECT_EQ(mask.at<uint8_t>(120, 160), 255);
+  EXPECT_EQ(cv::countNonZero(mask == 0) + cv::countNonZero(mask == 255),
+            static_cast<int>(mask.total()));
+  // An image of a pinhole camera (none here) or a survey without undistorted/ keeps the mask.
+  fs::remove_all(survey.undistorted());
+  const masks::SurveyMasks as_drawn(survey, "test");
+  EXPECT_EQ(as_drawn.forImage("cam/a.png", size).at<uint8_t>(19, 19), 0);
 }
 
 }  // namespace

@@ -30,7 +30,7 @@ Undistorter::Undistorter(const CameraCalibration& calibration, const UndistortOp
                               map2_);
 }
 
-cv::Mat Undistorter::apply(const cv::Mat& image) const {
+cv::Mat Undistorter::apply(const cv::Mat& image, int interpolation) const {
   if (image.size() != distorted_.image_size) {
     throw std::invalid_argument("image of " + std::to_string(image.cols) + "x" +
                                 std::to_string(image.rows) + " px, calibration of " +
@@ -39,7 +39,7 @@ cv::Mat Undistorter::apply(const cv::Mat& image) const {
   }
   if (identity_) return image.clone();
   cv::Mat out;
-  cv::remap(image, out, map1_, map2_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+  cv::remap(image, out, map1_, map2_, interpolation, cv::BORDER_CONSTANT);
   return out;
 }
 

@@ -3,6 +3,7 @@
 // the images handed to SfM are pinhole images whose intrinsics stay fixed.
 
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "auv/recon/calibration/calibration.h"
 
@@ -30,7 +31,8 @@ class Undistorter {
   bool identity() const { return identity_; }
 
   /// `image` must have the calibration's size (throws std::invalid_argument otherwise).
-  cv::Mat apply(const cv::Mat& image) const;
+  /// `interpolation`: cv::INTER_LINEAR for images, cv::INTER_NEAREST for masks and labels.
+  cv::Mat apply(const cv::Mat& image, int interpolation = cv::INTER_LINEAR) const;
 
  private:
   CameraCalibration distorted_, undistorted_;

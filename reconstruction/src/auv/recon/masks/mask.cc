@@ -5,7 +5,9 @@
 #include <opencv2/imgproc.hpp>
 
 #include "auv/recon/calibration/calibration.h"
+#include "auv/recon/calibration/undistort.h"
 #include "auv/recon/common/stage_error.h"
+#include "auv/recon/scene/colmap_text.h"
 
 namespace fs = std::filesystem;
 
@@ -111,7 +113,31 @@ cv::Mat CameraMasks::forImage(const std::string& image_file, cv::Size size) cons
 }
 
 SurveyMasks::SurveyMasks(const Survey& survey, std::string stage)
-    : survey_(survey), stage_(std::move(stage)) {}
+    : survey_(survey), stage_(std::move(stage)) {
+  if (survey_.pinholeWorkspace().images != survey_.undistorted()) return;
+  std::error_code error;
+  if (!fs::is_directory(masksFolder(survey_), error)) return;  // nothing to remap
+  scene::Reconstruction model;
+  try {
+    model = scene::readColmapText(survey_.sparse());
+  } catch (const std::exception& e) {
+    throw StageError(stage_, "cannot read " + survey_.sparse().string() +
+                                 " to remap the masks onto undistorted/: " + e.what());
+  }
+  // The same lens maps as sfm's undistorted images (sfm/undistorted_model.cc).
+  std::map<uint32_t, std::shared_ptr<const calibration::Undistorter>> by_camera;
+  for (const auto& [id, camera] : model.cameras) {
+    if (!camera.hasDistortion()) continue;
+    by_camera[id] = std::make_shared<const calibration::Undistorter>(
+        calibration::calibrationOf(camera), calibration::UndistortOptions());
+  }
+  for (const auto& [id, image] : model.images) {
+    const auto lens = by_camera.find(image.camera_id);
+    if (lens != by_camera.end()) lenses_[image.name] = lens->second;
+  }
+}
+
+SurveyMasks::~SurveyMasks() = default;
 
 cv::Mat SurveyMasks::forImage(const std::string& relative_name, cv::Size size) const {
   const fs::path name(relative_name);
@@ -124,6 +150,15 @@ cv::Mat SurveyMasks::forImage(const std::string& relative_name, cv::Size size) c
     masks = entry;
   }
   cv::Mat mask = masks->forImage(name.filename().string(), size);
+  const auto lens = lenses_.find(relative_name);
+  if (!mask.empty() && lens != lenses_.end()) {
+    // Pixels from outside the frame come out 0: ignored, as the corners of toCorrected().
+    try {
+      mask = lens->second->apply(mask, cv::INTER_NEAREST);
+    } catch (const std::invalid_argument& e) {
+      throw StageError(stage_, "mask of " + relative_name + " for undistorted/: " + e.what());
+    }
+  }
   if (!mask.empty()) {
     std::lock_guard<std::mutex> lock(mutex_);
     masked_.insert(relative_name);

@@ -8,7 +8,8 @@
 //
 // The per-image mask wins. Masks are drawn on the images as the user gave them (keyframes/,
 // the original frames); for the undistorted images of corrected/ they are remapped the way the
-// `correct` stage remapped the images (nearest neighbour): CameraMasks.
+// `correct` stage remapped the images (nearest neighbour): CameraMasks; for the images of
+// undistorted/ (a lens sfm self-calibrated) once more with that lens: SurveyMasks.
 
 #include <filesystem>
 #include <map>
@@ -21,6 +22,10 @@
 #include <opencv2/core.hpp>
 
 #include "auv/recon/common/survey.h"
+
+namespace auv::recon::calibration {
+class Undistorter;
+}
 
 namespace auv::recon::masks {
 
@@ -75,11 +80,16 @@ class CameraMasks {
   mutable std::map<std::pair<int, int>, cv::Mat> camera_mask_;  ///< by size, remapped
 };
 
-/// The masks of every camera of a survey, by image name relative to corrected/
-/// (`<camera>/<file>`, the names of the sparse model). Thread-safe.
+/// The masks of the images of the survey's pinhole workspace (Survey::pinholeWorkspace), by
+/// image name (`<camera>/<file>`, the names of the sparse model): those of corrected/, and when
+/// sfm wrote undistorted/ for a self-calibrated lens, remapped once more with that lens (the
+/// distorted model in sparse/, the same maps as the images, nearest neighbour), so a mask
+/// covers the same scene pixels in the images dense and texture read. Thread-safe.
 class SurveyMasks {
  public:
+  /// Reads sparse/ when the workspace is undistorted/ (StageError(stage, ...) when it cannot).
   SurveyMasks(const Survey& survey, std::string stage);
+  ~SurveyMasks();
   /// The mask of `<camera>/<file>` of `size` px; empty when none.
   cv::Mat forImage(const std::string& relative_name, cv::Size size) const;
   /// Distinct images that had a mask so far.
@@ -88,6 +98,9 @@ class SurveyMasks {
  private:
   Survey survey_;
   std::string stage_;
+  /// Per image name of sparse/: the lens its undistorted/ image was remapped with (only
+  /// images of distorted cameras; none when the workspace is sparse/ + corrected/).
+  std::map<std::string, std::shared_ptr<const calibration::Undistorter>> lenses_;
   mutable std::mutex mutex_;
   mutable std::map<std::string, std::shared_ptr<const CameraMasks>> cameras_;
   mutable std::set<std::string> masked_;
