@@ -120,12 +120,13 @@ TEST(MapValidity, MotionsNoSteeperThanTheClimbAngle) {
   world.three_d = true;
   world.build();
   const auto from = world.state(5.0, 0.0, 5.0);
-  // 2 m of depth over 10 m (11 deg) either way: valid; over 4 m (27 deg) or straight up: not.
+  // Rising 2 m over 10 m (11 deg): valid; over 4 m (27 deg) or straight up: not. Dives are
+  // not limited (the DVL and MIN_ALTITUDE watch below; nothing looks up but the fan).
   EXPECT_TRUE(world.si->checkMotion(from.get(), world.state(15.0, 0.0, 3.0).get()));
-  EXPECT_TRUE(world.si->checkMotion(from.get(), world.state(15.0, 0.0, 7.0).get()));
   EXPECT_FALSE(world.si->checkMotion(from.get(), world.state(9.0, 0.0, 3.0).get()));
-  EXPECT_FALSE(world.si->checkMotion(from.get(), world.state(9.0, 0.0, 7.0).get()));
   EXPECT_FALSE(world.si->checkMotion(from.get(), world.state(5.0, 0.0, 3.0).get()));
+  EXPECT_TRUE(world.si->checkMotion(from.get(), world.state(9.0, 0.0, 7.0).get()));
+  EXPECT_TRUE(world.si->checkMotion(from.get(), world.state(5.0, 0.0, 7.0).get()));
   std::pair<ompl::base::State*, double> last_valid(nullptr, 1.0);
   EXPECT_FALSE(world.si->checkMotion(from.get(), world.state(5.0, 0.0, 3.0).get(), last_valid));
   EXPECT_EQ(last_valid.second, 0.0);  // none of it is valid

@@ -21,8 +21,8 @@ const config::OptionTable<ClearanceOptions>& ClearanceOptions::table() {
       {"safety_margin", &O::safety_margin, "clearance kept on top of hull_radius", "m",
        Range::closed(0.0, 20.0)},
       {"max_climb_angle", &O::max_climb_angle,
-       "steepest climb or dive of a path; keep below the forward sonar's vertical half-aperture",
-       "deg", Range::closed(1.0, 90.0)},
+       "steepest climb of a path; keep below the forward sonar's upper half-aperture", "deg",
+       Range::closed(1.0, 90.0)},
   };
   return kTable;
 }
@@ -94,7 +94,7 @@ MapMotionValidator::MapMotionValidator(const ob::SpaceInformationPtr& si, double
 bool MapMotionValidator::withinClimbAngle(const ob::State* from, const ob::State* to) const {
   if (std::isinf(max_climb_slope_)) return true;
   const Eigen::Vector3d step = statePosition(to) - statePosition(from);
-  return std::abs(step.z()) <= max_climb_slope_ * step.head<2>().norm() + 1e-9;
+  return -step.z() <= max_climb_slope_ * step.head<2>().norm() + 1e-9;
 }
 
 bool MapMotionValidator::checkMotion(const ob::State* from, const ob::State* to) const {

@@ -22,10 +22,12 @@ struct ClearanceOptions {
   /// m, extra distance kept on top of the hull radius (navigation drift between visits, map
   /// quantisation). Small enough that the narrowest canyon passage (4.2 m) stays open.
   double safety_margin = 0.4;
-  /// deg, steepest climb or dive of a motion (from the horizontal). Keep it below the forward
-  /// sonar's vertical half-aperture: a path no steeper than what the sonar looks at runs into
-  /// nothing it has not looked at (an arch's underside above a climb, a boulder below a dive).
-  /// 90 = no limit. Motions leaving an invalid state (escapes) are exempt.
+  /// deg, steepest climb of a motion (rising; dives are not limited). Keep it below the
+  /// forward sonar's upper half-aperture: unknown space is free until seen and nothing looks
+  /// up but the sonar's fan, so a steeper climb rises into water nobody has looked at (an
+  /// arch's underside). Below, the fan's lower half, the DVL's beams and the controller's
+  /// MIN_ALTITUDE manoeuvre watch a dive. 90 = no limit. Escapes from an invalid state are
+  /// exempt.
   double max_climb_angle = 20.0;
   /// m, motion check step; <= 0 means half the map resolution. Never above half of it.
   double motion_check_step = 0.0;
@@ -66,7 +68,8 @@ class MapValidityChecker : public ompl::base::StateValidityChecker {
 
 /// Checks straight segments at a fixed metric step (<= half the map resolution), independent
 /// of OMPL's longest_valid_segment_fraction, so thin obstacles are never stepped over; a
-/// segment steeper than max_climb_angle (deg) is invalid unless it leaves an invalid state.
+/// segment climbing more steeply than max_climb_angle (deg) is invalid unless it leaves an
+/// invalid state.
 class MapMotionValidator : public ompl::base::MotionValidator {
  public:
   MapMotionValidator(const ompl::base::SpaceInformationPtr& si, double step,
@@ -78,11 +81,11 @@ class MapMotionValidator : public ompl::base::MotionValidator {
   double step() const { return step_; }
 
  private:
-  /// Whether the segment climbs or dives no steeper than the limit.
+  /// Whether the segment climbs no more steeply than the limit (z is depth: rising = z falls).
   bool withinClimbAngle(const ompl::base::State* from, const ompl::base::State* to) const;
 
   double step_;
-  double max_climb_slope_;  // |dz| / horizontal distance; infinity = no limit
+  double max_climb_slope_;  // rise / horizontal distance; infinity = no limit
 };
 
 struct PlanningSpaceOptions {
