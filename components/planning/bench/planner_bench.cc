@@ -46,6 +46,7 @@ const char* kUsage =
     "  --admissible-range M    Δd_a of Eq. (1) (default 1)\n"
     "  --narrow-passage-bias X OnlineRRTstar's share of bridge-test samples (default: the\n"
     "                          planning component's)\n"
+    "  --max-climb-angle DEG   steepest climb of a path (default: the planning component's)\n"
     "  --seed N                OMPL's global seed (default 1)\n"
     "  --out FILE.md           results (also FILE.csv with every run)\n";
 
@@ -59,6 +60,7 @@ struct Args {
   double expected_distance = 1.0;
   double admissible_range = 1.0;
   std::optional<double> narrow_passage_bias;  // unset: the component's default
+  std::optional<double> max_climb_angle;      // unset: the component's default
   std::uint32_t seed = 1;
   std::string out;
 };
@@ -125,6 +127,8 @@ Args parseArgs(int argc, char** argv) {
       if (!(*args.narrow_passage_bias >= 0.0 && *args.narrow_passage_bias <= 1.0)) {
         throw std::invalid_argument("--narrow-passage-bias: expected a number in [0, 1]");
       }
+    } else if (arg == "--max-climb-angle") {
+      args.max_climb_angle = parseNumber(arg, value());
     } else if (arg == "--seed") {
       args.seed = static_cast<std::uint32_t>(parseNumber(arg, value()));
     } else if (arg == "--out") {
@@ -278,6 +282,7 @@ int main(int argc, char** argv) {
   settings.cost.expected_distance = args.expected_distance;
   settings.cost.admissible_range = args.admissible_range;
   if (args.narrow_passage_bias) settings.narrow_passage_bias = *args.narrow_passage_bias;
+  if (args.max_climb_angle) settings.clearance.max_climb_angle = *args.max_climb_angle;
   std::vector<double> checkpoints;
   for (double c : {0.1, 0.5}) {
     if (c < args.budget) checkpoints.push_back(c);

@@ -130,6 +130,17 @@ TEST(MapValidity, MotionsNoSteeperThanTheClimbAngle) {
   std::pair<ompl::base::State*, double> last_valid(nullptr, 1.0);
   EXPECT_FALSE(world.si->checkMotion(from.get(), world.state(5.0, 0.0, 3.0).get(), last_valid));
   EXPECT_EQ(last_valid.second, 0.0);  // none of it is valid
+  // Steering: a state too high above `from` is lowered onto the limit, a lower one kept.
+  const auto* validator =
+      dynamic_cast<const MapMotionValidator*>(world.si->getMotionValidator().get());
+  ASSERT_NE(validator, nullptr);
+  auto steered = world.state(9.0, 3.0, 1.0);  // 5 m horizontally, 4 m up
+  validator->limitClimb(from.get(), steered.get());
+  EXPECT_NEAR(steered[2], 5.0 - std::tan(20.0 * M_PI / 180.0) * 5.0, 1e-9);
+  EXPECT_TRUE(world.si->checkMotion(from.get(), steered.get()));
+  auto deeper = world.state(9.0, 3.0, 9.0);
+  validator->limitClimb(from.get(), deeper.get());
+  EXPECT_DOUBLE_EQ(deeper[2], 9.0);
   // 90 deg lifts the limit.
   testing::FlatWorld free_climb;
   free_climb.three_d = true;

@@ -257,5 +257,19 @@ TEST_F(Session3dTest, ABoulderIsPassedAroundWhenTheBandKeepsTheVehicleBelowItsTo
   EXPECT_GE(checkedPath().size(), 2u);
 }
 
+TEST_F(Session3dTest, AGoalHighAboveTheStartIsReachedByAClimbNoSteeperThanTheLimit) {
+  // 5 m up over 8 m (32 deg) in open water: steeper than max_climb_angle (20 deg), so the way
+  // up is a longer, shallower one; the tree steers its climbs to the limit instead of giving
+  // up on every sample above a node (the nearest node to the goal is often right below it).
+  ASSERT_TRUE(start(query3d({4.0, 0.0, 8.5}, {12.0, 0.0, 3.0}, 1.0, 9.0)));
+  ASSERT_TRUE(solve(0, 100));
+  const std::vector<Eigen::Vector3d> path = checkedPath();
+  const double max_slope = std::tan(ClearanceOptions().max_climb_angle * M_PI / 180.0);
+  for (std::size_t i = 1; i < path.size(); ++i) {
+    const Eigen::Vector3d step = path[i] - path[i - 1];
+    EXPECT_LE(-step.z(), max_slope * step.head<2>().norm() + 1e-6) << "edge " << i;
+  }
+}
+
 }  // namespace
 }  // namespace auv::planning

@@ -91,6 +91,14 @@ MapMotionValidator::MapMotionValidator(const ob::SpaceInformationPtr& si, double
                                              : std::tan(max_climb_angle * M_PI / 180.0);
 }
 
+void MapMotionValidator::limitClimb(const ob::State* from, ob::State* to) const {
+  if (std::isinf(max_climb_slope_)) return;
+  const Eigen::Vector3d start = statePosition(from);
+  auto* values = to->as<ob::RealVectorStateSpace::StateType>()->values;
+  const double horizontal = std::hypot(values[0] - start.x(), values[1] - start.y());
+  values[2] = std::max(values[2], start.z() - max_climb_slope_ * horizontal);
+}
+
 bool MapMotionValidator::withinClimbAngle(const ob::State* from, const ob::State* to) const {
   if (std::isinf(max_climb_slope_)) return true;
   const Eigen::Vector3d step = statePosition(to) - statePosition(from);

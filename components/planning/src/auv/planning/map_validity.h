@@ -79,6 +79,10 @@ class MapMotionValidator : public ompl::base::MotionValidator {
   bool checkMotion(const ompl::base::State* from, const ompl::base::State* to,
                    std::pair<ompl::base::State*, double>& last_valid) const override;
   double step() const { return step_; }
+  /// Lowers `to` (raises its depth) so that the motion from `from` climbs no more steeply
+  /// than the limit: a planner's steering, so that a sample above a node still grows the tree
+  /// by a climb it may take instead of being thrown away.
+  void limitClimb(const ompl::base::State* from, ompl::base::State* to) const;
 
  private:
   /// Whether the segment climbs no more steeply than the limit (z is depth: rising = z falls).

@@ -12,6 +12,8 @@
 #include <ompl/tools/config/SelfConfig.h>
 #include <ompl/util/GeometricEquations.h>
 
+#include "auv/planning/map_validity.h"
+
 namespace auv::planning {
 namespace ob = ompl::base;
 
@@ -193,6 +195,16 @@ OnlineRRTstar::Node* OnlineRRTstar::extend(const ob::State* random_state) {
     si_->getStateSpace()->interpolate(nearest->state, random_state, range_ / distance, new_state);
   } else {
     si_->copyState(new_state, random_state);
+  }
+  // Steering within the climb limit (3-D): a sample high above its nearest node still grows
+  // the tree by the climb it may take; thrown away, the tree would rarely rise at all.
+  if (const auto* validator =
+          dynamic_cast<const MapMotionValidator*>(si_->getMotionValidator().get())) {
+    validator->limitClimb(nearest->state, new_state);
+    if (si_->distance(nearest->state, new_state) < 1e-3) {
+      si_->freeState(new_state);
+      return nullptr;
+    }
   }
   if (!si_->isValid(new_state) || !si_->checkMotion(nearest->state, new_state)) {
     si_->freeState(new_state);
