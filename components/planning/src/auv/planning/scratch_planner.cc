@@ -161,11 +161,19 @@ bool ScratchPlanner::rootInGoal() const {
 }
 
 bool ScratchPlanner::hasSolution() const {
-  return rootInGoal() || !plan_.empty() || (tree_ && !tree_->path().empty());
+  return rootInGoal() || !plan_.empty() || !treePath().empty();
 }
 
 std::vector<const ob::State*> ScratchPlanner::treePath() const {
-  return tree_ ? tree_->path() : std::vector<const ob::State*>{};
+  if (!tree_) return {};
+  std::vector<const ob::State*> path = tree_->path();
+  // OMPL's RRTstar reuses a neighbour's validity check for the rewire in the other direction
+  // when the cost is symmetric; the climb limit makes validity directional, so a rewired edge
+  // may climb too steeply. Such a path is no solution (each edge checked the way it is flown).
+  for (std::size_t i = 1; i < path.size(); ++i) {
+    if (!si_->checkMotion(path[i - 1], path[i])) return {};
+  }
+  return path;
 }
 
 std::vector<const ob::State*> ScratchPlanner::planPath() const {
