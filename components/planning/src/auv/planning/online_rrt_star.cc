@@ -54,6 +54,7 @@ void OnlineRRTstar::setup() {
   ob::Planner::setup();
   ompl::tools::SelfConfig self_config(si_, getName());
   self_config.configurePlannerRange(range_);
+  climb_limit_ = std::dynamic_pointer_cast<const MapMotionValidator>(si_->getMotionValidator());
   if (!nn_) nn_.reset(ompl::tools::SelfConfig::getDefaultNearestNeighbors<Node*>(this));
   nn_->setDistanceFunction(
       [this](const Node* a, const Node* b) { return si_->distance(a->state, b->state); });
@@ -198,9 +199,8 @@ OnlineRRTstar::Node* OnlineRRTstar::extend(const ob::State* random_state) {
   }
   // Steering within the climb limit (3-D): a sample high above its nearest node still grows
   // the tree by the climb it may take; thrown away, the tree would rarely rise at all.
-  if (const auto* validator =
-          dynamic_cast<const MapMotionValidator*>(si_->getMotionValidator().get())) {
-    validator->limitClimb(nearest->state, new_state);
+  if (climb_limit_) {
+    climb_limit_->limitClimb(nearest->state, new_state);
     if (si_->distance(nearest->state, new_state) < 1e-3) {
       si_->freeState(new_state);
       return nullptr;

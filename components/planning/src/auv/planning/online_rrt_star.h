@@ -21,6 +21,8 @@
 
 namespace auv::planning {
 
+class MapMotionValidator;
+
 /// Parameters (declareParam): range (δ, m), goal_bias, goal_tolerance (ε_goal, m),
 /// rewire_factor, narrow_passage_bias (share of the random states drawn by OMPL's bridge test,
 /// which finds the midpoints of narrow passages that uniform sampling rarely hits; 0 = the
@@ -126,6 +128,8 @@ class OnlineRRTstar : public ompl::base::Planner, public WaypointPlanner {
   std::shared_ptr<ompl::base::BridgeTestValidStateSampler> bridge_sampler_;
   ompl::RNG rng_;
   ompl::base::OptimizationObjectivePtr objective_;
+  /// The space's MapMotionValidator when it has one (climb-limited steering), set in setup().
+  std::shared_ptr<const MapMotionValidator> climb_limit_;
   Node* root_ = nullptr;
   std::vector<Node*> solutions_;
   ompl::base::State* goal_state_ = nullptr;
