@@ -6,8 +6,8 @@
 Reads one or more .jsonl files (one finished run per line; several sessions' files merge, a
 run present twice counts once: the last row of its key wins) and prints, per real-time factor:
 per world and planner mode the runs, successes, recoveries, contacts, minimum true clearance and
-path / oracle per query; then the baseline comparison (tree repair against the from-scratch
-planner: medians of path length and mission time over the seeds both modes finished).
+path / oracle per query; then the baseline comparisons (tree repair against each from-scratch
+planner present: medians of path length and mission time over the seeds both modes finished).
 """
 import argparse
 import json
@@ -74,13 +74,18 @@ def outcome_table(rows, rtf):
     return lines
 
 
-def comparison_table(rows, rtf):
-    """Repair against scratch on the (world, seed) pairs both finished successfully."""
-    lines = [f"Tree repair against the from-scratch baseline, real-time factor {rtf_text(rtf)}: "
-             "medians over the seeds both modes completed (executed path length of the whole "
-             "mission, mission time).", "",
-             "| world | real-time factor | seeds | path length m: repair / scratch | mission time s: "
-             "repair / scratch | path ÷ oracle median: repair / scratch | repair better? |",
+BASELINES = {"scratch": "OMPL's RRTstar from scratch",
+             "restart": "the repair planner's tree restarted (no reuse)"}
+
+
+def comparison_table(rows, rtf, baseline):
+    """Repair against `baseline` on the (world, seed) pairs both finished successfully."""
+    lines = [f"Tree repair against the baseline `{baseline}` ({BASELINES[baseline]}), real-time "
+             f"factor {rtf_text(rtf)}: medians over the seeds both modes completed (executed "
+             "path length of the whole mission, mission time).", "",
+             f"| world | real-time factor | seeds | path length m: repair / {baseline} | mission "
+             f"time s: repair / {baseline} | path ÷ oracle median: repair / {baseline} | repair "
+             "better? |",
              "|---|---|---|---|---|---|---|"]
     done = {}
     for r in rows:
@@ -89,11 +94,11 @@ def comparison_table(rows, rtf):
     any_row = False
     for world in sorted({r["world"] for r in rows}):
         seeds = sorted({s for (w, s, p) in done if w == world and p == "repair"} &
-                       {s for (w, s, p) in done if w == world and p == "scratch"})
+                       {s for (w, s, p) in done if w == world and p == baseline})
         if not seeds:
             continue
         any_row = True
-        pick = {p: [done[(world, s, p)] for s in seeds] for p in ("repair", "scratch")}
+        pick = {p: [done[(world, s, p)] for s in seeds] for p in ("repair", baseline)}
         length = {p: statistics.median(r["executed_length_m"] for r in pick[p]) for p in pick}
         time = {p: statistics.median(r["duration_s"] for r in pick[p]) for p in pick}
         ratio = {}
@@ -101,12 +106,13 @@ def comparison_table(rows, rtf):
             values = [q["ratio"] for r in pick[p] for q in r.get("query_results", [])
                       if q.get("ratio") is not None]
             ratio[p] = f"{statistics.median(values):.2f}" if values else "-"
-        verdict = ("yes" if length["repair"] < length["scratch"] and time["repair"] < time["scratch"]
-                   else "length only" if length["repair"] < length["scratch"]
-                   else "time only" if time["repair"] < time["scratch"] else "no")
+        shorter = length["repair"] < length[baseline]
+        faster = time["repair"] < time[baseline]
+        verdict = ("yes" if shorter and faster else "length only" if shorter
+                   else "time only" if faster else "no")
         lines.append(f"| {world} | {rtf_text(rtf)} | {len(seeds)} | {length['repair']:.1f} / "
-                     f"{length['scratch']:.1f} | {time['repair']:.0f} / {time['scratch']:.0f} | "
-                     f"{ratio['repair']} / {ratio['scratch']} | {verdict} |")
+                     f"{length[baseline]:.1f} | {time['repair']:.0f} / {time[baseline]:.0f} | "
+                     f"{ratio['repair']} / {ratio[baseline]} | {verdict} |")
     return lines if any_row else []
 
 
@@ -119,9 +125,10 @@ def report(rows):
         out += [f"### Real-time factor {rtf_text(rtf)} ({len(mine)} runs; commits "
                 f"{', '.join(commits)})", ""]
         out += outcome_table(mine, rtf) + [""]
-        comparison = comparison_table(mine, rtf)
-        if comparison:
-            out += comparison + [""]
+        for baseline in BASELINES:
+            comparison = comparison_table(mine, rtf, baseline)
+            if comparison:
+                out += comparison + [""]
     return "\n".join(out)
 
 

@@ -44,7 +44,7 @@ import campaign_table  # noqa: E402
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
 LAUNCH = os.path.join(ROOT, "bringup", "launch", "vehicle.yaml")
 RESULTS = os.path.join(ROOT, "bench_results", "mission_campaign.jsonl")
-PLANNERS = ("repair", "scratch")  # the planning component's `replanning`
+PLANNERS = ("repair", "scratch", "restart")  # the planning component's `replanning`
 CLEARANCE = 1.2  # m, the planner's hull_radius + safety_margin (planning defaults)
 ORACLE_GRID = 0.2  # m
 TRUE_MAP_RESOLUTION = 0.1  # m
@@ -356,7 +356,8 @@ def main():
     parser.add_argument("--planner", default="repair",
                         help="comma-separated planner modes, each run per world and seed: "
                              "repair (the paper's tree repair), scratch (OMPL's RRTstar from "
-                             "scratch on every map change)")
+                             "scratch on every map change), restart (the repair planner's tree "
+                             "restarted on every map change: tree repair without the reuse)")
     parser.add_argument("--real-time-factor", type=float, default=4.0,
                         help="simulated seconds per wall second (at 8 the 2-core machine "
                              "starved the stack); stated in every table")

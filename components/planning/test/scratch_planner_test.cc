@@ -1,8 +1,9 @@
-// The from-scratch baseline (replanning: scratch) behind the session's query and waypoint
-// protocol: it answers waypoint requests up to the goal, starts a new tree (sharing no node
-// with the old one) on every map change and every waypoint handed out, drops the plan it
-// follows once a wall blocks it and goes round, cancels a blocked root like the repair planner,
-// and the option is validated. The slices grow the trees for real (50 ms of wall time each).
+// The from-scratch baselines (replanning: scratch, OMPL's RRTstar; restart, OnlineRRTstar
+// without the reuse) behind the session's query and waypoint protocol: it answers waypoint requests
+// up to the goal, starts a new tree (sharing no node with the old one) on every map change and
+// every waypoint handed out, drops the plan it follows once a wall blocks it and goes round,
+// cancels a blocked root like the repair planner, and the option is validated. The slices grow the
+// trees for real (50 ms of wall time each).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -28,9 +29,9 @@ constexpr double kRange = 3.0;
 const Eigen::Vector3d kStart(2.0, 0.0, kDepth);
 const Eigen::Vector3d kGoal(18.0, 0.0, kDepth);
 
-SessionOptions scratchOptions() {
+SessionOptions scratchOptions(const std::string& replanning = "scratch") {
   SessionOptions o;
-  o.replanning = "scratch";
+  o.replanning = replanning;
   o.map_resolution = kResolution;
   o.clearance.hull_radius = kHullRadius;
   o.clearance.safety_margin = 0.4;
@@ -67,10 +68,10 @@ bool clearOf(const Eigen::AlignedBox3d& box, const Eigen::Vector3d& a, const Eig
   return true;
 }
 
-class ScratchSessionTest : public ::testing::Test {
+class ScratchSessionTest : public ::testing::TestWithParam<std::string> {
  protected:
   std::unique_ptr<octomap::OcTree> map = std::make_unique<octomap::OcTree>(kResolution);
-  PlanningSession session{scratchOptions()};
+  PlanningSession session{scratchOptions(GetParam())};
   double t = 100.0;  // s, the fake clock
   std::optional<Eigen::Vector3d> vehicle = kStart;
   uint64_t version = 0;
@@ -79,7 +80,7 @@ class ScratchSessionTest : public ::testing::Test {
 
   const ScratchPlanner& planner() const {
     const auto* scratch = dynamic_cast<const ScratchPlanner*>(session.planner());
-    EXPECT_NE(scratch, nullptr) << "replanning: scratch runs another planner";
+    EXPECT_NE(scratch, nullptr) << "replanning: " << GetParam() << " runs another planner";
     return *scratch;
   }
   void collect() {
@@ -111,7 +112,7 @@ class ScratchSessionTest : public ::testing::Test {
   }
 };
 
-TEST_F(ScratchSessionTest, AnswersWaypointByWaypointUpToTheGoalWithANewTreeForEach) {
+TEST_P(ScratchSessionTest, AnswersWaypointByWaypointUpToTheGoalWithANewTreeForEach) {
   ASSERT_TRUE(session.startQuery(makeQuery(1), *map, vehicle, t));
   EXPECT_EQ(planner().trees(), 1u);
   uint64_t reached = 0;
@@ -134,7 +135,7 @@ TEST_F(ScratchSessionTest, AnswersWaypointByWaypointUpToTheGoalWithANewTreeForEa
   EXPECT_TRUE(cancels.empty()) << cancels.front().text;
 }
 
-TEST_F(ScratchSessionTest, TreeHasOneRootAtTheVehicleFromTheStart) {
+TEST_P(ScratchSessionTest, TreeHasOneRootAtTheVehicleFromTheStart) {
   ASSERT_TRUE(session.startQuery(makeQuery(1), *map, vehicle, t));
   TreeSnapshot tree = session.tree();
   ASSERT_EQ(tree.nodes.size(), 1u) << "the root is in the tree before the first slice";
@@ -147,7 +148,7 @@ TEST_F(ScratchSessionTest, TreeHasOneRootAtTheVehicleFromTheStart) {
       << "the valid root was added twice";
 }
 
-TEST_F(ScratchSessionTest, MapChangeStartsATreeSharingNothingButTheRoot) {
+TEST_P(ScratchSessionTest, MapChangeStartsATreeSharingNothingButTheRoot) {
   ASSERT_TRUE(session.startQuery(makeQuery(1), *map, vehicle, t));
   const auto first = next(0);
   ASSERT_TRUE(first);
@@ -180,7 +181,7 @@ TEST_F(ScratchSessionTest, MapChangeStartsATreeSharingNothingButTheRoot) {
   EXPECT_EQ(planner().trees(), trees + 1);
 }
 
-TEST_F(ScratchSessionTest, WallAcrossThePlanDropsItAndTheVehicleGoesRound) {
+TEST_P(ScratchSessionTest, WallAcrossThePlanDropsItAndTheVehicleGoesRound) {
   ASSERT_TRUE(session.startQuery(makeQuery(1), *map, vehicle, t));
   const auto first = next(0);
   ASSERT_TRUE(first);
@@ -214,7 +215,7 @@ TEST_F(ScratchSessionTest, WallAcrossThePlanDropsItAndTheVehicleGoesRound) {
   EXPECT_TRUE(waypoints.back().is_final);
 }
 
-TEST_F(ScratchSessionTest, ColumnOnTheActiveWaypointCancelsItAndReplansFromTheVehicle) {
+TEST_P(ScratchSessionTest, ColumnOnTheActiveWaypointCancelsItAndReplansFromTheVehicle) {
   ASSERT_TRUE(session.startQuery(makeQuery(1), *map, vehicle, t));
   const auto first = next(0);
   ASSERT_TRUE(first);
@@ -233,7 +234,12 @@ TEST_F(ScratchSessionTest, ColumnOnTheActiveWaypointCancelsItAndReplansFromTheVe
   EXPECT_GT(again->waypoint_id, first->waypoint_id);
 }
 
-TEST(ScratchPlannerTest, RootInsideTheClearanceStillGrowsATree) {
+INSTANTIATE_TEST_SUITE_P(Baselines, ScratchSessionTest, ::testing::Values("scratch", "restart"),
+                         [](const auto& info) { return info.param; });
+
+class ScratchPlannerTest : public ::testing::TestWithParam<Replanning> {};
+
+TEST_P(ScratchPlannerTest, RootInsideTheClearanceStillGrowsATree) {
   testing::FlatWorld world;
   addOccupiedBox(*world.tree, {4.0, -3.0, 4.0}, {4.5, 3.0, 6.0});
   world.build();
@@ -244,7 +250,7 @@ TEST(ScratchPlannerTest, RootInsideTheClearanceStillGrowsATree) {
   pdef->setStartAndGoalStates(root, world.state(1.0, 5.0), 1.0);
   pdef->setOptimizationObjective(
       std::make_shared<ompl::base::PathLengthOptimizationObjective>(world.si));
-  ScratchPlanner planner(world.si, pdef, TreeSettings{});
+  ScratchPlanner planner(world.si, pdef, TreeSettings{}, GetParam());
   planner.reset(root.get());
   planner.solve(ompl::base::timedPlannerTerminationCondition(0.2));
   EXPECT_GT(planner.treeSize(), 1u);
@@ -253,10 +259,27 @@ TEST(ScratchPlannerTest, RootInsideTheClearanceStillGrowsATree) {
   EXPECT_TRUE(world.si->getStateSpace()->equalStates(path.front(), root.get()));
 }
 
-TEST(ScratchOptionsTest, ReplanningIsRepairOrScratch) {
+INSTANTIATE_TEST_SUITE_P(Baselines, ScratchPlannerTest,
+                         ::testing::Values(Replanning::SCRATCH, Replanning::RESTART),
+                         [](const auto& info) {
+                           return std::string(info.param == Replanning::SCRATCH ? "scratch"
+                                                                                : "restart");
+                         });
+
+TEST(ScratchPlannerTest, IsNoRepairPlanner) {
+  testing::FlatWorld world;
+  world.build();
+  auto pdef = std::make_shared<ompl::base::ProblemDefinition>(world.si);
+  EXPECT_THROW(ScratchPlanner(world.si, pdef, TreeSettings{}, Replanning::REPAIR),
+               PlanningConfigError);
+}
+
+TEST(ScratchOptionsTest, ReplanningIsRepairScratchOrRestart) {
   SessionOptions options = scratchOptions();
   EXPECT_NO_THROW(PlanningSession{options});
   options.replanning = "repair";
+  EXPECT_NO_THROW(PlanningSession{options});
+  options.replanning = "restart";
   EXPECT_NO_THROW(PlanningSession{options});
   options.replanning = "rebuild";
   try {
@@ -264,7 +287,7 @@ TEST(ScratchOptionsTest, ReplanningIsRepairOrScratch) {
     FAIL() << "accepted replanning 'rebuild'";
   } catch (const PlanningConfigError& error) {
     EXPECT_NE(std::string(error.what()).find("replanning"), std::string::npos) << error.what();
-    EXPECT_NE(std::string(error.what()).find("repair, scratch"), std::string::npos) << error.what();
+    EXPECT_NE(std::string(error.what()).find("restart"), std::string::npos) << error.what();
   }
 }
 

@@ -528,4 +528,20 @@ void OnlineRRTstar::getPlannerData(ob::PlannerData& data) const {
   }
 }
 
+std::shared_ptr<OnlineRRTstar> makeOnlineRRTstar(const TreeSettings& settings,
+                                                 const ob::SpaceInformationPtr& si,
+                                                 const ob::ProblemDefinitionPtr& pdef,
+                                                 const ob::State* root) {
+  auto planner = std::make_shared<OnlineRRTstar>(si);
+  planner->setRange(settings.range);
+  planner->setGoalBias(settings.goal_bias);
+  planner->setNarrowPassageBias(settings.narrow_passage_bias);
+  planner->setRewireFactor(settings.rewire_factor);
+  planner->setGoalTolerance(settings.goal_tolerance);
+  planner->setProblemDefinition(pdef);
+  planner->setup();
+  planner->reset(root);
+  return planner;
+}
+
 }  // namespace auv::planning

@@ -147,4 +147,13 @@ class OnlineRRTstar : public ompl::base::Planner, public WaypointPlanner {
   uint64_t iterations_ = 0;
 };
 
+/// OnlineRRTstar with `settings` on `pdef` (start, goal and objective; `si` set up), set up and
+/// rooted at `root` even when `root` is inside the clearance: OMPL's start-state input skips
+/// invalid starts and would leave no tree, while the motion validator lets the tree leave such
+/// a root by moving away from the wall (a vehicle that drifted close to it).
+std::shared_ptr<OnlineRRTstar> makeOnlineRRTstar(const TreeSettings& settings,
+                                                 const ompl::base::SpaceInformationPtr& si,
+                                                 const ompl::base::ProblemDefinitionPtr& pdef,
+                                                 const ompl::base::State* root);
+
 }  // namespace auv::planning

@@ -154,11 +154,12 @@ const config::OptionTable<SessionOptions>& SessionOptions::table() {
        "distance at which a waypoint counts as reached", "m", Range::closed(0.01, 10.0)},
       {"replanning",
        &O::replanning,
-       "on a map change: repair the anytime tree (the paper) or plan anew from scratch with "
-       "OMPL's RRTstar (the campaign's baseline)",
+       "on a map change: repair the anytime tree (the paper), or plan anew from the root with "
+       "OMPL's RRTstar (scratch) or with the repair planner's tree restarted (restart): the "
+       "campaign's baselines",
        "",
        {},
-       {"repair", "scratch"}},
+       {"repair", "scratch", "restart"}},
   };
   return kTable;
 }

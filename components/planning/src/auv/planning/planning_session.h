@@ -60,8 +60,9 @@ struct SessionOptions {
   double default_time_budget = 10.0;
   double waypoint_speed = 0.5;      ///< m/s, Waypoint speed.
   double waypoint_tolerance = 0.5;  ///< m, Waypoint tolerance.
-  /// "repair": the paper's tree repair (OnlineRRTstar); "scratch": the from-scratch baseline
-  /// (ScratchPlanner: OMPL's RRTstar planned anew on every map change).
+  /// "repair": the paper's tree repair (OnlineRRTstar); "scratch" and "restart": the
+  /// from-scratch baselines (ScratchPlanner: OMPL's RRTstar, or OnlineRRTstar without the
+  /// reuse, planned anew on every map change).
   std::string replanning = "repair";
 
   /// The fields with meaning, unit and range (the planning component's parameters of those

@@ -9,6 +9,9 @@
 #include <ompl/geometric/planners/rrt/RRTstar.h>
 #include <ompl/util/Console.h>
 
+#include "auv/planning/distance_field.h"
+#include "auv/planning/online_rrt_star.h"
+
 namespace auv::planning {
 
 namespace ob = ompl::base;
@@ -46,6 +49,20 @@ class BridgeMixSampler : public ob::StateSampler {
 };
 
 }  // namespace
+
+/// One tree of the baseline, grown from the root until the next map change or waypoint.
+class FreshTree {
+ public:
+  virtual ~FreshTree() = default;
+  virtual ob::PlannerStatus solve(const ob::PlannerTerminationCondition& ptc) = 0;
+  virtual std::size_t size() const = 0;
+  virtual uint64_t iterations() const = 0;
+  /// States from the root to the best goal node (empty without one).
+  virtual std::vector<const ob::State*> path() const = 0;
+  virtual void fill(TreeSnapshot& tree) const = 0;
+};
+
+namespace {
 
 /// OMPL's RRTstar, unchanged, with access to what the session shows and needs: its tree, its
 /// best goal motion, a root inside the clearance and the sampler.
@@ -93,9 +110,65 @@ class FreshRRTstar : public ompl::geometric::RRTstar {
   }
 };
 
+/// replanning: scratch.
+class OmplTree : public FreshTree {
+ public:
+  OmplTree(const ob::SpaceInformationPtr& si, const ob::ProblemDefinitionPtr& pdef,
+           const TreeSettings& settings, const ob::State* root)
+      : rrt_(std::make_shared<FreshRRTstar>(si)) {
+    rrt_->setRange(settings.range);
+    rrt_->setGoalBias(settings.goal_bias);
+    rrt_->setRewireFactor(settings.rewire_factor);
+    // k-nearest (OMPL's default): its radius variant takes the measure of all three
+    // dimensions, which is 0 in the fixed-depth plane and would switch rewiring off.
+    rrt_->setKNearest(true);
+    rrt_->setProblemDefinition(pdef);
+    rrt_->setup();
+    // RRTstar samples the goal itself (goal_bias); the bridge share of the rest makes the
+    // narrow_passage_bias of all random states, as in OnlineRRTstar.
+    const double bridge_share =
+        settings.goal_bias < 1.0 ? settings.narrow_passage_bias / (1.0 - settings.goal_bias) : 0.0;
+    rrt_->plant(root, std::make_shared<BridgeMixSampler>(si.get(), bridge_share, settings.range));
+  }
+  ob::PlannerStatus solve(const ob::PlannerTerminationCondition& ptc) override {
+    return rrt_->solve(ptc);
+  }
+  std::size_t size() const override { return rrt_->size(); }
+  uint64_t iterations() const override { return rrt_->numIterations(); }
+  std::vector<const ob::State*> path() const override { return rrt_->path(); }
+  void fill(TreeSnapshot& tree) const override { rrt_->fill(tree); }
+
+ private:
+  std::shared_ptr<FreshRRTstar> rrt_;
+};
+
+/// replanning: restart.
+class OnlineTree : public FreshTree {
+ public:
+  OnlineTree(const ob::SpaceInformationPtr& si, const ob::ProblemDefinitionPtr& pdef,
+             const TreeSettings& settings, const ob::State* root)
+      : rrt_(makeOnlineRRTstar(settings, si, pdef, root)) {}
+  ob::PlannerStatus solve(const ob::PlannerTerminationCondition& ptc) override {
+    return rrt_->solve(ptc);
+  }
+  std::size_t size() const override { return rrt_->treeSize(); }
+  uint64_t iterations() const override { return rrt_->iterations(); }
+  std::vector<const ob::State*> path() const override { return rrt_->bestPath(); }
+  void fill(TreeSnapshot& tree) const override { rrt_->snapshot(tree); }
+
+ private:
+  std::shared_ptr<OnlineRRTstar> rrt_;
+};
+
+}  // namespace
+
 ScratchPlanner::ScratchPlanner(const ob::SpaceInformationPtr& si,
-                               const ob::ProblemDefinitionPtr& pdef, const TreeSettings& settings)
-    : si_(si), pdef_(pdef), settings_(settings) {
+                               const ob::ProblemDefinitionPtr& pdef, const TreeSettings& settings,
+                               Replanning mode)
+    : si_(si), pdef_(pdef), settings_(settings), mode_(mode) {
+  if (mode == Replanning::REPAIR) {
+    throw PlanningConfigError("ScratchPlanner: replanning must be scratch or restart, not repair");
+  }
   // RRTstar informs twice per solve() call, i.e. twenty lines a second in planning slices.
   if (ompl::msg::getLogLevel() < ompl::msg::LOG_WARN) ompl::msg::setLogLevel(ompl::msg::LOG_WARN);
 }
@@ -112,26 +185,17 @@ void ScratchPlanner::freePlan() {
 }
 
 void ScratchPlanner::restart() {
-  if (tree_) earlier_iterations_ += tree_->numIterations();
+  if (tree_) earlier_iterations_ += tree_->iterations();
   tree_.reset();
   auto pdef = std::make_shared<ob::ProblemDefinition>(si_);
   pdef->addStartState(root_);
   pdef->setGoal(pdef_->getGoal());
   pdef->setOptimizationObjective(pdef_->getOptimizationObjective());
-  tree_ = std::make_shared<FreshRRTstar>(si_);
-  tree_->setRange(settings_.range);
-  tree_->setGoalBias(settings_.goal_bias);
-  tree_->setRewireFactor(settings_.rewire_factor);
-  // k-nearest (OMPL's default): its radius variant takes the measure of all three dimensions,
-  // which is 0 in the fixed-depth plane and would switch rewiring off.
-  tree_->setKNearest(true);
-  tree_->setProblemDefinition(pdef);
-  tree_->setup();
-  // RRTstar samples the goal itself (goal_bias); the bridge share of the rest makes the
-  // narrow_passage_bias of all random states, as in OnlineRRTstar.
-  const double bridge_share =
-      settings_.goal_bias < 1.0 ? settings_.narrow_passage_bias / (1.0 - settings_.goal_bias) : 0.0;
-  tree_->plant(root_, std::make_shared<BridgeMixSampler>(si_.get(), bridge_share, settings_.range));
+  if (mode_ == Replanning::RESTART) {
+    tree_ = std::make_unique<OnlineTree>(si_, pdef, settings_, root_);
+  } else {
+    tree_ = std::make_unique<OmplTree>(si_, pdef, settings_, root_);
+  }
   ++trees_;
 }
 
@@ -152,7 +216,7 @@ ob::PlannerStatus ScratchPlanner::solve(const ob::PlannerTerminationCondition& p
 
 std::size_t ScratchPlanner::treeSize() const { return tree_ ? tree_->size() : 0; }
 
-uint64_t ScratchPlanner::treeIterations() const { return tree_ ? tree_->numIterations() : 0; }
+uint64_t ScratchPlanner::treeIterations() const { return tree_ ? tree_->iterations() : 0; }
 
 uint64_t ScratchPlanner::iterations() const { return earlier_iterations_ + treeIterations(); }
 
@@ -170,6 +234,9 @@ std::vector<const ob::State*> ScratchPlanner::treePath() const {
   // OMPL's RRTstar reuses a neighbour's validity check for the rewire in the other direction
   // when the cost is symmetric; the climb limit makes validity directional, so a rewired edge
   // may climb too steeply. Such a path is no solution (each edge checked the way it is flown).
+  // OnlineRRTstar checks each edge the way it is flown already; checking again would make
+  // the restart baseline pay for what tree repair does not.
+  if (mode_ == Replanning::RESTART) return path;
   for (std::size_t i = 1; i < path.size(); ++i) {
     if (!si_->checkMotion(path[i - 1], path[i])) return {};
   }

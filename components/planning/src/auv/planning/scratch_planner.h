@@ -1,10 +1,15 @@
 #pragma once
-// The online baseline of the mission campaign (issue 19): the same query and waypoint protocol
-// as OnlineRRTstar, but OMPL's own RRTstar planned from scratch from the current root whenever
-// the map changes or a waypoint is handed out (the root moved). No tree is ever reused; what is
-// carried over is the plan being followed: the rest of the path after the waypoint handed out,
-// kept while it stays valid and used when the fresh tree has nothing cheaper yet (a planner
-// that throws away a valid plan it is executing would be a strawman).
+// The online baselines of the mission campaign (issue 19): the same query and waypoint protocol
+// as OnlineRRTstar, but a tree planned from scratch from the current root whenever the map
+// changes or a waypoint is handed out (the root moved). No tree is ever reused; what is carried
+// over is the plan being followed: the rest of the path after the waypoint handed out, kept
+// while it stays valid and used when the fresh tree has nothing cheaper yet (a planner that
+// throws away a valid plan it is executing would be a strawman).
+//
+// Two kinds of fresh tree: OMPL's own RRTstar (replanning: scratch, the textbook baseline) and
+// the repair planner's OnlineRRTstar restarted each time (replanning: restart). The second
+// differs from tree repair in nothing but the reuse — same sampling, same climb-limited
+// steering — so the campaign can tell what the repair itself buys from what the steering does.
 
 #include <cstdint>
 #include <memory>
@@ -14,14 +19,16 @@
 
 namespace auv::planning {
 
-class FreshRRTstar;
+class FreshTree;
 
 class ScratchPlanner : public WaypointPlanner {
  public:
   /// `pdef` gives the goal (a GoalState at the goal tolerance) and the objective; each tree
-  /// gets a problem definition of its own, rooted where that tree starts.
+  /// gets a problem definition of its own, rooted where that tree starts. `mode` is SCRATCH
+  /// (OMPL's RRTstar) or RESTART (OnlineRRTstar); throws PlanningConfigError for REPAIR.
   ScratchPlanner(const ompl::base::SpaceInformationPtr& si,
-                 const ompl::base::ProblemDefinitionPtr& pdef, const TreeSettings& settings);
+                 const ompl::base::ProblemDefinitionPtr& pdef, const TreeSettings& settings,
+                 Replanning mode = Replanning::SCRATCH);
   ~ScratchPlanner() override;
   ScratchPlanner(const ScratchPlanner&) = delete;
   ScratchPlanner& operator=(const ScratchPlanner&) = delete;
@@ -68,9 +75,10 @@ class ScratchPlanner : public WaypointPlanner {
   ompl::base::SpaceInformationPtr si_;
   ompl::base::ProblemDefinitionPtr pdef_;
   TreeSettings settings_;
+  Replanning mode_;
   ompl::base::State* root_ = nullptr;
   std::vector<ompl::base::State*> plan_;  // after root_, up to the goal
-  std::shared_ptr<FreshRRTstar> tree_;
+  std::unique_ptr<FreshTree> tree_;
   uint64_t trees_ = 0;
   uint64_t earlier_iterations_ = 0;  // of the trees dropped since reset()
 };

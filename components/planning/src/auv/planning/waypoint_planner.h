@@ -78,9 +78,12 @@ class WaypointPlanner {
 enum class Replanning {
   REPAIR,   ///< the paper's: one anytime tree, re-checked and pruned (OnlineRRTstar)
   SCRATCH,  ///< the baseline: OMPL's RRTstar planned anew from the root (ScratchPlanner)
+  /// the baseline with the repair planner's own tree: OnlineRRTstar planned anew from the root
+  /// (ScratchPlanner), i.e. tree repair without the reuse
+  RESTART,
 };
 
-/// "repair" or "scratch"; throws PlanningConfigError otherwise.
+/// "repair", "scratch" or "restart"; throws PlanningConfigError otherwise.
 Replanning replanningFromName(const std::string& name);
 
 struct TreeSettings {
