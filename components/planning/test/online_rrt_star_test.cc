@@ -76,6 +76,23 @@ TEST_F(PlannerTest, FindsAPathAroundAWallAndImprovesItWithMoreIterations) {
   EXPECT_TRUE(pdef_->hasExactSolution());
 }
 
+TEST_F(PlannerTest, GoalDrawsSpreadOverTheGoalRegionSoABlockedNearestNodeIsNoDeadEnd) {
+  // Only goal-directed draws (goal_bias 1). A short wall stands right before the goal: every
+  // draw of the goal itself extends the same nearest node into the wall's clearance, so with
+  // exact goal draws alone the tree never grows past it; draws spread over the goal region
+  // (within the tolerance) reach round the wall's end.
+  testing::addOccupiedBox(*world_.tree, {8.0, -1.0, 0.0}, {8.5, 1.0, 10.0});
+  makePlanner(2.0, 0.0, 10.0, 0.0);
+  planner_->setGoalBias(1.0);
+  planner_->setGoalTolerance(2.5);
+  ASSERT_EQ(grow(3000), ob::PlannerStatus::EXACT_SOLUTION) << planner_->treeSize() << " nodes";
+  const auto path = planner_->bestPath();
+  for (std::size_t i = 1; i < path.size(); ++i) {
+    EXPECT_TRUE(world_.si->checkMotion(path[i - 1], path[i]));
+  }
+  EXPECT_TRUE(planner_->checkConsistency());
+}
+
 TEST_F(PlannerTest, PopWaypointKeepsOnlyTheRootChildSubtree) {
   makePlanner(2.0, 0.0, 18.0, 5.0);
   ASSERT_EQ(grow(2000), ob::PlannerStatus::EXACT_SOLUTION);

@@ -164,7 +164,16 @@ void OnlineRRTstar::sampleRandomState(ob::State* random_state) {
   if (!sampler_) sampler_ = si_->allocStateSampler();
   const double draw = rng_.uniform01();
   if (draw < goal_bias_) {
-    si_->copyState(random_state, goal_state_);
+    // Half the goal draws are the goal itself (the straight pull), half a state near it within
+    // the tolerance: the goal's nearest node is often the same one, and where the way from it
+    // is blocked (below a ledge the goal sits on, beyond a climb the limit forbids) every exact
+    // goal draw fails there again, while a spread one can enter the goal region from another
+    // node and side.
+    if (draw < 0.5 * goal_bias_) {
+      si_->copyState(random_state, goal_state_);
+    } else {
+      sampler_->sampleUniformNear(random_state, goal_state_, goal_tolerance_);
+    }
     return;
   }
   if (draw < goal_bias_ + narrow_passage_bias_) {

@@ -97,8 +97,8 @@ class OnlineRRTstar : public ompl::base::Planner, public WaypointPlanner {
   double getNarrowPassageSpread() const { return narrow_passage_spread_; }
 
  private:
-  /// The random state of one iteration: the goal (goal_bias), a bridge-test state
-  /// (narrow_passage_bias, when the bridge test finds one) or a uniform state.
+  /// The random state of one iteration: the goal or a state near it (goal_bias), a bridge-test
+  /// state (narrow_passage_bias, when the bridge test finds one) or a uniform state.
   void sampleRandomState(ompl::base::State* random_state);
   /// Algorithm 2: nearest, steer by δ, check, choose parent, add, rewire. Null if trapped.
   Node* extend(const ompl::base::State* random_state);

@@ -123,7 +123,10 @@ const config::OptionTable<SessionOptions>& SessionOptions::table() {
   using O = SessionOptions;
   static const config::OptionTable<O> kTable = {
       {"range", &O::range, "RRT* extension length (delta)", "m", Range::closed(0.05, 100.0)},
-      {"goal_bias", &O::goal_bias, "probability of sampling the goal", "", Range::closed(0, 1)},
+      {"goal_bias", &O::goal_bias,
+       "probability of sampling the goal region: half these draws the goal, half a state "
+       "within the goal tolerance of it",
+       "", Range::closed(0, 1)},
       {"narrow_passage_bias", &O::narrow_passage_bias,
        "share of random states drawn by OMPL's bridge test, which finds narrow passages "
        "(gaps) that uniform sampling rarely hits; 0 = uniform only (the paper)",
