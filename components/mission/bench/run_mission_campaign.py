@@ -29,6 +29,7 @@ the same command again, and only the run in progress is lost. `campaign_table.py
 """
 import argparse
 import datetime
+import hashlib
 import json
 import os
 import shutil
@@ -253,8 +254,17 @@ def map_resolution(args):
     return MAP_RESOLUTION
 
 
-def run_mission(world, seed, planner, args, runs_dir):
-    run_dir = os.path.join(runs_dir, f"{world}-{seed}-{planner}")
+def campaign_dir(runs_dir, results, config):
+    """Where this campaign's run folders go: one folder per results file and configuration, so
+    that two campaigns (another objective, another rows file) never overwrite each other's runs;
+    the worlds' true maps stay shared in runs_dir."""
+    stem = os.path.splitext(os.path.basename(results))[0]
+    digest = hashlib.sha1(json.dumps(config, sort_keys=True).encode()).hexdigest()[:8]
+    return os.path.join(runs_dir, f"{stem}-{digest}")
+
+
+def run_mission(world, seed, planner, args, runs_dir, out_dir):
+    run_dir = os.path.join(out_dir, f"{world}-{seed}-{planner}")
     shutil.rmtree(run_dir, ignore_errors=True)
     scenario = world if args.navigation == "drift" else \
         ideal_navigation_scenario(world, seed, runs_dir)
@@ -266,7 +276,7 @@ def run_mission(world, seed, planner, args, runs_dir):
     if args.prior_map:
         command.append(f"initial_map:={true_map_for(world, seed, runs_dir, map_resolution(args))}")
     started = time.monotonic()
-    with open(os.path.join(runs_dir, f"{world}-{seed}-{planner}.log"), "w") as log:
+    with open(os.path.join(out_dir, f"{world}-{seed}-{planner}.log"), "w") as log:
         try:
             code = subprocess.run(command, stdout=log, stderr=subprocess.STDOUT,
                                   timeout=args.timeout).returncode
@@ -410,6 +420,8 @@ def main():
     order = [(w, s) for s in seeds for w in worlds] if args.seed_major else \
         [(w, s) for w in worlds for s in seeds]
     config = configuration(args)
+    out_dir = campaign_dir(runs_dir, args.results, config)
+    os.makedirs(out_dir, exist_ok=True)
     done = done_keys(args.results)
     commit = git_commit()
     for world, seed in order:
@@ -421,7 +433,8 @@ def main():
                 continue
             load = os.getloadavg()[0]
             started = datetime.datetime.now().isoformat(timespec="seconds")
-            run_dir, code, wall, summary = run_mission(world, seed, planner, args, runs_dir)
+            run_dir, code, wall, summary = run_mission(world, seed, planner, args, runs_dir,
+                                                      out_dir)
             row = {"key": key, "world": world, "seed": seed, "planner": planner, **config,
                    "commit": commit, "started": started, "exit": code, "wall_s": round(wall, 1),
                    "load_average": [round(load, 2), round(os.getloadavg()[0], 2)],
