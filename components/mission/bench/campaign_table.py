@@ -75,7 +75,7 @@ def outcome_table(rows, rtf):
 
 
 BASELINES = {"scratch": "OMPL's RRTstar from scratch",
-             "restart": "the repair planner's tree restarted (no reuse)"}
+             "restart": "the repair planner's tree restarted, no reuse"}
 
 
 def comparison_table(rows, rtf, baseline):
