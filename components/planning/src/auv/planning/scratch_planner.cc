@@ -57,7 +57,8 @@ class FreshTree {
   virtual ob::PlannerStatus solve(const ob::PlannerTerminationCondition& ptc) = 0;
   virtual std::size_t size() const = 0;
   virtual uint64_t iterations() const = 0;
-  /// States from the root to the best goal node (empty without one).
+  /// States from the root to the best goal node, each edge valid the way it is flown (empty
+  /// without one).
   virtual std::vector<const ob::State*> path() const = 0;
   virtual void fill(TreeSnapshot& tree) const = 0;
 };
@@ -135,7 +136,18 @@ class OmplTree : public FreshTree {
   }
   std::size_t size() const override { return rrt_->size(); }
   uint64_t iterations() const override { return rrt_->numIterations(); }
-  std::vector<const ob::State*> path() const override { return rrt_->path(); }
+  std::vector<const ob::State*> path() const override {
+    std::vector<const ob::State*> states = rrt_->path();
+    // RRTstar reuses a neighbour's validity check for the rewire in the other direction when
+    // the cost is symmetric; the climb limit makes validity directional, so a rewired edge may
+    // climb too steeply. Such a path is no solution. (OnlineRRTstar checks each edge the way it
+    // is flown already.)
+    const auto& si = rrt_->getSpaceInformation();
+    for (std::size_t i = 1; i < states.size(); ++i) {
+      if (!si->checkMotion(states[i - 1], states[i])) return {};
+    }
+    return states;
+  }
   void fill(TreeSnapshot& tree) const override { rrt_->fill(tree); }
 
  private:
@@ -229,18 +241,7 @@ bool ScratchPlanner::hasSolution() const {
 }
 
 std::vector<const ob::State*> ScratchPlanner::treePath() const {
-  if (!tree_) return {};
-  std::vector<const ob::State*> path = tree_->path();
-  // OMPL's RRTstar reuses a neighbour's validity check for the rewire in the other direction
-  // when the cost is symmetric; the climb limit makes validity directional, so a rewired edge
-  // may climb too steeply. Such a path is no solution (each edge checked the way it is flown).
-  // OnlineRRTstar checks each edge the way it is flown already; checking again would make
-  // the restart baseline pay for what tree repair does not.
-  if (mode_ == Replanning::RESTART) return path;
-  for (std::size_t i = 1; i < path.size(); ++i) {
-    if (!si_->checkMotion(path[i - 1], path[i])) return {};
-  }
-  return path;
+  return tree_ ? tree_->path() : std::vector<const ob::State*>{};
 }
 
 std::vector<const ob::State*> ScratchPlanner::planPath() const {

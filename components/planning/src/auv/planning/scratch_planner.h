@@ -28,7 +28,7 @@ class ScratchPlanner : public WaypointPlanner {
   /// (OMPL's RRTstar) or RESTART (OnlineRRTstar); throws PlanningConfigError for REPAIR.
   ScratchPlanner(const ompl::base::SpaceInformationPtr& si,
                  const ompl::base::ProblemDefinitionPtr& pdef, const TreeSettings& settings,
-                 Replanning mode = Replanning::SCRATCH);
+                 Replanning mode);
   ~ScratchPlanner() override;
   ScratchPlanner(const ScratchPlanner&) = delete;
   ScratchPlanner& operator=(const ScratchPlanner&) = delete;
