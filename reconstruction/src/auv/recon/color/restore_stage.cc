@@ -338,15 +338,21 @@ RestoreStageResult runRestoreStage(const Survey& survey, const RestoreStageOptio
   // Grey world over the restored surface points: the average light left on the scene is not
   // separable from the albedo without a reference.
   if (options.water.white_balance == "grey_world") {
-    Eigen::Array3d sum = Eigen::Array3d::Zero();
+    Eigen::Array3d sum = Eigen::Array3d::Zero(), unlit = Eigen::Array3d::Zero();
     for (const PointObservation& o : observations) {
-      sum += restoreLinear(o.rgb.cast<double>(), o.range, o.cos4, water, options.water.max_gain) /
-             water.illuminant(positions[o.point]);
+      const Eigen::Array3d j =
+          restoreLinear(o.rgb.cast<double>(), o.range, o.cos4, water, options.water.max_gain);
+      unlit += j;
+      sum += j / water.illuminant(positions[o.point]);
     }
-    // Gains that make the mean grey at the same luminance (Rec. 709 weights): the exposure the
-    // camera chose is kept.
-    const double luminance = 0.2126 * sum[0] + 0.7152 * sum[1] + 0.0722 * sum[2];
-    if ((sum > 0).all()) water.white_balance = luminance / sum;
+    // Gains that make the mean grey at the luminance (Rec. 709 weights) the surface had before
+    // the light correction: the camera's exposure is kept. The light gradient only
+    // redistributes light across the scene; taken at the cameras' mean position, an
+    // extrapolated gradient would also set the exposure (a canyon survey came out 2.7x dark).
+    const auto luminance = [](const Eigen::Array3d& c) {
+      return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+    };
+    if ((sum > 0).all()) water.white_balance = luminance(unlit) / sum;
   }
 
   // Pass 2: the restored keyframes.
