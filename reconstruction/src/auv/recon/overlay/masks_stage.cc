@@ -86,6 +86,9 @@ void MasksStageOptions::bind(OptionSet& set) {
           "grey levels: temporal standard deviation below which a pixel is static");
   set.add("min_gradient", &overlay.min_gradient,
           "grey levels/px: mean-image gradient above which a static pixel is an overlay edge");
+  set.add("max_std_flat", &overlay.max_std_flat,
+          "grey levels: temporal standard deviation below which a pixel is overlay whatever its "
+          "contrast (0 = edges only)");
   set.add("close_px", &overlay.close_px, "px: closing that joins text strokes into blocks");
   set.add("min_area_px", &overlay.min_area_px, "px: smaller overlay blobs are dropped");
   set.add("dilate_px", &overlay.dilate_px, "px: margin added around the overlay");
@@ -141,6 +144,7 @@ MasksStageResult runMasksStage(const Survey& survey, const MasksStageOptions& op
                   {"samples", o.samples},
                   {"max_std", o.max_std},
                   {"min_gradient", o.min_gradient},
+                  {"max_std_flat", o.max_std_flat},
                   {"close_px", o.close_px},
                   {"min_area_px", o.min_area_px},
                   {"dilate_px", o.dilate_px},

@@ -18,6 +18,8 @@ void OverlayOptions::check() const {
   AUV_RECON_CHECK_OPTION(samples >= 2 && samples <= 10000, samples, "must be in [2, 10000]");
   AUV_RECON_CHECK_OPTION(max_std > 0 && max_std < 128, max_std, "must be in (0, 128) grey levels");
   AUV_RECON_CHECK_OPTION(min_gradient > 0, min_gradient, "must be > 0 grey levels per px");
+  AUV_RECON_CHECK_OPTION(max_std_flat >= 0 && max_std_flat < max_std, max_std_flat,
+                         "must be in [0, max_std) grey levels");
   AUV_RECON_CHECK_OPTION(close_px >= 0 && close_px <= 255, close_px, "must be in [0, 255] px");
   AUV_RECON_CHECK_OPTION(min_area_px >= 0, min_area_px, "must be >= 0 px");
   AUV_RECON_CHECK_OPTION(dilate_px >= 0 && dilate_px <= 255, dilate_px, "must be in [0, 255] px");
@@ -82,7 +84,12 @@ OverlayDetection OverlayDetector::detect() const {
   cv::Sobel(mean_, gy, CV_64F, 0, 1, 3, 0.25);
   cv::magnitude(gx, gy, gradient);
   const cv::Mat still = std_dev < options_.max_std;
-  cv::Mat seeds = still & (gradient > options_.min_gradient);
+  // Flat seeds count only in solid patches: a scene's pixels that happen to barely vary are
+  // scattered, and the closing below would join them into blobs.
+  cv::Mat flat = std_dev < options_.max_std_flat;
+  cv::morphologyEx(flat, flat, cv::MORPH_OPEN,
+                   cv::getStructuringElement(cv::MORPH_ELLIPSE, {7, 7}));
+  cv::Mat seeds = (still & (gradient > options_.min_gradient)) | flat;
   // A part of the vehicle in a corner has no edge along the image border: still border pixels
   // close its outline (a still stretch of scene along the border stays a thin line, removed by
   // the opening below).

@@ -3,7 +3,9 @@
 // housing's edge or the vehicle's own parts stay put on the image while the scene moves under
 // them. Over frames sampled across a camera's videos, a pixel whose grey level keeps still
 // (temporal standard deviation below `max_std`) and that lies on an edge of the temporal mean
-// image (the moving scene blurs out of the mean, a fixed overlay stays sharp) seeds the mask;
+// image (the moving scene blurs out of the mean, a fixed overlay stays sharp) seeds the mask,
+// and so does a pixel that barely varies at all (`max_std_flat`: the flat inside of a dark box
+// on dark footage, whose edges are too faint);
 // the seeds are closed into blocks (text strokes join), holes are filled (the inside of a
 // read-out box), small blobs dropped and the rest dilated by a margin (SIFT descriptors reach
 // beyond their keypoint). The result is a mask in COLMAP's convention (masks/mask.h): 0 on the
@@ -25,6 +27,10 @@ struct OverlayOptions {
   /// Grey levels per px: the temporal mean image's gradient (Sobel / 4) above which a static
   /// pixel is an overlay edge.
   double min_gradient = 12.0;
+  /// Grey levels: a pixel whose temporal standard deviation is below this is an overlay pixel
+  /// whatever its contrast (a dark read-out box or housing on dark footage has no edge above
+  /// min_gradient; the moving scene's pixels, even its dark ones, vary more). 0 = edges only.
+  double max_std_flat = 1.0;
   /// px: closing that joins the strokes of text into one block.
   int close_px = 15;
   /// px: static blobs smaller than this (after closing) are dropped as chance.
