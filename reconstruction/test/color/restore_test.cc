@@ -262,6 +262,9 @@ Eigen::Array3d meanRestoredColor(const Survey& survey, const std::map<std::strin
   return sum / clear.size();
 }
 
+// Rec. 709 luminance of a linear (r, g, b) colour.
+double luminance(const Eigen::Array3d& c) { return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; }
+
 TEST(Restore, GreyWorldBalancesTheRestoredColours) {
   TempDir dir;
   const Survey survey(dir.path / "survey");
@@ -274,9 +277,6 @@ TEST(Restore, GreyWorldBalancesTheRestoredColours) {
   options.water.white_balance = "grey_world";
   runRestoreStage(survey, options);
   const Eigen::Array3d balanced = meanRestoredColor(survey, clear);
-  const auto luminance = [](const Eigen::Array3d& c) {
-    return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
-  };
   // The floor is not grey (blue-green on average): balanced, it is, at the same luminance.
   EXPECT_GT(unbalanced.maxCoeff() / unbalanced.minCoeff(), 1.15) << unbalanced.transpose();
   EXPECT_LT(balanced.maxCoeff() / balanced.minCoeff(), 1.08) << balanced.transpose();
@@ -301,9 +301,6 @@ TEST(Restore, GreyWorldKeepsTheCamerasExposureWhenTheLightVaries) {
   const RestoreStageResult result = runRestoreStage(survey, options);
   EXPECT_LT(result.model.illuminant_gradient(0, 0), -0.2);  // the gradient was found
   const Eigen::Array3d balanced = meanRestoredColor(survey, clear);
-  const auto luminance = [](const Eigen::Array3d& c) {
-    return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
-  };
   // Equal over the surface points the fits used (weighted by the views that see them); over the
   // floor's pixels within 13 % (measured: +10 %; the exposure taken at the cameras: -19 %).
   EXPECT_NEAR(luminance(balanced), luminance(unlit), 0.13 * luminance(unlit))
