@@ -7,6 +7,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
@@ -164,3 +166,26 @@ TEST_F(OverlayTest, MasksStageWritesTheCameraMaskAndNeverOverwritesOne) {
 }
 
 }  // namespace
+
+TEST(OverlayOptions, BadValuesAreRefusedNamingTheField) {
+  const std::vector<std::pair<std::string, void (*)(overlay::OverlayOptions&)>> cases = {
+      {"samples", [](overlay::OverlayOptions& o) { o.samples = 1; }},
+      {"max_std", [](overlay::OverlayOptions& o) { o.max_std = 0; }},
+      {"min_gradient", [](overlay::OverlayOptions& o) { o.min_gradient = 0; }},
+      {"max_std_flat", [](overlay::OverlayOptions& o) { o.max_std_flat = -1; }},
+      {"max_std_flat", [](overlay::OverlayOptions& o) { o.max_std_flat = o.max_std; }},
+      {"close_px", [](overlay::OverlayOptions& o) { o.close_px = -1; }},
+      {"min_moving_fraction", [](overlay::OverlayOptions& o) { o.min_moving_fraction = 2; }},
+  };
+  for (const auto& [field, spoil] : cases) {
+    overlay::OverlayOptions options;
+    spoil(options);
+    try {
+      options.check();
+      ADD_FAILURE() << field << ": a bad value was accepted";
+    } catch (const std::exception& e) {
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_NO_THROW(overlay::OverlayOptions().check());
+}
