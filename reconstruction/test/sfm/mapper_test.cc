@@ -10,6 +10,33 @@
 namespace auv::recon::sfm {
 namespace {
 
+TEST(IncrementalMapper, ImagesOfASeparateGroupSayTheyAreNotConnected) {
+  testing::SyntheticOptions o;
+  o.cameras = 3;
+  o.stations = 8;
+  testing::SyntheticScene s = testing::makeSyntheticScene(o);
+  // The third camera's views matched only one another (as a camera looking into murk does).
+  std::map<uint32_t, uint32_t> camera_of;
+  for (const View& view : s.input.views) camera_of[view.id] = view.camera_id;
+  const uint32_t third = camera_of.rbegin()->second;
+  std::vector<ViewPair> kept;
+  for (const ViewPair& pair : s.input.pairs) {
+    if ((camera_of[pair.image_a] == third) == (camera_of[pair.image_b] == third))
+      kept.push_back(pair);
+  }
+  s.input.pairs = kept;
+  IncrementalMapper mapper(s.input, MapperOptions());
+  const MapperResult result = mapper.run(nullptr, nullptr);
+  ASSERT_EQ(result.status, MapperStatus::SUCCESS) << result.message;
+  ASSERT_EQ(result.unregistered.size(), 8u);
+  for (uint32_t id : result.unregistered) {
+    EXPECT_EQ(camera_of[id], third);
+    const std::string& why = result.unregistered_reasons.at(id);
+    EXPECT_NE(why.find("not connected to the model"), std::string::npos) << why;
+    EXPECT_NE(why.find("only to 7 other"), std::string::npos) << why;
+  }
+}
+
 TEST(IncrementalMapper, ReconstructsAThreeCameraRigWithWrongMatches) {
   testing::SyntheticOptions o;
   o.cameras = 3;

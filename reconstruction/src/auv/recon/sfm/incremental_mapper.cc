@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 
@@ -485,6 +486,25 @@ std::string IncrementalMapper::whyUnregistered(uint32_t id) const {
   bool paired = false;
   for (const ViewPair& pair : input_.pairs) paired |= pair.image_a == id || pair.image_b == id;
   if (!paired) return "no verified pair: it matched no other image";
+  // The images its verified pairs reach, transitively: when none is in the model, it belongs to
+  // a group no verified pair joins to the model's (another camera in murk, a second visit).
+  std::set<uint32_t> group{id};
+  for (std::vector<uint32_t> open{id}; !open.empty();) {
+    const uint32_t image = open.back();
+    open.pop_back();
+    for (const ViewPair& pair : input_.pairs) {
+      const uint32_t other = pair.image_a == image   ? pair.image_b
+                             : pair.image_b == image ? pair.image_a
+                                                     : image;
+      if (other != image && group.insert(other).second) open.push_back(other);
+    }
+  }
+  if (std::none_of(group.begin(), group.end(),
+                   [&](uint32_t image) { return rec_.images.count(image) > 0; })) {
+    return "not connected to the model: its verified pairs join it only to " +
+           std::to_string(group.size() - 1) +
+           " other unregistered image(s), a separate group (the model holds one group)";
+  }
   size_t visible = 0;
   for (int64_t t : tracks_.tracksOfImage(id)) {
     visible += t != Tracks::kNoTrack && rec_.points.count(static_cast<uint64_t>(t));
