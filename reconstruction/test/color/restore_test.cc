@@ -262,9 +262,6 @@ Eigen::Array3d meanRestoredColor(const Survey& survey, const std::map<std::strin
   return sum / clear.size();
 }
 
-// Rec. 709 luminance of a linear (r, g, b) colour.
-double luminance(const Eigen::Array3d& c) { return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; }
-
 TEST(Restore, GreyWorldBalancesTheRestoredColours) {
   TempDir dir;
   const Survey survey(dir.path / "survey");

@@ -349,9 +349,6 @@ RestoreStageResult runRestoreStage(const Survey& survey, const RestoreStageOptio
     // the light correction: the camera's exposure is kept. The light gradient only
     // redistributes light across the scene; taken at the cameras' mean position, an
     // extrapolated gradient would also set the exposure (a canyon survey came out 2.7x dark).
-    const auto luminance = [](const Eigen::Array3d& c) {
-      return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
-    };
     if ((sum > 0).all()) water.white_balance = luminance(unlit) / sum;
   }
 

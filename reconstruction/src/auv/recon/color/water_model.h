@@ -143,6 +143,11 @@ cv::Mat restoreImage(const cv::Mat& bgr8, const cv::Mat& range, const cv::Mat& c
                      const WaterModel& model, const WaterFitOptions& options,
                      const cv::Mat& illuminant = cv::Mat());
 
+/// Rec. 709 luminance of a linear (r, g, b) colour.
+inline double luminance(const Eigen::Array3d& rgb) {
+  return 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2];
+}
+
 /// Linear restored colour (before white balance) of one pixel.
 Eigen::Array3d restoreLinear(const Eigen::Array3d& rgb, double range, double cos4,
                              const WaterModel& model, double max_gain);

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -483,20 +484,20 @@ void IncrementalMapper::globalBundleAdjustment(MapperResult& result, int max_ite
 std::string IncrementalMapper::whyUnregistered(uint32_t id) const {
   const auto failed = last_failure_.find(id);
   if (failed != last_failure_.end()) return failed->second;
-  bool paired = false;
-  for (const ViewPair& pair : input_.pairs) paired |= pair.image_a == id || pair.image_b == id;
-  if (!paired) return "no verified pair: it matched no other image";
+  std::map<uint32_t, std::vector<uint32_t>> neighbours;
+  for (const ViewPair& pair : input_.pairs) {
+    neighbours[pair.image_a].push_back(pair.image_b);
+    neighbours[pair.image_b].push_back(pair.image_a);
+  }
+  if (!neighbours.count(id)) return "no verified pair: it matched no other image";
   // The images its verified pairs reach, transitively: when none is in the model, it belongs to
   // a group no verified pair joins to the model's (another camera in murk, a second visit).
   std::set<uint32_t> group{id};
   for (std::vector<uint32_t> open{id}; !open.empty();) {
     const uint32_t image = open.back();
     open.pop_back();
-    for (const ViewPair& pair : input_.pairs) {
-      const uint32_t other = pair.image_a == image   ? pair.image_b
-                             : pair.image_b == image ? pair.image_a
-                                                     : image;
-      if (other != image && group.insert(other).second) open.push_back(other);
+    for (uint32_t other : neighbours[image]) {
+      if (group.insert(other).second) open.push_back(other);
     }
   }
   if (std::none_of(group.begin(), group.end(),
