@@ -522,6 +522,123 @@ TEST_F(PlanningSessionTest, BudgetCountsFromTheLastSolution) {
   EXPECT_EQ(cancels.size(), 2u);
 }
 
+/// detour_hold of 2 s at a cost ratio of 1.6, path-length queries (Eq. (1) would reward the
+/// wall the tests put up) in bounds 60 m wide, so that a wall leaves a long way round.
+class DetourHoldTest : public PlanningSessionTest {
+ protected:
+  static SessionOptions holding() {
+    SessionOptions o = defaults();
+    o.detour_hold = 2.0;
+    o.detour_factor = 1.6;
+    o.max_tree_size = 1000000;  // a full tree ends the hold (DetourHoldFullTreeTest)
+    return o;
+  }
+  explicit DetourHoldTest(const SessionOptions& options = holding())
+      : PlanningSessionTest(options) {}
+
+  /// Starts the query, takes the first waypoint and grows the tree to a near-straight path.
+  PlannedWaypoint goUnderway() {
+    PlanningQuery query = makeQuery(1, kStart, kGoal);
+    query.objective = PlanningObjective::PATH_LENGTH;
+    query.bounds_min.y() = -30.0;
+    query.bounds_max.y() = 30.0;
+    EXPECT_TRUE(start(query));
+    const auto first = next(0);
+    EXPECT_TRUE(first);
+    vehicle = first->position;
+    for (int i = 0; i < 20; ++i) slice();
+    return *first;
+  }
+  /// A wall across the straight way at x = 10, open only at y > 20: the way round costs
+  /// about three times the straight one.
+  static std::unique_ptr<octomap::OcTree> walled() {
+    auto wall = std::make_unique<octomap::OcTree>(kResolution);
+    addOccupiedBox(*wall, {9.5, -31.0, 3.0}, {10.5, 20.0, 7.0});
+    return wall;
+  }
+  bool warned(const std::string& part) const {
+    return std::any_of(warnings.begin(), warnings.end(),
+                       [&](const std::string& w) { return w.find(part) != std::string::npos; });
+  }
+};
+
+TEST_F(DetourHoldTest, AMuchLongerDetourWaitsForItsHoldThenIsTaken) {
+  const PlannedWaypoint first = goUnderway();
+  const double cost_before = session.path().cost;
+  const double cut = t;
+  replaceMap(walled());
+  slice();
+  ASSERT_TRUE(warned("waits up to 2 s for a shorter way")) << "cost before " << cost_before;
+  request(first.waypoint_id);
+  while (t < cut + 1.8) {
+    slice();
+    ASSERT_EQ(waypoints.size(), 1u)
+        << "a waypoint came " << t - cut << " s into the hold: " << warnings.back();
+  }
+  for (int i = 0; i < 100 && waypoints.size() == 1; ++i) slice();
+  ASSERT_EQ(waypoints.size(), 2u);
+  EXPECT_GE(t, cut + 2.0);
+  EXPECT_TRUE(warned("no shorter way within detour_hold: taking the detour"));
+  EXPECT_GT(session.path().cost, 1.6 * cost_before) << "the only way is the long one";
+  EXPECT_TRUE(cancels.empty()) << cancels.front().text;
+}
+
+TEST_F(DetourHoldTest, AWayBackEndsTheHoldAtOnce) {
+  const PlannedWaypoint first = goUnderway();
+  const double cut = t;
+  replaceMap(walled());
+  slice();
+  ASSERT_TRUE(warned("waits up to 2 s"));
+  request(first.waypoint_id);
+  // The wall was a false return: the next map clears it and the tree regrows the short way.
+  replaceMap(std::make_unique<octomap::OcTree>(kResolution));
+  for (int i = 0; i < 100 && waypoints.size() == 1; ++i) slice();
+  ASSERT_EQ(waypoints.size(), 2u);
+  EXPECT_LT(t, cut + 2.0) << "held the whole time although a short way was found";
+  EXPECT_TRUE(warned("found a way of cost"));
+}
+
+/// The same with a tree limit the hold reaches: a full tree grows no way back.
+class DetourHoldFullTreeTest : public DetourHoldTest {
+ protected:
+  static SessionOptions smallTree() {
+    SessionOptions o = holding();
+    o.max_tree_size = 1500;  // full again within the hold
+    return o;
+  }
+  DetourHoldFullTreeTest() : DetourHoldTest(smallTree()) {}
+};
+
+TEST_F(DetourHoldFullTreeTest, AFullTreeEndsTheHold) {
+  const PlannedWaypoint first = goUnderway();
+  const double cut = t;
+  replaceMap(walled());
+  slice();
+  ASSERT_TRUE(warned("waits up to 2 s"));
+  request(first.waypoint_id);
+  for (int i = 0; i < 100 && waypoints.size() == 1; ++i) slice();
+  ASSERT_EQ(waypoints.size(), 2u);
+  EXPECT_LT(t, cut + 2.0) << "held on with a tree that could not grow";
+  EXPECT_TRUE(warned("the tree is full")) << warnings.back();
+}
+
+TEST_F(PlanningSessionTest, WithoutDetourHoldTheDetourIsTakenAtOnce) {
+  PlanningQuery query = makeQuery(1, kStart, kGoal);
+  query.objective = PlanningObjective::PATH_LENGTH;
+  ASSERT_TRUE(start(query));
+  const auto first = next(0);
+  ASSERT_TRUE(first);
+  vehicle = first->position;
+  for (int i = 0; i < 20; ++i) slice();
+  auto wall = std::make_unique<octomap::OcTree>(kResolution);
+  addOccupiedBox(*wall, {9.5, -10.5, 3.0}, {10.5, 5.5, 7.0});
+  replaceMap(std::move(wall));
+  const double cut = t;
+  ASSERT_TRUE(next(first->waypoint_id));
+  EXPECT_LT(t, cut + 2.0);
+  EXPECT_TRUE(warnings.empty()) << warnings.front();
+}
+
 TEST_F(PlanningSessionTest, TreeAndPathSnapshotsAgree) {
   EXPECT_TRUE(session.tree().nodes.empty());
   EXPECT_TRUE(session.path().positions.empty());

@@ -74,6 +74,10 @@ struct PlanningSession::ActiveQuery {
   uint64_t checked_revision = 0;  // field revision the tree was last re-checked against
   bool no_solution_reported = false;
   uint64_t earlier_iterations = 0;  // iterations of the trees dropped by restarts
+  // detour_hold: the best cost before the map change that made it jump, and until when the
+  // next waypoint waits for a way back under detour_factor × it (0: no hold).
+  double cost_before_detour = 0.0;
+  double hold_until = 0.0;
 };
 
 namespace {
@@ -163,6 +167,12 @@ const config::OptionTable<SessionOptions>& SessionOptions::table() {
        "",
        {},
        {"repair", "scratch", "restart"}},
+      {"detour_hold", &O::detour_hold,
+       "when a map change raises the best path's cost above detour_factor times what it was, "
+       "the next waypoint waits up to this long for a shorter way (0: never)",
+       "s", Range::closed(0, 600)},
+      {"detour_factor", &O::detour_factor, "cost ratio that starts a detour_hold", "",
+       Range::closed(1.0, 100.0)},
   };
   return kTable;
 }
@@ -345,6 +355,7 @@ bool PlanningSession::vehicleReachesRoot(const Eigen::Vector3d& vehicle,
 }
 
 bool PlanningSession::planSlice(const std::optional<Eigen::Vector3d>& vehicle, double now) {
+  now_ = now;
   if (!query_) return false;
   ActiveQuery& q = *query_;
   // Re-check the tree only when the map changed: between changes the tree stays valid, and the
@@ -376,9 +387,21 @@ void PlanningSession::recheckTree(const std::optional<Eigen::Vector3d>& vehicle,
   const double influence = std::max({options_.clearance.clearance() + q.query.min_altitude,
                                      q.query.expected_distance + 0.5 * q.query.admissible_range}) +
                            options_.map_resolution;
+  const double cost_before = q.planner->bestCost().value();
   UpdateResult result = recheck_everything_
                             ? q.planner->updateTree(nullptr)
                             : q.planner->updateTree(nullptr, changed_region_, influence);
+  const double cost_after = q.planner->bestCost().value();
+  if (options_.detour_hold > 0.0 && q.hold_until <= now && std::isfinite(cost_before) &&
+      cost_after > options_.detour_factor * cost_before) {
+    q.cost_before_detour = cost_before;
+    q.hold_until = now + options_.detour_hold;
+    std::ostringstream text;
+    text << "map version " << map_version_ << " raised the best path's cost from " << cost_before
+         << " to " << cost_after << ": the next waypoint waits up to " << options_.detour_hold
+         << " s for a shorter way (detour_hold)";
+    outbox_.warnings.push_back(text.str());
+  }
   recheck_everything_ = false;
   changed_region_.setEmpty();
   // The vehicle drifts off the planned edges by its tracking error, which the safety margin
@@ -423,6 +446,7 @@ void PlanningSession::regrowIfFullWithoutSolution() {
 }
 
 void PlanningSession::finishSlice(double now) {
+  now_ = now;
   if (!query_) return;
   answerWaypointRequest();
   ActiveQuery& q = *query_;
@@ -447,6 +471,7 @@ void PlanningSession::answerWaypointRequest() {
     return;
   }
   ActiveQuery& q = *query_;
+  if (holdingForDetour()) return;
   const Eigen::Vector3d from = statePosition(q.planner->rootState());
   ob::ScopedState<> waypoint_state(q.si);
   if (!q.planner->popWaypoint(waypoint_state.get())) return;  // the root is the goal already
@@ -463,6 +488,27 @@ void PlanningSession::answerWaypointRequest() {
   q.approach_via = from;
   pending_request_.reset();
   outbox_.messages.emplace_back(waypoint);
+}
+
+bool PlanningSession::holdingForDetour() {
+  ActiveQuery& q = *query_;
+  if (q.hold_until <= 0.0) return false;
+  const double cost = q.planner->bestCost().value();
+  const bool way_back = cost <= options_.detour_factor * q.cost_before_detour;
+  // The tree grows only while not full, and only a waypoint (which the hold withholds) prunes it.
+  const bool full = q.planner->treeSize() >= options_.max_tree_size;
+  if (!way_back && !full && now_ < q.hold_until) return true;
+  std::ostringstream text;
+  if (way_back) {
+    text << "found a way of cost " << cost;
+  } else {
+    text << (full ? "the tree is full (max_tree_size)" : "no shorter way within detour_hold")
+         << ": taking the detour of cost " << cost;
+  }
+  text << " (" << q.cost_before_detour << " before the map change)";
+  outbox_.warnings.push_back(text.str());
+  q.hold_until = 0.0;
+  return false;
 }
 
 void PlanningSession::cancel(uint64_t waypoint_id, CancelReason reason, const std::string& text) {

@@ -64,6 +64,12 @@ struct SessionOptions {
   /// from-scratch baselines (ScratchPlanner: OMPL's RRTstar, or OnlineRRTstar without the
   /// reuse, planned anew on every map change).
   std::string replanning = "repair";
+  /// s: when a map change makes the best path's cost jump above detour_factor × what it was,
+  /// the next waypoint waits up to this long for the tree to find a way back under that
+  /// factor before the vehicle takes the detour (0: never wait). The vehicle holds at the
+  /// waypoint it reached meanwhile.
+  double detour_hold = 0.0;
+  double detour_factor = 1.5;  ///< the cost ratio that starts a detour_hold
 
   /// The fields with meaning, unit and range (the planning component's parameters of those
   /// names); the clearance's are in ClearanceOptions::table().
@@ -216,6 +222,8 @@ class PlanningSession {
   /// Under max_tree_size without a solution nothing prunes the tree: regrow it from its root.
   void regrowIfFullWithoutSolution();
   void answerWaypointRequest();
+  /// Whether the next waypoint waits (detour_hold): notes a cost jump, ends a hold.
+  bool holdingForDetour();
   /// Whether the hull passes from `vehicle` to the tree's `root` the way the controller will
   /// drive: through the waypoint it still heads for, if any (forgotten once within tolerance).
   bool vehicleReachesRoot(const Eigen::Vector3d& vehicle, const Eigen::Vector3d& root);
@@ -232,6 +240,7 @@ class PlanningSession {
   Eigen::AlignedBox3d changed_region_;
   bool recheck_everything_ = true;  // a full map arrived: no box says what changed
   Outbox outbox_;
+  double now_ = 0.0;  // of the latest slice
 };
 
 }  // namespace auv::planning
