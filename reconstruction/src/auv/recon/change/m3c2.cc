@@ -1,0 +1,159 @@
+#include "auv/recon/change/m3c2.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include <open3d/geometry/KDTreeFlann.h>
+#include <Eigen/Eigenvalues>
+
+#include "auv/recon/common/stage_error.h"
+
+namespace auv::recon::change {
+
+void M3C2Options::check() const {
+  AUV_RECON_CHECK_OPTION(normal_scale_m > 0, normal_scale_m, "must be > 0");
+  AUV_RECON_CHECK_OPTION(projection_scale_m > 0, projection_scale_m, "must be > 0");
+  AUV_RECON_CHECK_OPTION(max_depth_m > 0, max_depth_m, "must be > 0");
+  AUV_RECON_CHECK_OPTION(min_points >= 2, min_points, "must be >= 2 (a spread needs two)");
+  AUV_RECON_CHECK_OPTION(registration_error_m >= 0, registration_error_m, "must be >= 0");
+  AUV_RECON_CHECK_OPTION(confidence_z > 0, confidence_z, "must be > 0");
+  if (!(orientation.norm() > 0) || !orientation.allFinite()) {
+    throw OptionError("orientation: must be a non-zero vector");
+  }
+}
+
+namespace {
+
+Eigen::MatrixXd toMatrix(const std::vector<Eigen::Vector3d>& points) {
+  Eigen::MatrixXd matrix(3, static_cast<Eigen::Index>(points.size()));
+  for (size_t i = 0; i < points.size(); ++i) matrix.col(static_cast<Eigen::Index>(i)) = points[i];
+  return matrix;
+}
+
+/// A cloud with its search tree (Open3D's tree refers to the matrix: both live here).
+class IndexedCloud {
+ public:
+  explicit IndexedCloud(const std::vector<Eigen::Vector3d>& points)
+      : points_(points), matrix_(toMatrix(points)) {
+    if (!points.empty()) tree_.SetMatrixData(matrix_);
+  }
+  /// Indices of the points within `radius` of `centre`.
+  std::vector<int> within(const Eigen::Vector3d& centre, double radius) const {
+    std::vector<int> indices;
+    std::vector<double> distance2;
+    if (!points_.empty()) tree_.SearchRadius(centre, radius, indices, distance2);
+    return indices;
+  }
+  const Eigen::Vector3d& operator[](int i) const { return points_[static_cast<size_t>(i)]; }
+
+ private:
+  const std::vector<Eigen::Vector3d>& points_;
+  Eigen::MatrixXd matrix_;
+  open3d::geometry::KDTreeFlann tree_;
+};
+
+/// Unit normal of the least-squares plane through the points (zero with fewer than three or
+/// when they are collinear).
+Eigen::Vector3d planeNormal(const IndexedCloud& a, const std::vector<int>& in_a,
+                            const IndexedCloud& b, const std::vector<int>& in_b) {
+  const size_t n = in_a.size() + in_b.size();
+  if (n < 3) return Eigen::Vector3d::Zero();
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (int i : in_a) mean += a[i];
+  for (int i : in_b) mean += b[i];
+  mean /= static_cast<double>(n);
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  for (int i : in_a) covariance += (a[i] - mean) * (a[i] - mean).transpose();
+  for (int i : in_b) covariance += (b[i] - mean) * (b[i] - mean).transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
+  // Collinear points: the two smallest eigenvalues vanish together, no plane is defined.
+  if (solver.eigenvalues()(1) <= 1e-12 * std::max(solver.eigenvalues()(2), 1e-300)) {
+    return Eigen::Vector3d::Zero();
+  }
+  return solver.eigenvectors().col(0);
+}
+
+struct AxisStatistics {
+  int count = 0;
+  double mean = 0.0, spread = 0.0;
+};
+
+/// Mean and standard deviation of the positions along `normal` of the cloud's points inside
+/// the cylinder around `core`.
+AxisStatistics alongAxis(const IndexedCloud& cloud, const Eigen::Vector3d& core,
+                         const Eigen::Vector3d& normal, const M3C2Options& options) {
+  const double radius = 0.5 * options.projection_scale_m;
+  // The sphere that holds the cylinder; the points outside the cylinder are dropped below.
+  const double search = std::hypot(radius, options.max_depth_m);
+  AxisStatistics s;
+  double sum = 0.0, sum2 = 0.0;
+  for (int i : cloud.within(core, search)) {
+    const Eigen::Vector3d offset = cloud[i] - core;
+    const double along = offset.dot(normal);
+    if (std::abs(along) > options.max_depth_m) continue;
+    if ((offset - along * normal).squaredNorm() > radius * radius) continue;
+    ++s.count;
+    sum += along;
+    sum2 += along * along;
+  }
+  if (s.count == 0) return s;
+  s.mean = sum / s.count;
+  // Sample standard deviation; clamped at 0 against rounding.
+  s.spread = s.count > 1
+                 ? std::sqrt(std::max(0.0, (sum2 - s.count * s.mean * s.mean) / (s.count - 1)))
+                 : 0.0;
+  return s;
+}
+
+}  // namespace
+
+std::vector<M3C2Point> m3c2(const std::vector<Eigen::Vector3d>& cloud1,
+                            const std::vector<Eigen::Vector3d>& cloud2,
+                            const std::vector<Eigen::Vector3d>& core_points,
+                            const M3C2Options& options,
+                            const std::vector<Eigen::Vector3d>& orientation_hints) {
+  options.check();
+  if (!orientation_hints.empty() && orientation_hints.size() != core_points.size()) {
+    throw std::invalid_argument("m3c2: " + std::to_string(orientation_hints.size()) +
+                                " orientation hints for " + std::to_string(core_points.size()) +
+                                " core points");
+  }
+  const IndexedCloud first(cloud1);
+  const IndexedCloud second(cloud2);
+  std::vector<M3C2Point> result(core_points.size());
+  const double normal_radius = 0.5 * options.normal_scale_m;
+#pragma omp parallel for schedule(dynamic, 64)
+  for (long k = 0; k < static_cast<long>(core_points.size()); ++k) {
+    const size_t c = static_cast<size_t>(k);
+    const Eigen::Vector3d& core = core_points[c];
+    M3C2Point& out = result[c];
+    // Cloud 1's surface defines the normal; where it is too sparse, both clouds together.
+    std::vector<int> near1 = first.within(core, normal_radius);
+    Eigen::Vector3d normal = planeNormal(first, near1, second, {});
+    if (normal.isZero()) {
+      normal = planeNormal(first, near1, second, second.within(core, normal_radius));
+    }
+    if (normal.isZero()) continue;
+    const Eigen::Vector3d hint =
+        orientation_hints.empty() ? options.orientation : orientation_hints[c];
+    if (normal.dot(hint) < 0) normal = -normal;
+    out.normal = normal;
+    const AxisStatistics s1 = alongAxis(first, core, normal, options);
+    const AxisStatistics s2 = alongAxis(second, core, normal, options);
+    out.count1 = s1.count;
+    out.count2 = s2.count;
+    out.spread1 = s1.spread;
+    out.spread2 = s2.spread;
+    if (s1.count < options.min_points || s2.count < options.min_points) continue;
+    out.distance = s2.mean - s1.mean;
+    out.level_of_detection =
+        options.confidence_z *
+        (std::sqrt(s1.spread * s1.spread / s1.count + s2.spread * s2.spread / s2.count) +
+         options.registration_error_m);
+    out.significant = std::abs(out.distance) > out.level_of_detection;
+  }
+  return result;
+}
+
+}  // namespace auv::recon::change

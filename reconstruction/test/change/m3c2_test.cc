@@ -1,0 +1,188 @@
+// M3C2 on synthetic pairs with analytic answers: parallel planes, concentric spheres, a step,
+// no change with noise (about 5 % significant at 95 %), the registration error inside the
+// level of detection, too few points, and the option checks.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+#include "auv/recon/change/m3c2.h"
+#include "auv/recon/common/stage_error.h"
+
+namespace auv::recon::change {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+/// A square of jittered grid points (spacing `step`) at height z = height(x, y) + noise.
+template <class Height>
+std::vector<Eigen::Vector3d> surface(double half_size, double step, Height height, double noise,
+                                     unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> jitter(-0.3 * step, 0.3 * step);
+  std::normal_distribution<double> gauss(0.0, noise);
+  std::vector<Eigen::Vector3d> points;
+  for (double x = -half_size; x <= half_size; x += step) {
+    for (double y = -half_size; y <= half_size; y += step) {
+      const double px = x + jitter(rng), py = y + jitter(rng);
+      points.emplace_back(px, py, height(px, py) + (noise > 0 ? gauss(rng) : 0.0));
+    }
+  }
+  return points;
+}
+
+std::vector<Eigen::Vector3d> plane(double z, double noise, unsigned seed) {
+  return surface(
+      5.0, 0.05, [z](double, double) { return z; }, noise, seed);
+}
+
+/// Points spread evenly over a sphere (Fibonacci lattice).
+std::vector<Eigen::Vector3d> sphere(double radius, int count) {
+  std::vector<Eigen::Vector3d> points;
+  const double golden = kPi * (3.0 - std::sqrt(5.0));
+  for (int i = 0; i < count; ++i) {
+    const double z = 1.0 - 2.0 * (i + 0.5) / count;
+    const double r = std::sqrt(1.0 - z * z);
+    points.emplace_back(radius * r * std::cos(golden * i), radius * r * std::sin(golden * i),
+                        radius * z);
+  }
+  return points;
+}
+
+std::vector<Eigen::Vector3d> grid(double half_size, double step, double z) {
+  std::vector<Eigen::Vector3d> points;
+  for (double x = -half_size; x <= half_size + 1e-9; x += step) {
+    for (double y = -half_size; y <= half_size + 1e-9; y += step) points.emplace_back(x, y, z);
+  }
+  return points;
+}
+
+M3C2Options upwards() {
+  M3C2Options options;
+  options.orientation = Eigen::Vector3d::UnitZ();
+  return options;
+}
+
+TEST(M3C2, ParallelPlanesAreTheirOffsetApartWithATightLevelOfDetection) {
+  const double noise = 0.01;
+  const auto before = plane(0.0, noise, 1);
+  const auto after = plane(0.3, noise, 2);
+  const auto result = m3c2(before, after, grid(4.0, 0.5, 0.0), upwards());
+  ASSERT_FALSE(result.empty());
+  for (const M3C2Point& p : result) {
+    ASSERT_TRUE(p.valid());
+    EXPECT_NEAR(p.normal.z(), 1.0, 1e-3);
+    EXPECT_NEAR(p.distance, 0.3, 0.01);
+    // About pi 0.25² / 0.05² = 78 points per cloud: LoD ~ 1.96 sqrt(2 0.01² / 78) = 3 mm.
+    EXPECT_GT(p.count1, 40);
+    EXPECT_NEAR(p.spread1, noise, 0.005);
+    EXPECT_LT(p.level_of_detection, 0.01);
+    EXPECT_TRUE(p.significant);
+  }
+  // The orientation sets the sign: seen from below, the second plane is nearer.
+  M3C2Options downwards = upwards();
+  downwards.orientation = -Eigen::Vector3d::UnitZ();
+  EXPECT_NEAR(m3c2(before, after, {{0, 0, 0}}, downwards)[0].distance, -0.3, 0.01);
+}
+
+TEST(M3C2, ConcentricSpheresAreTheirRadiiApartAlongOutwardNormals) {
+  const auto inner = sphere(5.0, 40000);
+  const auto outer = sphere(5.2, 40000);
+  const std::vector<Eigen::Vector3d> cores = sphere(5.0, 200);
+  M3C2Options options;
+  options.max_depth_m = 0.5;
+  // Outward hints: the normals' sign follows each core point's own direction.
+  const auto result = m3c2(inner, outer, cores, options, cores);
+  for (size_t i = 0; i < cores.size(); ++i) {
+    ASSERT_TRUE(result[i].valid()) << i;
+    EXPECT_GT(result[i].normal.dot(cores[i].normalized()), 0.99);
+    EXPECT_NEAR(result[i].distance, 0.2, 0.01) << i;
+    EXPECT_TRUE(result[i].significant);
+  }
+  EXPECT_THROW(m3c2(inner, outer, cores, options, {Eigen::Vector3d::UnitZ()}),
+               std::invalid_argument);
+}
+
+TEST(M3C2, AStepIsMeasuredOnEachSideAwayFromIt) {
+  const auto before = plane(0.0, 0.0, 3);
+  const auto after = surface(
+      5.0, 0.05, [](double x, double) { return x < 0.0 ? 0.0 : 0.5; }, 0.0, 4);
+  M3C2Options options = upwards();
+  const auto result = m3c2(before, after, {{-2.0, 0.0, 0.0}, {2.0, 0.0, 0.0}}, options);
+  EXPECT_NEAR(result[0].distance, 0.0, 1e-9);
+  EXPECT_FALSE(result[0].significant);
+  EXPECT_NEAR(result[1].distance, 0.5, 1e-9);
+  EXPECT_TRUE(result[1].significant);
+  // A cylinder shorter than the step does not reach the raised side: no distance there.
+  options.max_depth_m = 0.4;
+  const M3C2Point short_cylinder = m3c2(before, after, {{2.0, 0.0, 0.0}}, options)[0];
+  EXPECT_FALSE(short_cylinder.valid());
+  EXPECT_EQ(short_cylinder.count2, 0);
+  EXPECT_FALSE(short_cylinder.significant);
+}
+
+TEST(M3C2, WithoutChangeAboutFivePercentOfTheCorePointsAreSignificant) {
+  // Independent noise on both epochs, nothing moved: the 95 % level of detection flags ~5 %.
+  const auto before = plane(0.0, 0.02, 5);
+  const auto after = plane(0.0, 0.02, 6);
+  // Core points 0.5 m apart: their cylinders (0.5 m wide) share no points.
+  const auto result = m3c2(before, after, grid(4.5, 0.5, 0.0), upwards());
+  int significant = 0, valid = 0;
+  for (const M3C2Point& p : result) {
+    valid += p.valid();
+    significant += p.significant;
+  }
+  ASSERT_EQ(valid, static_cast<int>(result.size()));
+  const double share = static_cast<double>(significant) / valid;
+  std::printf("no change: %d of %d core points significant\n", significant, valid);
+  EXPECT_GT(share, 0.01) << significant << " of " << valid;
+  EXPECT_LT(share, 0.12) << significant << " of " << valid;
+}
+
+TEST(M3C2, TheRegistrationErrorRaisesTheLevelOfDetection) {
+  const auto before = plane(0.0, 0.01, 7);
+  const auto after = plane(0.05, 0.01, 8);
+  M3C2Options options = upwards();
+  const M3C2Point tight = m3c2(before, after, {{0, 0, 0}}, options)[0];
+  options.registration_error_m = 0.03;
+  const M3C2Point loose = m3c2(before, after, {{0, 0, 0}}, options)[0];
+  EXPECT_NEAR(loose.level_of_detection - tight.level_of_detection, 1.96 * 0.03, 1e-12);
+  EXPECT_DOUBLE_EQ(loose.distance, tight.distance);
+  EXPECT_TRUE(tight.significant);
+  EXPECT_FALSE(loose.significant) << "5 cm within a 6 cm registration error is no change";
+}
+
+TEST(M3C2, TooFewPointsGiveNoDistance) {
+  const auto before = plane(0.0, 0.0, 9);
+  const std::vector<Eigen::Vector3d> sparse = {{0, 0, 0.1}, {0.05, 0, 0.1}};
+  const M3C2Point p = m3c2(before, sparse, {{0, 0, 0}}, upwards())[0];
+  EXPECT_FALSE(p.valid());
+  EXPECT_EQ(p.count2, 2);
+  EXPECT_FALSE(p.significant);
+  // No neighbours at all: no normal either.
+  const M3C2Point far = m3c2(before, sparse, {{50, 50, 0}}, upwards())[0];
+  EXPECT_FALSE(far.valid());
+  EXPECT_TRUE(far.normal.isZero());
+  EXPECT_TRUE(m3c2({}, {}, {{0, 0, 0}}, upwards()).front().normal.isZero());
+}
+
+TEST(M3C2, OptionsOutOfRangeAreNamed) {
+  M3C2Options options;
+  options.projection_scale_m = 0.0;
+  try {
+    m3c2({}, {}, {}, options);
+    FAIL() << "accepted projection_scale_m = 0";
+  } catch (const OptionError& e) {
+    EXPECT_NE(std::string(e.what()).find("projection_scale_m = 0"), std::string::npos) << e.what();
+  }
+  options = M3C2Options();
+  options.min_points = 1;
+  EXPECT_THROW(options.check(), OptionError);
+  options = M3C2Options();
+  options.orientation = Eigen::Vector3d::Zero();
+  EXPECT_THROW(options.check(), OptionError);
+}
+
+}  // namespace
+}  // namespace auv::recon::change
