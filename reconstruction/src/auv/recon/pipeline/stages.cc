@@ -3,6 +3,7 @@
 #include <memory>
 
 #include "auv/recon/calibration/calibrate_stage.h"
+#include "auv/recon/change/compare_stage.h"
 #include "auv/recon/color/correct_stage.h"
 #include "auv/recon/color/restore_stage.h"
 #include "auv/recon/dense/dense_stage.h"
@@ -40,7 +41,8 @@ const std::vector<const Stage*>& stages() {
            color::CorrectStage, features::FeaturesStage, features::MatchStage, sfm::SfmStage,
            dense::DenseStage, mesh::MeshStage, color::RestoreStage, texture::TextureStage,
            evaluate::EvaluateStage,  // not chained: the simulated run (docs/paper.md §4.3)
-           evaluate::FiguresStage>();
+           evaluate::FiguresStage,
+           change::CompareStage>();  // not chained: two surveys
   static const std::vector<const Stage*> all = [] {
     std::vector<const Stage*> pointers;
     for (const auto& stage : owned) pointers.push_back(stage.get());

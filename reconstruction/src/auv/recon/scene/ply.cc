@@ -27,6 +27,12 @@ void writePly(const fs::path& file, const PlyData& d) {
     throw std::invalid_argument(file.string() + ": " + std::to_string(d.colors.size()) +
                                 " colours for " + std::to_string(n) + " points");
   }
+  for (const auto& [name, values] : d.scalars) {
+    if (values.size() != n) {
+      throw std::invalid_argument(file.string() + ": " + std::to_string(values.size()) +
+                                  " values of '" + name + "' for " + std::to_string(n) + " points");
+    }
+  }
   for (const auto& e : d.edges) {
     if (e[0] >= n || e[1] >= n) throw std::invalid_argument(file.string() + ": edge index");
   }
@@ -44,6 +50,7 @@ void writePly(const fs::path& file, const PlyData& d) {
   if (!d.colors.empty()) {
     out << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
   }
+  for (const auto& scalar : d.scalars) out << "property float " << scalar.first << "\n";
   if (!d.edges.empty()) {
     out << "element edge " << d.edges.size() << "\nproperty int vertex1\nproperty int vertex2\n";
   }
@@ -59,6 +66,7 @@ void writePly(const fs::path& file, const PlyData& d) {
     if (!d.colors.empty()) {
       for (int k = 0; k < 3; ++k) put(out, d.colors[i][k]);
     }
+    for (const auto& scalar : d.scalars) put(out, scalar.second[i]);
   }
   for (const auto& e : d.edges) {
     put(out, static_cast<int32_t>(e[0]));

@@ -6,6 +6,8 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -16,8 +18,11 @@ struct PlyData {
   std::vector<Eigen::Vector3d> positions;
   std::vector<Eigen::Vector3d> normals;              ///< empty or one per position
   std::vector<Eigen::Matrix<uint8_t, 3, 1>> colors;  ///< empty or one per position
-  std::vector<std::array<uint32_t, 2>> edges;        ///< vertex index pairs
-  std::vector<std::array<uint32_t, 3>> triangles;    ///< vertex index triples
+  /// Per-vertex float properties after the colours (name, one value per position): scalar
+  /// fields for CloudCompare and the like (e.g. a change's distance).
+  std::vector<std::pair<std::string, std::vector<float>>> scalars;
+  std::vector<std::array<uint32_t, 2>> edges;      ///< vertex index pairs
+  std::vector<std::array<uint32_t, 3>> triangles;  ///< vertex index triples
 };
 
 /// Writes binary little-endian PLY through a temporary name. Throws std::invalid_argument for

@@ -1,0 +1,29 @@
+#pragma once
+// The changed regions of a comparison: significant M3C2 core points joined into clusters,
+// each with its area, distances and the volume gained and lost.
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "auv/recon/change/m3c2.h"
+
+namespace auv::recon::change {
+
+struct ChangeCluster {
+  std::vector<size_t> core_points;  ///< indices into the comparison's core points
+  double area_m2 = 0.0;             ///< core points × spacing²
+  double mean_distance_m = 0.0;
+  double max_abs_distance_m = 0.0;  ///< the largest |distance|, signed as measured
+  double volume_gained_m3 = 0.0;    ///< sum of the positive distances × spacing²
+  double volume_lost_m3 = 0.0;      ///< sum of the negative distances × spacing² (as > 0)
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+};
+
+/// Significant core points within `link_m` of each other form one cluster; each core point
+/// stands for `spacing_m`² of surface. Clusters smaller than `min_area_m2` are dropped (noise
+/// at the level of detection). Sorted by area, largest first.
+std::vector<ChangeCluster> clusterChanges(const std::vector<Eigen::Vector3d>& core_points,
+                                          const std::vector<M3C2Point>& comparison,
+                                          double spacing_m, double link_m, double min_area_m2);
+
+}  // namespace auv::recon::change

@@ -1,0 +1,214 @@
+#include "auv/recon/change/compare_stage.h"
+
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+#include <open3d/geometry/KDTreeFlann.h>
+#include <open3d/geometry/PointCloud.h>
+
+#include "auv/recon/change/clusters.h"
+#include "auv/recon/common/option_set.h"
+#include "auv/recon/common/report.h"
+#include "auv/recon/common/stage_error.h"
+#include "auv/recon/common/staged_output.h"
+#include "auv/recon/scene/colmap_text.h"
+#include "auv/recon/scene/mesh_io.h"
+#include "auv/recon/scene/ply.h"
+
+namespace fs = std::filesystem;
+
+namespace auv::recon::change {
+
+namespace {
+
+constexpr const char* kStage = "compare";
+
+double since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+/// Per core point, the direction to the nearest camera of survey 1 (the side its surface was
+/// seen from); empty when survey 1 has no readable sparse model.
+std::vector<Eigen::Vector3d> towardsCameras(const Survey& survey,
+                                            const std::vector<Eigen::Vector3d>& core_points) {
+  std::vector<Eigen::Vector3d> centres;
+  try {
+    for (const auto& [id, image] : scene::readColmapText(survey.sparse()).images) {
+      centres.push_back(image.center());
+    }
+  } catch (const std::exception&) {
+    return {};  // no model: the orientation option decides
+  }
+  if (centres.empty()) return {};
+  Eigen::MatrixXd matrix(3, static_cast<Eigen::Index>(centres.size()));
+  for (size_t i = 0; i < centres.size(); ++i) matrix.col(static_cast<Eigen::Index>(i)) = centres[i];
+  const open3d::geometry::KDTreeFlann tree(matrix);
+  std::vector<Eigen::Vector3d> hints(core_points.size());
+  std::vector<int> index;
+  std::vector<double> distance2;
+  for (size_t i = 0; i < core_points.size(); ++i) {
+    tree.SearchKNN(core_points[i], 1, index, distance2);
+    hints[i] = centres[static_cast<size_t>(index[0])] - core_points[i];
+  }
+  return hints;
+}
+
+nlohmann::json clusterJson(const ChangeCluster& c) {
+  return {{"area_m2", c.area_m2},
+          {"core_points", c.core_points.size()},
+          {"mean_distance_m", c.mean_distance_m},
+          {"max_abs_distance_m", c.max_abs_distance_m},
+          {"volume_gained_m3", c.volume_gained_m3},
+          {"volume_lost_m3", c.volume_lost_m3},
+          {"centroid", {c.centroid.x(), c.centroid.y(), c.centroid.z()}}};
+}
+
+}  // namespace
+
+void CompareOptions::check() const {
+  if (later.empty()) throw OptionError("survey-2: the later survey is required");
+  coregistration.check();
+  m3c2.check();
+  AUV_RECON_CHECK_OPTION(core_spacing_m > 0, core_spacing_m, "must be > 0");
+  AUV_RECON_CHECK_OPTION(min_cluster_area_m2 >= 0, min_cluster_area_m2, "must be >= 0");
+}
+
+void CompareOptions::bind(OptionSet& set) {
+  set.positional("survey-2", &later,
+                 "the later survey (reads dense/fused.ply; writes change/ and report.json's "
+                 "`compare` section)");
+  set.add("core_spacing_m", &core_spacing_m, "m: survey 1's cloud thinned to core points");
+  set.add("min_cluster_area_m2", &min_cluster_area_m2,
+          "m²: smaller clusters of significant change are dropped");
+  set.add("normal_scale_m", &m3c2.normal_scale_m, "m: M3C2 normal scale D (diameter)");
+  set.add("projection_scale_m", &m3c2.projection_scale_m,
+          "m: M3C2 projection scale d (cylinder diameter)");
+  set.add("max_depth_m", &m3c2.max_depth_m, "m: M3C2 cylinder half-length: the largest change");
+  set.add("min_points", &m3c2.min_points, "M3C2: fewer points of a cloud in the cylinder: none");
+  set.add("registration_error_m", &m3c2.registration_error_m,
+          "m: inside the level of detection (0: the co-registration's RMS on stable points)");
+  set.add("voxel_m", &coregistration.voxel_m, "m: clouds thinned for the co-registration");
+  set.add("max_correspondence_m", &coregistration.max_correspondence_m,
+          "m: how far the navigation frames may disagree");
+  set.add("stable_threshold_m", &coregistration.stable_threshold_m,
+          "m: farther from survey 1's surface: changed, not aligned on");
+  set.add("min_overlap", &coregistration.min_overlap,
+          "share of survey 2 that must lie on survey 1 (else refused: another site?)");
+  set.add("min_stable_fraction", &coregistration.min_stable_fraction,
+          "share of the overlap that must be stable (else refused)");
+}
+
+nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
+  options.check();
+  const auto start = std::chrono::steady_clock::now();
+  const Survey later(options.later);
+  const open3d::geometry::PointCloud first =
+      scene::readCloud(survey.dense() / "fused.ply", kStage, "dense");
+  const open3d::geometry::PointCloud second =
+      scene::readCloud(later.dense() / "fused.ply", kStage, "dense");
+  const double read_s = since(start);
+
+  auto phase = std::chrono::steady_clock::now();
+  CoregistrationResult aligned;
+  try {
+    aligned = coregister(first.points_, second.points_, Eigen::Matrix4d::Identity(),
+                         options.coregistration);
+  } catch (const CoregistrationError& e) {
+    throw StageError(kStage,
+                     survey.root().string() + " and " + later.root().string() + ": " + e.what());
+  }
+  const double coregistration_s = since(phase);
+  std::vector<Eigen::Vector3d> second_aligned = second.points_;
+  const Eigen::Matrix3d rotation = aligned.transform.topLeftCorner<3, 3>();
+  const Eigen::Vector3d translation = aligned.transform.topRightCorner<3, 1>();
+  for (Eigen::Vector3d& p : second_aligned) p = rotation * p + translation;
+
+  phase = std::chrono::steady_clock::now();
+  const std::vector<Eigen::Vector3d> cores = first.VoxelDownSample(options.core_spacing_m)->points_;
+  M3C2Options m3c2_options = options.m3c2;
+  if (m3c2_options.registration_error_m == 0.0) m3c2_options.registration_error_m = aligned.rms_m;
+  const std::vector<Eigen::Vector3d> hints = towardsCameras(survey, cores);
+  const std::vector<M3C2Point> comparison =
+      m3c2(first.points_, second_aligned, cores, m3c2_options, hints);
+  const std::vector<ChangeCluster> clusters =
+      clusterChanges(cores, comparison, options.core_spacing_m, 1.5 * options.core_spacing_m,
+                     options.min_cluster_area_m2);
+  const double m3c2_s = since(phase);
+
+  size_t valid = 0, significant = 0;
+  scene::PlyData ply;
+  ply.positions = cores;
+  std::vector<float> distance, lod, flag;
+  for (const M3C2Point& p : comparison) {
+    valid += p.valid();
+    significant += p.significant;
+    ply.normals.push_back(p.normal);
+    distance.push_back(static_cast<float>(p.distance));
+    lod.push_back(static_cast<float>(p.level_of_detection));
+    flag.push_back(p.significant ? 1.0f : 0.0f);
+  }
+  ply.scalars = {{"distance", distance}, {"level_of_detection", lod}, {"significant", flag}};
+
+  nlohmann::json report = {
+      {"survey_1", survey.root().string()},
+      {"survey_2", later.root().string()},
+      {"registration",
+       {{"rms_m", aligned.rms_m},
+        {"overlap", aligned.overlap},
+        {"stable_fraction", aligned.stable_fraction},
+        {"rounds", aligned.rounds},
+        {"transform_2_to_1", {}}}},
+      {"level_of_detection_registration_error_m", m3c2_options.registration_error_m},
+      {"orientation", hints.empty() ? "option" : "towards survey 1's cameras"},
+      {"core_points", cores.size()},
+      {"core_points_measured", valid},
+      {"core_points_significant", significant},
+      {"clusters", nlohmann::json::array()},
+      {"seconds", {{"read", read_s}, {"coregistration", coregistration_s}, {"m3c2", m3c2_s}}}};
+  for (int r = 0; r < 4; ++r) {
+    report["registration"]["transform_2_to_1"].push_back(
+        {aligned.transform(r, 0), aligned.transform(r, 1), aligned.transform(r, 2),
+         aligned.transform(r, 3)});
+  }
+  for (const ChangeCluster& c : clusters) report["clusters"].push_back(clusterJson(c));
+
+  StagedOutput staged(later.root() / "change");
+  scene::writePly(staged.path() / "changes.ply", ply);
+  writeFileAtomically(staged.path() / "report.json", report.dump(2) + "\n");
+  staged.commit();
+  report["seconds"]["total"] = since(start);
+  nlohmann::json section = report;
+  section.erase("clusters");
+  section["clusters"] = clusters.size();
+  updateReport(later.report(), kStage, section);
+  return report;
+}
+
+StageReport CompareStage::runWith(const Survey& survey, const CompareOptions& options) const {
+  const nlohmann::json r = runCompare(survey, options);
+  const fs::path folder = Survey(options.later).root() / "change";
+  std::ostringstream line;
+  line << kStage << ": registered on " << 100.0 * r["registration"]["stable_fraction"].get<double>()
+       << " % stable surface (rms " << r["registration"]["rms_m"].get<double>() << " m); "
+       << r["core_points_significant"].get<size_t>() << " of "
+       << r["core_points_measured"].get<size_t>() << " core points changed significantly, "
+       << r["clusters"].size() << " regions -> " << folder.string();
+  StageReport report;
+  report.lines.push_back(line.str());
+  for (const auto& c : r["clusters"]) {
+    std::ostringstream region;
+    region << kStage << ": region of " << c["area_m2"].get<double>() << " m², mean "
+           << c["mean_distance_m"].get<double>() << " m, +" << c["volume_gained_m3"].get<double>()
+           << " / -" << c["volume_lost_m3"].get<double>() << " m³ at ("
+           << c["centroid"][0].get<double>() << ", " << c["centroid"][1].get<double>() << ", "
+           << c["centroid"][2].get<double>() << ")";
+    report.lines.push_back(region.str());
+  }
+  std::ostringstream summary;
+  summary << r["clusters"].size() << " changed regions";
+  report.summary = summary.str();
+  return report;
+}
+
+}  // namespace auv::recon::change

@@ -1,0 +1,62 @@
+#pragma once
+// `auv recon compare <survey-1> <survey-2>`: what changed at the site between two surveys
+// (issue 21). Both dense clouds (dense/fused.ply) are co-registered on their stable surfaces
+// (coregistration.h), compared by M3C2 at core points thinned from survey 1's cloud (m3c2.h),
+// the significant changes clustered (clusters.h), and written into survey 2:
+//
+//   change/changes.ply     core points: normal, distance, level_of_detection, significant
+//   change/report.json     the registration, the counts, every cluster (area, distances,
+//                          volumes, centroid); also the `compare` section of report.json
+//
+// Not chained by `auv recon run`: it needs two surveys.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "auv/recon/change/coregistration.h"
+#include "auv/recon/change/m3c2.h"
+#include "auv/recon/common/stage.h"
+#include "auv/recon/common/survey.h"
+
+namespace auv::recon {
+class OptionSet;
+}
+
+namespace auv::recon::change {
+
+struct CompareOptions {
+  std::string later;  ///< survey 2 (the positional after survey 1); the outputs go there
+  CoregistrationOptions coregistration;
+  M3C2Options m3c2;
+  double core_spacing_m = 0.2;        ///< survey 1's cloud thinned to one core point per voxel
+  double min_cluster_area_m2 = 0.05;  ///< smaller clusters of significant change are dropped
+
+  void check() const;
+  void bind(OptionSet& set);
+};
+
+/// Runs the comparison; `survey` is survey 1. Throws StageError("compare", ...) naming the
+/// missing input (and the stage that makes it) or why the surveys cannot be aligned
+/// (CoregistrationError's figures); nothing is written then.
+nlohmann::json runCompare(const Survey& survey, const CompareOptions& options);
+
+class CompareStage final : public StageWith<CompareOptions> {
+ public:
+  std::string name() const override { return "compare"; }
+  std::string usage() const override {
+    return "<survey-1> <survey-2>   what changed at the site between two surveys (M3C2)";
+  }
+  std::string surveyHelp() const override {
+    return "the earlier survey (reads dense/fused.ply, sparse/ for the normals' side)";
+  }
+  bool chained() const override { return false; }
+  std::vector<std::filesystem::path> inputs(const Survey& survey) const override {
+    return {survey.dense()};
+  }
+  std::vector<std::filesystem::path> outputs(const Survey&) const override { return {}; }
+  StageReport runWith(const Survey& survey, const CompareOptions& options) const override;
+};
+
+}  // namespace auv::recon::change

@@ -1,0 +1,132 @@
+// `auv recon compare` on two synthetic surveys of a rolling seabed (NED, z down): the second
+// with a 1 m block (3 × 3 m) and 0.3 m of growth (4 × 4 m), its navigation frame off by
+// 0.2 m. The two changes come out as the only two regions, with their areas and volumes;
+// change/ holds changes.ply (scalar fields) and report.json. A missing dense cloud names the
+// stage to run, surveys of two places are refused; neither writes anything.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <random>
+#include <string>
+
+#include "auv/recon/change/compare_stage.h"
+#include "auv/recon/common/report.h"
+#include "auv/recon/common/stage_error.h"
+#include "auv/recon/scene/ply.h"
+
+namespace fs = std::filesystem;
+
+namespace auv::recon::change {
+namespace {
+
+struct TempDir {
+  fs::path path;
+  TempDir() {
+    path = fs::temp_directory_path() /
+           ("compare_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+    fs::create_directories(path);
+  }
+  ~TempDir() { fs::remove_all(path); }
+  static inline int counter = 0;
+};
+
+bool onBlock(double x, double y) { return x > 2.0 && x < 5.0 && y > 1.0 && y < 4.0; }
+bool onGrowth(double x, double y) { return x > -6.0 && x < -2.0 && y > -6.0 && y < -2.0; }
+
+/// A survey folder whose dense/fused.ply samples the seabed (10 cm, 5 mm noise), shifted by
+/// `offset` (the survey's own navigation frame).
+Survey survey(const fs::path& root, bool changed, const Eigen::Vector3d& offset, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0.0, 0.005);
+  scene::PlyData ply;
+  for (double x = -10.0; x <= 10.0; x += 0.1) {
+    for (double y = -10.0; y <= 10.0; y += 0.1) {
+      double up = 0.4 * std::sin(0.6 * x) * std::cos(0.45 * y) + 0.05 * x + noise(rng);
+      if (changed && onBlock(x, y)) up += 1.0;
+      if (changed && onGrowth(x, y)) up += 0.3;
+      ply.positions.push_back(Eigen::Vector3d(x, y, 20.0 - up) + offset);
+    }
+  }
+  fs::create_directories(root / "dense");
+  scene::writePly(root / "dense" / "fused.ply", ply);
+  return Survey(root);
+}
+
+TEST(CompareStage, FindsTheBlockAndTheGrowthAndNothingElse) {
+  TempDir dir;
+  const Survey first = survey(dir.path / "s1", false, Eigen::Vector3d::Zero(), 1);
+  const Survey second = survey(dir.path / "s2", true, Eigen::Vector3d(0.2, -0.1, 0.05), 2);
+  CompareOptions options;
+  options.later = second.root().string();
+  const CompareStage stage;
+  const StageReport printed = stage.runWith(first, options);
+  const nlohmann::json r =
+      nlohmann::json::parse(std::ifstream(second.root() / "change" / "report.json"));
+  EXPECT_LT(r["registration"]["rms_m"].get<double>(), 0.02);
+  EXPECT_NEAR(r["registration"]["transform_2_to_1"][0][3].get<double>(), -0.2, 0.01);
+  ASSERT_EQ(r["clusters"].size(), 2u) << r["clusters"].dump(1);
+  // Largest first: the growth (16 m², 0.3 m up: normals point up, NED -z), then the block.
+  const auto& growth = r["clusters"][0];
+  const auto& block = r["clusters"][1];
+  // Areas: at least the true one, at most grown by the cylinder's radius all round (core
+  // points whose cylinder reaches over the edge see part of the change).
+  const double d = options.m3c2.projection_scale_m;
+  EXPECT_GE(growth["area_m2"].get<double>(), 16.0);
+  EXPECT_LE(growth["area_m2"].get<double>(), (4.0 + d) * (4.0 + d));
+  EXPECT_NEAR(growth["mean_distance_m"].get<double>(), 0.3, 0.05);
+  EXPECT_NEAR(growth["volume_gained_m3"].get<double>(), 4.8, 0.2 * 4.8);
+  EXPECT_NEAR(growth["centroid"][0].get<double>(), -4.0, 0.3);
+  EXPECT_GE(block["area_m2"].get<double>(), 9.0);
+  EXPECT_LE(block["area_m2"].get<double>(), (3.0 + d) * (3.0 + d));
+  EXPECT_NEAR(block["volume_gained_m3"].get<double>(), 9.0, 0.2 * 9.0);
+  EXPECT_NEAR(block["max_abs_distance_m"].get<double>(), 1.0, 0.05);
+  EXPECT_NEAR(block["centroid"][0].get<double>(), 3.5, 0.3);
+  EXPECT_LT(block["volume_lost_m3"].get<double>(), 0.1);
+  // The files a viewer and the next tools read.
+  std::ifstream ply(second.root() / "change" / "changes.ply", std::ios::binary);
+  std::string header((std::istreambuf_iterator<char>(ply)), {});
+  header = header.substr(0, header.find("end_header"));
+  EXPECT_NE(header.find("property float distance"), std::string::npos) << header;
+  EXPECT_NE(header.find("property float level_of_detection"), std::string::npos);
+  EXPECT_EQ(readReportSection(second.report(), "compare")["clusters"].get<size_t>(), 2u);
+  ASSERT_GE(printed.lines.size(), 3u);
+  EXPECT_NE(printed.lines[0].find("2 regions"), std::string::npos) << printed.lines[0];
+}
+
+TEST(CompareStage, AMissingCloudNamesTheStageToRunAndWritesNothing) {
+  TempDir dir;
+  const Survey first = survey(dir.path / "s1", false, Eigen::Vector3d::Zero(), 3);
+  fs::create_directories(dir.path / "s2");
+  CompareOptions options;
+  options.later = (dir.path / "s2").string();
+  try {
+    runCompare(first, options);
+    FAIL() << "compared with a survey that has no dense cloud";
+  } catch (const StageError& e) {
+    EXPECT_NE(std::string(e.what()).find("fused.ply"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("dense"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(dir.path / "s2" / "change"));
+}
+
+TEST(CompareStage, SurveysOfTwoPlacesAreRefusedAndNothingIsWritten) {
+  TempDir dir;
+  const Survey first = survey(dir.path / "s1", false, Eigen::Vector3d::Zero(), 4);
+  const Survey second = survey(dir.path / "s2", false, Eigen::Vector3d(200.0, 0.0, 0.0), 5);
+  CompareOptions options;
+  options.later = second.root().string();
+  try {
+    runCompare(first, options);
+    FAIL() << "compared two places 200 m apart";
+  } catch (const StageError& e) {
+    EXPECT_NE(std::string(e.what()).find("overlap too little"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(second.root() / "change"));
+  EXPECT_TRUE(readReport(second.report()).empty());
+  options.later.clear();
+  EXPECT_THROW(runCompare(first, options), OptionError);
+}
+
+}  // namespace
+}  // namespace auv::recon::change
