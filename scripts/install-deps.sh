@@ -30,6 +30,8 @@ PACKAGES=(
   libboost-dev libstb-dev
   # reconstruction pipeline benchmark: wall time and peak memory per stage (GNU time)
   time
+  # change detection: CloudCompare (command-line mode) reads the change clouds in the tests
+  cloudcompare
 )
 
 echo "install-deps: apt-get update"

@@ -5,9 +5,12 @@
 // stage to run, surveys of two places are refused; neither writes anything.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <random>
+#include <sstream>
 #include <string>
 
 #include "auv/recon/change/compare_stage.h"
@@ -87,11 +90,72 @@ TEST(CompareStage, FindsTheBlockAndTheGrowthAndNothingElse) {
   std::ifstream ply(second.root() / "change" / "changes.ply", std::ios::binary);
   std::string header((std::istreambuf_iterator<char>(ply)), {});
   header = header.substr(0, header.find("end_header"));
-  EXPECT_NE(header.find("property float distance"), std::string::npos) << header;
-  EXPECT_NE(header.find("property float level_of_detection"), std::string::npos);
+  EXPECT_NE(header.find("property float scalar_distance"), std::string::npos) << header;
+  EXPECT_NE(header.find("property float scalar_level_of_detection"), std::string::npos);
   EXPECT_EQ(readReportSection(second.report(), "compare")["clusters"].get<size_t>(), 2u);
   ASSERT_GE(printed.lines.size(), 3u);
   EXPECT_NE(printed.lines[0].find("2 regions"), std::string::npos) << printed.lines[0];
+}
+
+/// CloudCompare's path, or empty when it is not installed.
+std::string cloudCompare() {
+  for (const char* dir : {"/usr/bin", "/usr/local/bin"}) {
+    const fs::path candidate = fs::path(dir) / "CloudCompare";
+    if (fs::exists(candidate)) return candidate.string();
+  }
+  return "";
+}
+
+TEST(CompareStage, CloudCompareReadsTheChangesAsScalarFields) {
+  const std::string tool = cloudCompare();
+  if (tool.empty()) GTEST_SKIP() << "CloudCompare is not installed (scripts/install-deps.sh)";
+  TempDir dir;
+  const Survey first = survey(dir.path / "s1", false, Eigen::Vector3d::Zero(), 6);
+  const Survey second = survey(dir.path / "s2", true, Eigen::Vector3d::Zero(), 7);
+  CompareOptions options;
+  options.later = second.root().string();
+  const nlohmann::json r = runCompare(first, options);
+  // The reference reader: CloudCompare's command-line mode, exported as ASCII with a header.
+  const fs::path exported = dir.path / "changes.asc";
+  const std::string command = "QT_QPA_PLATFORM=offscreen '" + tool + "' -SILENT -O '" +
+                              (second.root() / "change" / "changes.ply").string() +
+                              "' -C_EXPORT_FMT ASC -ADD_HEADER -SAVE_CLOUDS FILE '" +
+                              exported.string() + "' > '" + (dir.path / "cc.log").string() +
+                              "' 2>&1";
+  ASSERT_EQ(std::system(command.c_str()), 0) << command;
+  std::ifstream in(exported);
+  std::string header;
+  std::getline(in, header);
+  // "//X Y Z <scalar fields> Nx Ny Nz": the columns by name.
+  std::istringstream names(header.substr(2));
+  std::vector<std::string> columns;
+  for (std::string name; names >> name;) columns.push_back(name);
+  const auto column = [&](const std::string& name) {
+    const auto at = std::find(columns.begin(), columns.end(), name);
+    return at == columns.end() ? -1 : static_cast<int>(at - columns.begin());
+  };
+  const int distance_at = column("distance"), lod_at = column("level_of_detection"),
+            flag_at = column("significant");
+  ASSERT_GE(distance_at, 0) << header;
+  ASSERT_GE(lod_at, 0) << header;
+  ASSERT_GE(flag_at, 0) << header;
+  size_t rows = 0, significant = 0, measured = 0;
+  for (std::string line; std::getline(in, line);) {
+    std::istringstream fields(line);
+    std::vector<std::string> values;
+    for (std::string value; fields >> value;) values.push_back(value);
+    ASSERT_EQ(values.size(), columns.size()) << line;
+    ++rows;
+    const bool flag = std::stod(values[flag_at]) == 1.0;
+    significant += flag;
+    if (values[distance_at] != "nan") {
+      ++measured;
+      EXPECT_EQ(flag, std::abs(std::stod(values[distance_at])) > std::stod(values[lod_at])) << line;
+    }
+  }
+  EXPECT_EQ(rows, r["core_points"].get<size_t>());
+  EXPECT_EQ(measured, r["core_points_measured"].get<size_t>());
+  EXPECT_EQ(significant, r["core_points_significant"].get<size_t>());
 }
 
 TEST(CompareStage, AMissingCloudNamesTheStageToRunAndWritesNothing) {

@@ -148,7 +148,10 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
     lod.push_back(static_cast<float>(p.level_of_detection));
     flag.push_back(p.significant ? 1.0f : 0.0f);
   }
-  ply.scalars = {{"distance", distance}, {"level_of_detection", lod}, {"significant", flag}};
+  // CloudCompare loads PLY properties named scalar_<name> as the scalar fields <name>.
+  ply.scalars = {{"scalar_distance", distance},
+                 {"scalar_level_of_detection", lod},
+                 {"scalar_significant", flag}};
 
   nlohmann::json report = {
       {"survey_1", survey.root().string()},
