@@ -222,7 +222,8 @@ class PlanningSession {
   /// Under max_tree_size without a solution nothing prunes the tree: regrow it from its root.
   void regrowIfFullWithoutSolution();
   void answerWaypointRequest();
-  /// Whether the next waypoint waits (detour_hold): notes a cost jump, ends a hold.
+  /// Whether the next waypoint waits (detour_hold); ends the hold, logged, once a way back
+  /// under detour_factor is found, the tree is full or the hold is over.
   bool holdingForDetour();
   /// Whether the hull passes from `vehicle` to the tree's `root` the way the controller will
   /// drive: through the waypoint it still heads for, if any (forgotten once within tolerance).
