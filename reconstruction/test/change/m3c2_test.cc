@@ -153,6 +153,22 @@ TEST(M3C2, TheRegistrationErrorRaisesTheLevelOfDetection) {
   EXPECT_FALSE(loose.significant) << "5 cm within a 6 cm registration error is no change";
 }
 
+TEST(M3C2, TheCylinderHoldsExactlyThePointsInsideIt) {
+  // The search runs in segments along the axis: every point inside counts once, none outside.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> xy(-0.6, 0.6), z(-1.5, 1.5);
+  std::vector<Eigen::Vector3d> cloud;
+  for (int i = 0; i < 20000; ++i) cloud.emplace_back(xy(rng), xy(rng), z(rng));
+  M3C2Options options = upwards();
+  options.max_depth_m = 1.1;  // not a multiple of the segment length
+  const M3C2Point p = m3c2(plane(0.0, 0.0, 12), cloud, {{0, 0, 0}}, options)[0];
+  int inside = 0;
+  for (const Eigen::Vector3d& q : cloud) {
+    inside += std::hypot(q.x(), q.y()) <= 0.25 && std::abs(q.z()) <= 1.1;
+  }
+  EXPECT_EQ(p.count2, inside);
+}
+
 TEST(M3C2, TooFewPointsGiveNoDistance) {
   const auto before = plane(0.0, 0.0, 9);
   const std::vector<Eigen::Vector3d> sparse = {{0, 0, 0.1}, {0.05, 0, 0.1}};

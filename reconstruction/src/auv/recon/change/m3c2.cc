@@ -1,5 +1,6 @@
 #include "auv/recon/change/m3c2.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -84,18 +85,27 @@ struct AxisStatistics {
 AxisStatistics alongAxis(const IndexedCloud& cloud, const Eigen::Vector3d& core,
                          const Eigen::Vector3d& normal, const M3C2Options& options) {
   const double radius = 0.5 * options.projection_scale_m;
-  // The sphere that holds the cylinder; the points outside the cylinder are dropped below.
-  const double search = std::hypot(radius, options.max_depth_m);
+  const double depth = options.max_depth_m;
+  // The cylinder is searched as a row of short segments, each inside a small sphere: one
+  // sphere around a long cylinder holds several times more of a surface crossing it. Each
+  // segment keeps only the points of its own slab along the axis, so none counts twice.
+  const double half = std::min(radius, depth);
+  const int segments = static_cast<int>(std::ceil(depth / half - 1e-9));
+  const double sphere = std::hypot(radius, half);
   AxisStatistics s;
   double sum = 0.0, sum2 = 0.0;
-  for (int i : cloud.within(core, search)) {
-    const Eigen::Vector3d offset = cloud[i] - core;
-    const double along = offset.dot(normal);
-    if (std::abs(along) > options.max_depth_m) continue;
-    if ((offset - along * normal).squaredNorm() > radius * radius) continue;
-    ++s.count;
-    sum += along;
-    sum2 += along * along;
+  for (int j = 0; j < segments; ++j) {
+    const double low = -depth + 2.0 * half * j;
+    const double high = j + 1 == segments ? depth : low + 2.0 * half;
+    for (int i : cloud.within(core + (low + half) * normal, sphere)) {
+      const Eigen::Vector3d offset = cloud[i] - core;
+      const double along = offset.dot(normal);
+      if (along < low || along > high || (along == high && j + 1 < segments)) continue;
+      if ((offset - along * normal).squaredNorm() > radius * radius) continue;
+      ++s.count;
+      sum += along;
+      sum2 += along * along;
+    }
   }
   if (s.count == 0) return s;
   s.mean = sum / s.count;
