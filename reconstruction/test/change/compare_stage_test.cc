@@ -18,6 +18,8 @@
 #include "auv/recon/common/stage_error.h"
 #include "auv/recon/scene/ply.h"
 
+#include <opencv2/imgcodecs.hpp>
+
 namespace fs = std::filesystem;
 
 namespace auv::recon::change {
@@ -93,6 +95,18 @@ TEST(CompareStage, FindsTheBlockAndTheGrowthAndNothingElse) {
   EXPECT_NE(header.find("property float scalar_distance"), std::string::npos) << header;
   EXPECT_NE(header.find("property float scalar_level_of_detection"), std::string::npos);
   EXPECT_EQ(readReportSection(second.report(), "compare")["clusters"].get<size_t>(), 2u);
+  // The top-down map: north up, east right, 0.2 m cells of 4 px from (x, y) = (10, -10).
+  const cv::Mat map = cv::imread((second.root() / "change" / "change_map.png").string());
+  ASSERT_FALSE(map.empty());
+  const auto pixel = [&](double x, double y) {
+    return map.at<cv::Vec3b>(static_cast<int>((10.0 - x) / 0.2) * 4 + 2,
+                             static_cast<int>((y + 10.0) / 0.2) * 4 + 2);
+  };
+  const cv::Vec3b on_block = pixel(3.5, 2.5), on_seabed = pixel(-8.0, 8.0);
+  EXPECT_GT(on_block[2], 200) << "red";  // BGR
+  EXPECT_LT(on_block[0], 60) << "the block is shown at full red";
+  EXPECT_GT(on_seabed[0], 150) << "the unchanged seabed stays pale";
+  EXPECT_GT(on_seabed[2], 150);
   ASSERT_GE(printed.lines.size(), 3u);
   EXPECT_NE(printed.lines[0].find("2 regions"), std::string::npos) << printed.lines[0];
 }

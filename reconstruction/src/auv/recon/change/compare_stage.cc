@@ -1,5 +1,6 @@
 #include "auv/recon/change/compare_stage.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -7,6 +8,7 @@
 #include <open3d/geometry/KDTreeFlann.h>
 #include <open3d/geometry/PointCloud.h>
 
+#include "auv/recon/change/change_map.h"
 #include "auv/recon/change/clusters.h"
 #include "auv/recon/common/option_set.h"
 #include "auv/recon/common/report.h"
@@ -178,6 +180,14 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
 
   StagedOutput staged(later.root() / "change");
   scene::writePly(staged.path() / "changes.ply", ply);
+  double scale_m = 0.1;  // the colour scale: the largest region's change, if any
+  if (!clusters.empty()) {
+    scale_m = 0.0;
+    for (const ChangeCluster& c : clusters)
+      scale_m = std::max(scale_m, std::abs(c.max_abs_distance_m));
+  }
+  writeChangeMap(staged.path() / "change_map.png", cores, comparison, options.core_spacing_m,
+                 scale_m);
   writeFileAtomically(staged.path() / "report.json", report.dump(2) + "\n");
   staged.commit();
   report["seconds"]["total"] = since(start);

@@ -5,6 +5,7 @@
 // the significant changes clustered (clusters.h), and written into survey 2:
 //
 //   change/changes.ply     core points: normal, distance, level_of_detection, significant
+//   change/change_map.png  the top-down change map (change_map.h)
 //   change/report.json     the registration, the counts, every cluster (area, distances,
 //                          volumes, centroid); also the `compare` section of report.json
 //
