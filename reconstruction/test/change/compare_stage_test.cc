@@ -16,8 +16,10 @@
 #include "auv/recon/change/compare_stage.h"
 #include "auv/recon/common/report.h"
 #include "auv/recon/common/stage_error.h"
+#include "auv/recon/scene/mesh_io.h"
 #include "auv/recon/scene/ply.h"
 
+#include <open3d/geometry/TriangleMesh.h>
 #include <opencv2/imgcodecs.hpp>
 
 namespace fs = std::filesystem;
@@ -41,7 +43,8 @@ bool onGrowth(double x, double y) { return x > -6.0 && x < -2.0 && y > -6.0 && y
 
 /// A survey folder whose dense/fused.ply samples the seabed (10 cm, 5 mm noise), shifted by
 /// `offset` (the survey's own navigation frame).
-Survey survey(const fs::path& root, bool changed, const Eigen::Vector3d& offset, unsigned seed) {
+Survey survey(const fs::path& root, bool changed, const Eigen::Vector3d& offset, unsigned seed,
+              bool with_mesh = false) {
   std::mt19937 rng(seed);
   std::normal_distribution<double> noise(0.0, 0.005);
   scene::PlyData ply;
@@ -55,13 +58,25 @@ Survey survey(const fs::path& root, bool changed, const Eigen::Vector3d& offset,
   }
   fs::create_directories(root / "dense");
   scene::writePly(root / "dense" / "fused.ply", ply);
+  if (with_mesh) {  // the grid's triangles as mesh/mesh.ply
+    const uint32_t side = static_cast<uint32_t>(std::lround(std::sqrt(ply.positions.size())));
+    for (uint32_t i = 0; i + 1 < side; ++i) {
+      for (uint32_t j = 0; j + 1 < side; ++j) {
+        const uint32_t a = i * side + j, b = a + 1, c = a + side, d = c + 1;
+        ply.triangles.push_back({a, c, b});
+        ply.triangles.push_back({b, c, d});
+      }
+    }
+    fs::create_directories(root / "mesh");
+    scene::writePly(root / "mesh" / "mesh.ply", ply);
+  }
   return Survey(root);
 }
 
 TEST(CompareStage, FindsTheBlockAndTheGrowthAndNothingElse) {
   TempDir dir;
   const Survey first = survey(dir.path / "s1", false, Eigen::Vector3d::Zero(), 1);
-  const Survey second = survey(dir.path / "s2", true, Eigen::Vector3d(0.2, -0.1, 0.05), 2);
+  const Survey second = survey(dir.path / "s2", true, Eigen::Vector3d(0.2, -0.1, 0.05), 2, true);
   CompareOptions options;
   options.later = second.root().string();
   const CompareStage stage;
@@ -107,6 +122,21 @@ TEST(CompareStage, FindsTheBlockAndTheGrowthAndNothingElse) {
   EXPECT_LT(on_block[0], 60) << "the block is shown at full red";
   EXPECT_GT(on_seabed[0], 150) << "the unchanged seabed stays pale";
   EXPECT_GT(on_seabed[2], 150);
+  // Survey 2's mesh, coloured by the change, in survey 1's frame.
+  ASSERT_EQ(r["coloured_mesh"], "mesh_change.ply");
+  open3d::geometry::TriangleMesh mesh;
+  ASSERT_TRUE(scene::readTriangleMesh(second.root() / "change" / "mesh_change.ply", mesh));
+  ASSERT_TRUE(mesh.HasVertexColors());
+  size_t block_vertices = 0, block_red = 0;
+  for (size_t v = 0; v < mesh.vertices_.size(); ++v) {
+    const Eigen::Vector3d& p = mesh.vertices_[v];
+    if (onBlock(p.x() - 0.3, p.y() - 0.3) && onBlock(p.x() + 0.3, p.y() + 0.3)) {
+      ++block_vertices;
+      block_red += mesh.vertex_colors_[v].x() > 0.9 && mesh.vertex_colors_[v].z() < 0.3;
+    }
+  }
+  ASSERT_GT(block_vertices, 100u);
+  EXPECT_GT(static_cast<double>(block_red) / block_vertices, 0.95);
   ASSERT_GE(printed.lines.size(), 3u);
   EXPECT_NE(printed.lines[0].find("2 regions"), std::string::npos) << printed.lines[0];
 }

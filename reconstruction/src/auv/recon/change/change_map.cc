@@ -18,6 +18,14 @@ constexpr int kPixelsPerCell = 4;
 constexpr int kLegendHeight = 28;
 }  // namespace
 
+Eigen::Vector3d changeColour(const M3C2Point& p, double scale_m) {
+  if (!p.valid()) return Eigen::Vector3d::Constant(90.0 / 255.0);
+  const double t = std::clamp(p.distance / scale_m, -1.0, 1.0);
+  const double strength = std::abs(t) * (p.significant ? 1.0 : 0.25);
+  const double fade = 1.0 - strength;
+  return t >= 0 ? Eigen::Vector3d(1.0, fade, fade) : Eigen::Vector3d(fade, fade, 1.0);
+}
+
 void writeChangeMap(const std::filesystem::path& file,
                     const std::vector<Eigen::Vector3d>& core_points,
                     const std::vector<M3C2Point>& comparison, double cell_m, double scale_m) {
@@ -47,15 +55,8 @@ void writeChangeMap(const std::filesystem::path& file,
     for (int col = 0; col < cols; ++col) {
       const int i = shown[static_cast<size_t>(row) * cols + col];
       if (i < 0) continue;  // no surface seen here: white
-      const M3C2Point& p = comparison[static_cast<size_t>(i)];
-      cv::Scalar colour(90, 90, 90);  // BGR: measured nowhere
-      if (p.valid()) {
-        const double t = std::clamp(p.distance / scale_m, -1.0, 1.0);
-        // White at 0 to red (gain) or blue (loss); not significant: a quarter of the colour.
-        const double strength = std::abs(t) * (p.significant ? 1.0 : 0.25);
-        const double fade = 255.0 * (1.0 - strength);
-        colour = t >= 0 ? cv::Scalar(fade, fade, 255) : cv::Scalar(255, fade, fade);
-      }
+      const Eigen::Vector3d rgb = 255.0 * changeColour(comparison[static_cast<size_t>(i)], scale_m);
+      const cv::Scalar colour(rgb.z(), rgb.y(), rgb.x());  // BGR
       cv::rectangle(
           image,
           cv::Rect(col * kPixelsPerCell, row * kPixelsPerCell, kPixelsPerCell, kPixelsPerCell),

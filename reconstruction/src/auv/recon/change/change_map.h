@@ -13,6 +13,11 @@
 
 namespace auv::recon::change {
 
+/// The colour (RGB in [0, 1]) of a change of `distance` m at full colour `scale_m`: white at 0
+/// to red (gained) or blue (lost), a quarter of the colour when not significant, dark grey when
+/// not measured. The map and the coloured mesh share it.
+Eigen::Vector3d changeColour(const M3C2Point& point, double scale_m);
+
 /// Writes the map as PNG through a temporary name; `cell_m` is the core spacing, `scale_m` the
 /// distance shown at full colour (larger ones saturate). Throws std::runtime_error when it
 /// cannot write.

@@ -7,6 +7,7 @@
 
 #include <open3d/geometry/KDTreeFlann.h>
 #include <open3d/geometry/PointCloud.h>
+#include <open3d/geometry/TriangleMesh.h>
 
 #include "auv/recon/change/change_map.h"
 #include "auv/recon/change/clusters.h"
@@ -54,6 +55,31 @@ std::vector<Eigen::Vector3d> towardsCameras(const Survey& survey,
     hints[i] = centres[static_cast<size_t>(index[0])] - core_points[i];
   }
   return hints;
+}
+
+/// Survey 2's mesh in survey 1's frame, each vertex coloured by the change at the nearest core
+/// point within `reach_m` (grey beyond: not compared). False when survey 2 has no mesh.
+bool writeChangeMesh(const Survey& later, const Eigen::Matrix4d& transform,
+                     const std::vector<Eigen::Vector3d>& cores,
+                     const std::vector<M3C2Point>& comparison, double reach_m, double scale_m,
+                     const fs::path& file) {
+  if (!fs::exists(later.mesh() / "mesh.ply")) return false;
+  open3d::geometry::TriangleMesh mesh = scene::readMesh(later.mesh() / "mesh.ply", kStage);
+  mesh.Transform(transform);
+  Eigen::MatrixXd matrix(3, static_cast<Eigen::Index>(cores.size()));
+  for (size_t i = 0; i < cores.size(); ++i) matrix.col(static_cast<Eigen::Index>(i)) = cores[i];
+  const open3d::geometry::KDTreeFlann tree(matrix);
+  mesh.vertex_colors_.assign(mesh.vertices_.size(), Eigen::Vector3d::Constant(0.7));
+  std::vector<int> index;
+  std::vector<double> distance2;
+  for (size_t v = 0; v < mesh.vertices_.size(); ++v) {
+    if (tree.SearchKNN(mesh.vertices_[v], 1, index, distance2) > 0 &&
+        distance2[0] <= reach_m * reach_m) {
+      mesh.vertex_colors_[v] = changeColour(comparison[static_cast<size_t>(index[0])], scale_m);
+    }
+  }
+  scene::writeMeshPly(file, mesh);
+  return true;
 }
 
 nlohmann::json clusterJson(const ChangeCluster& c) {
@@ -188,6 +214,13 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
   }
   writeChangeMap(staged.path() / "change_map.png", cores, comparison, options.core_spacing_m,
                  scale_m);
+  report["coloured_mesh"] =
+      writeChangeMesh(later, aligned.transform, cores, comparison,
+                      // a changed surface lies up to max_depth from its core point
+                      std::hypot(2.0 * options.core_spacing_m, options.m3c2.max_depth_m), scale_m,
+                      staged.path() / "mesh_change.ply")
+          ? "mesh_change.ply"
+          : "none: survey 2 has no mesh/mesh.ply";
   writeFileAtomically(staged.path() / "report.json", report.dump(2) + "\n");
   staged.commit();
   report["seconds"]["total"] = since(start);

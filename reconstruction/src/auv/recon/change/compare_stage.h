@@ -6,6 +6,7 @@
 //
 //   change/changes.ply     core points: normal, distance, level_of_detection, significant
 //   change/change_map.png  the top-down change map (change_map.h)
+//   change/mesh_change.ply survey 2's mesh/mesh.ply, vertices coloured by the change
 //   change/report.json     the registration, the counts, every cluster (area, distances,
 //                          volumes, centroid); also the `compare` section of report.json
 //
