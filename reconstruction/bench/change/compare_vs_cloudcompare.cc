@@ -16,7 +16,6 @@
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
-#include <random>
 #include <sstream>
 
 #include <open3d/geometry/KDTreeFlann.h>
@@ -24,6 +23,7 @@
 #include <nlohmann/json.hpp>
 
 #include "auv/recon/change/compare_stage.h"
+#include "auv/recon/change/synthetic_site.h"
 #include "auv/recon/scene/mesh_io.h"
 #include "auv/recon/scene/ply.h"
 
@@ -37,38 +37,17 @@ double since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-/// Two surveys of a rolling seabed (NED), the second changed and its frame shifted.
+/// The synthetic site's two surveys (change/synthetic_site.h), the second changed, its frame
+/// shifted, survey 1 with its mesh.
 void makeSyntheticPair(const fs::path& s1, const fs::path& s2) {
-  for (int epoch = 0; epoch < 2; ++epoch) {
-    std::mt19937 rng(epoch + 1);
-    std::normal_distribution<double> noise(0.0, 0.005);
-    scene::PlyData ply;
-    for (double x = -10.0; x <= 10.0; x += 0.1) {
-      for (double y = -10.0; y <= 10.0; y += 0.1) {
-        double up = 0.4 * std::sin(0.6 * x) * std::cos(0.45 * y) + 0.05 * x + noise(rng);
-        if (epoch == 1 && x > 2.0 && x < 5.0 && y > 1.0 && y < 4.0) up += 1.0;
-        if (epoch == 1 && x > -6.0 && x < -2.0 && y > -6.0 && y < -2.0) up += 0.3;
-        const Eigen::Vector3d shift =
-            epoch == 1 ? Eigen::Vector3d(0.2, -0.1, 0.05) : Eigen::Vector3d::Zero();
-        ply.positions.push_back(Eigen::Vector3d(x, y, 20.0 - up) + shift);
-      }
-    }
-    const fs::path root = epoch == 0 ? s1 : s2;
-    fs::create_directories(root / "dense");
-    scene::writePly(root / "dense" / "fused.ply", ply);
-    if (epoch == 0) {  // survey 1's mesh: the grid's triangles
-      const uint32_t side = static_cast<uint32_t>(std::lround(std::sqrt(ply.positions.size())));
-      for (uint32_t i = 0; i + 1 < side; ++i) {
-        for (uint32_t j = 0; j + 1 < side; ++j) {
-          const uint32_t a = i * side + j, b = a + 1, c = a + side, d = c + 1;
-          ply.triangles.push_back({a, c, b});
-          ply.triangles.push_back({b, c, d});
-        }
-      }
-      fs::create_directories(root / "mesh");
-      scene::writePly(root / "mesh" / "mesh.ply", ply);
-    }
-  }
+  change::SyntheticSurvey first;
+  first.with_mesh = true;
+  change::writeSyntheticSurvey(s1, first);
+  change::SyntheticSurvey second;
+  second.changed = true;
+  second.offset = Eigen::Vector3d(0.2, -0.1, 0.05);
+  second.seed = 2;
+  change::writeSyntheticSurvey(s2, second);
 }
 
 struct CorePoint {

@@ -9,15 +9,14 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
-#include <random>
 #include <sstream>
 #include <string>
 
 #include "auv/recon/change/compare_stage.h"
+#include "auv/recon/change/synthetic_site.h"
 #include "auv/recon/common/report.h"
 #include "auv/recon/common/stage_error.h"
 #include "auv/recon/scene/mesh_io.h"
-#include "auv/recon/scene/ply.h"
 
 #include <open3d/geometry/TriangleMesh.h>
 #include <opencv2/imgcodecs.hpp>
@@ -38,38 +37,15 @@ struct TempDir {
   static inline int counter = 0;
 };
 
-bool onBlock(double x, double y) { return x > 2.0 && x < 5.0 && y > 1.0 && y < 4.0; }
-bool onGrowth(double x, double y) { return x > -6.0 && x < -2.0 && y > -6.0 && y < -2.0; }
-
-/// A survey folder whose dense/fused.ply samples the seabed (10 cm, 5 mm noise), shifted by
-/// `offset` (the survey's own navigation frame).
+/// A survey folder of the synthetic site (change/synthetic_site.h).
 Survey survey(const fs::path& root, bool changed, const Eigen::Vector3d& offset, unsigned seed,
               bool with_mesh = false) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> noise(0.0, 0.005);
-  scene::PlyData ply;
-  for (double x = -10.0; x <= 10.0; x += 0.1) {
-    for (double y = -10.0; y <= 10.0; y += 0.1) {
-      double up = 0.4 * std::sin(0.6 * x) * std::cos(0.45 * y) + 0.05 * x + noise(rng);
-      if (changed && onBlock(x, y)) up += 1.0;
-      if (changed && onGrowth(x, y)) up += 0.3;
-      ply.positions.push_back(Eigen::Vector3d(x, y, 20.0 - up) + offset);
-    }
-  }
-  fs::create_directories(root / "dense");
-  scene::writePly(root / "dense" / "fused.ply", ply);
-  if (with_mesh) {  // the grid's triangles as mesh/mesh.ply
-    const uint32_t side = static_cast<uint32_t>(std::lround(std::sqrt(ply.positions.size())));
-    for (uint32_t i = 0; i + 1 < side; ++i) {
-      for (uint32_t j = 0; j + 1 < side; ++j) {
-        const uint32_t a = i * side + j, b = a + 1, c = a + side, d = c + 1;
-        ply.triangles.push_back({a, c, b});
-        ply.triangles.push_back({b, c, d});
-      }
-    }
-    fs::create_directories(root / "mesh");
-    scene::writePly(root / "mesh" / "mesh.ply", ply);
-  }
+  SyntheticSurvey options;
+  options.changed = changed;
+  options.offset = offset;
+  options.seed = seed;
+  options.with_mesh = with_mesh;
+  writeSyntheticSurvey(root, options);
   return Survey(root);
 }
 
@@ -130,7 +106,7 @@ TEST(CompareStage, FindsTheBlockAndTheGrowthAndNothingElse) {
   size_t block_vertices = 0, block_red = 0;
   for (size_t v = 0; v < mesh.vertices_.size(); ++v) {
     const Eigen::Vector3d& p = mesh.vertices_[v];
-    if (onBlock(p.x() - 0.3, p.y() - 0.3) && onBlock(p.x() + 0.3, p.y() + 0.3)) {
+    if (onSyntheticBlock(p.x() - 0.3, p.y() - 0.3) && onSyntheticBlock(p.x() + 0.3, p.y() + 0.3)) {
       ++block_vertices;
       block_red += mesh.vertex_colors_[v].x() > 0.9 && mesh.vertex_colors_[v].z() < 0.3;
     }
