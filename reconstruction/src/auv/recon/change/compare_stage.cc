@@ -82,6 +82,34 @@ bool writeChangeMesh(const Survey& later, const Eigen::Matrix4d& transform,
   return true;
 }
 
+/// change/changes.ply: the core points with their normals and the comparison as scalar fields.
+scene::PlyData changesPly(const std::vector<Eigen::Vector3d>& cores,
+                          const std::vector<M3C2Point>& comparison) {
+  scene::PlyData ply;
+  ply.positions = cores;
+  std::vector<float> distance, lod, flag;
+  for (const M3C2Point& p : comparison) {
+    ply.normals.push_back(p.normal);
+    distance.push_back(static_cast<float>(p.distance));
+    lod.push_back(static_cast<float>(p.level_of_detection));
+    flag.push_back(p.significant ? 1.0f : 0.0f);
+  }
+  // CloudCompare loads PLY properties named scalar_<name> as the scalar fields <name>.
+  ply.scalars = {{"scalar_distance", distance},
+                 {"scalar_level_of_detection", lod},
+                 {"scalar_significant", flag}};
+  return ply;
+}
+
+/// The change shown at full colour: the largest region's, or 0.1 m without regions.
+double colourScale(const std::vector<ChangeCluster>& clusters) {
+  double scale_m = 0.0;
+  for (const ChangeCluster& c : clusters) {
+    scale_m = std::max(scale_m, std::abs(c.max_abs_distance_m));
+  }
+  return scale_m > 0.0 ? scale_m : 0.1;
+}
+
 nlohmann::json clusterJson(const ChangeCluster& c) {
   return {{"area_m2", c.area_m2},
           {"core_points", c.core_points.size()},
@@ -165,21 +193,10 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
   const double m3c2_s = since(phase);
 
   size_t valid = 0, significant = 0;
-  scene::PlyData ply;
-  ply.positions = cores;
-  std::vector<float> distance, lod, flag;
   for (const M3C2Point& p : comparison) {
     valid += p.valid();
     significant += p.significant;
-    ply.normals.push_back(p.normal);
-    distance.push_back(static_cast<float>(p.distance));
-    lod.push_back(static_cast<float>(p.level_of_detection));
-    flag.push_back(p.significant ? 1.0f : 0.0f);
   }
-  // CloudCompare loads PLY properties named scalar_<name> as the scalar fields <name>.
-  ply.scalars = {{"scalar_distance", distance},
-                 {"scalar_level_of_detection", lod},
-                 {"scalar_significant", flag}};
 
   nlohmann::json report = {
       {"survey_1", survey.root().string()},
@@ -205,13 +222,8 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
   for (const ChangeCluster& c : clusters) report["clusters"].push_back(clusterJson(c));
 
   StagedOutput staged(later.root() / "change");
-  scene::writePly(staged.path() / "changes.ply", ply);
-  double scale_m = 0.1;  // the colour scale: the largest region's change, if any
-  if (!clusters.empty()) {
-    scale_m = 0.0;
-    for (const ChangeCluster& c : clusters)
-      scale_m = std::max(scale_m, std::abs(c.max_abs_distance_m));
-  }
+  scene::writePly(staged.path() / "changes.ply", changesPly(cores, comparison));
+  const double scale_m = colourScale(clusters);
   writeChangeMap(staged.path() / "change_map.png", cores, comparison, options.core_spacing_m,
                  scale_m);
   report["coloured_mesh"] =
