@@ -161,7 +161,7 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
   const Survey later(options.later);
   const open3d::geometry::PointCloud first =
       scene::readCloud(survey.dense() / "fused.ply", kStage, "dense");
-  const open3d::geometry::PointCloud second =
+  open3d::geometry::PointCloud second =
       scene::readCloud(later.dense() / "fused.ply", kStage, "dense");
   const double read_s = since(start);
 
@@ -175,10 +175,7 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
                      survey.root().string() + " and " + later.root().string() + ": " + e.what());
   }
   const double coregistration_s = since(phase);
-  std::vector<Eigen::Vector3d> second_aligned = second.points_;
-  const Eigen::Matrix3d rotation = aligned.transform.topLeftCorner<3, 3>();
-  const Eigen::Vector3d translation = aligned.transform.topRightCorner<3, 1>();
-  for (Eigen::Vector3d& p : second_aligned) p = rotation * p + translation;
+  second.Transform(aligned.transform);  // survey 2 in survey 1's frame
 
   phase = std::chrono::steady_clock::now();
   const std::vector<Eigen::Vector3d> cores = first.VoxelDownSample(options.core_spacing_m)->points_;
@@ -186,7 +183,7 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
   if (m3c2_options.registration_error_m == 0.0) m3c2_options.registration_error_m = aligned.rms_m;
   const std::vector<Eigen::Vector3d> hints = towardsCameras(survey, cores);
   const std::vector<M3C2Point> comparison =
-      m3c2(first.points_, second_aligned, cores, m3c2_options, hints);
+      m3c2(first.points_, second.points_, cores, m3c2_options, hints);
   const std::vector<ChangeCluster> clusters =
       clusterChanges(cores, comparison, options.core_spacing_m, 1.5 * options.core_spacing_m,
                      options.min_cluster_area_m2);

@@ -77,6 +77,12 @@ CoregistrationResult coregister(const std::vector<Eigen::Vector3d>& cloud1,
   registration::ICPConvergenceCriteria criteria;
   criteria.max_iteration_ = options.icp_iterations;
   size_t overlapping = 0;
+  // Distance of a survey-2 point, moved by the current transform, to survey 1's surface.
+  const auto residual = [&](const Eigen::Vector3d& point) {
+    const Eigen::Vector3d moved =
+        result.transform.topLeftCorner<3, 3>() * point + result.transform.topRightCorner<3, 1>();
+    return surface.distance(moved, options.max_correspondence_m);
+  };
   for (int round = 0; round < options.rounds; ++round) {
     // The first round reaches as far as the coarse transform may be off; later ones only as
     // far as a stable point may be, so changed surfaces find no partner.
@@ -91,11 +97,8 @@ CoregistrationResult coregister(const std::vector<Eigen::Vector3d>& cloud1,
     // Which points of survey 2 lie on survey 1's surface now.
     stable.clear();
     overlapping = 0;
-    const Eigen::Matrix3d rotation = result.transform.topLeftCorner<3, 3>();
-    const Eigen::Vector3d translation = result.transform.topRightCorner<3, 1>();
     for (size_t i = 0; i < source->points_.size(); ++i) {
-      const double d = surface.distance(rotation * source->points_[i] + translation,
-                                        options.max_correspondence_m);
+      const double d = residual(source->points_[i]);
       if (!std::isfinite(d)) continue;
       ++overlapping;
       if (d <= options.stable_threshold_m) stable.push_back(i);
@@ -122,14 +125,11 @@ CoregistrationResult coregister(const std::vector<Eigen::Vector3d>& cloud1,
     throw CoregistrationError(message.str());
   }
   // The residual and the stable flags, at full density.
-  const Eigen::Matrix3d rotation = result.transform.topLeftCorner<3, 3>();
-  const Eigen::Vector3d translation = result.transform.topRightCorner<3, 1>();
   double sum2 = 0.0;
   size_t count = 0;
   result.stable.assign(cloud2.size(), false);
   for (size_t i = 0; i < cloud2.size(); ++i) {
-    const double d =
-        surface.distance(rotation * cloud2[i] + translation, options.max_correspondence_m);
+    const double d = residual(cloud2[i]);
     if (d <= options.stable_threshold_m) {
       result.stable[i] = true;
       sum2 += d * d;

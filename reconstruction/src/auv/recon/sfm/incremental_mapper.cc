@@ -481,29 +481,44 @@ void IncrementalMapper::globalBundleAdjustment(MapperResult& result, int max_ite
   for (uint32_t id : config.refine_focal) resetRunawayIntrinsics(id, result);
 }
 
-std::string IncrementalMapper::whyUnregistered(uint32_t id) const {
-  const auto failed = last_failure_.find(id);
-  if (failed != last_failure_.end()) return failed->second;
+std::map<uint32_t, size_t> IncrementalMapper::separateGroups() const {
   std::map<uint32_t, std::vector<uint32_t>> neighbours;
   for (const ViewPair& pair : input_.pairs) {
     neighbours[pair.image_a].push_back(pair.image_b);
     neighbours[pair.image_b].push_back(pair.image_a);
   }
-  if (!neighbours.count(id)) return "no verified pair: it matched no other image";
-  // The images its verified pairs reach, transitively: when none is in the model, it belongs to
-  // a group no verified pair joins to the model's (another camera in murk, a second visit).
-  std::set<uint32_t> group{id};
-  for (std::vector<uint32_t> open{id}; !open.empty();) {
-    const uint32_t image = open.back();
-    open.pop_back();
-    for (uint32_t other : neighbours[image]) {
-      if (group.insert(other).second) open.push_back(other);
+  // Each group of images its verified pairs join, transitively, once: a group without an image
+  // in the model is one no verified pair joins to it (another camera in murk, a second visit).
+  std::map<uint32_t, size_t> separate;
+  std::set<uint32_t> seen;
+  for (const auto& [start, unused] : neighbours) {
+    if (!seen.insert(start).second) continue;
+    std::vector<uint32_t> group{start};
+    for (size_t next = 0; next < group.size(); ++next) {
+      for (uint32_t other : neighbours[group[next]]) {
+        if (seen.insert(other).second) group.push_back(other);
+      }
+    }
+    if (std::none_of(group.begin(), group.end(),
+                     [&](uint32_t image) { return rec_.images.count(image) > 0; })) {
+      for (uint32_t image : group) separate[image] = group.size();
     }
   }
-  if (std::none_of(group.begin(), group.end(),
-                   [&](uint32_t image) { return rec_.images.count(image) > 0; })) {
+  return separate;
+}
+
+std::string IncrementalMapper::whyUnregistered(uint32_t id,
+                                               const std::map<uint32_t, size_t>& separate) const {
+  const auto failed = last_failure_.find(id);
+  if (failed != last_failure_.end()) return failed->second;
+  const bool paired = std::any_of(input_.pairs.begin(), input_.pairs.end(), [&](const ViewPair& p) {
+    return p.image_a == id || p.image_b == id;
+  });
+  if (!paired) return "no verified pair: it matched no other image";
+  const auto group = separate.find(id);
+  if (group != separate.end()) {
     return "not connected to the model: its verified pairs join it only to " +
-           std::to_string(group.size() - 1) +
+           std::to_string(group->second - 1) +
            " other unregistered image(s), a separate group (the model holds one group)";
   }
   size_t visible = 0;
@@ -648,10 +663,11 @@ MapperResult IncrementalMapper::run(Progress* progress,
     filterPoints(all);
   }
   rec_.updatePointErrors();
+  const std::map<uint32_t, size_t> separate = separateGroups();
   for (const View& view : input_.views) {
     if (rec_.images.count(view.id)) continue;
     result.unregistered.push_back(view.id);
-    result.unregistered_reasons[view.id] = whyUnregistered(view.id);
+    result.unregistered_reasons[view.id] = whyUnregistered(view.id, separate);
   }
   result.status = MapperStatus::SUCCESS;
   result.reconstruction = rec_;

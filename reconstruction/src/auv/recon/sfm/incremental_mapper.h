@@ -145,8 +145,11 @@ class IncrementalMapper {
   /// `timed`: counted as global BA time (the initial pair's two-view BA counts as initial pair).
   /// Resets camera `id` to its prior when its refinement ran away (MapperOptions).
   void resetRunawayIntrinsics(uint32_t id, MapperResult& result);
+  /// The images in groups that verified pairs join to each other but not to the model, with
+  /// their group's size (computed once, after mapping).
+  std::map<uint32_t, size_t> separateGroups() const;
   /// Why view `id` is not registered, for MapperResult::unregistered_reasons.
-  std::string whyUnregistered(uint32_t id) const;
+  std::string whyUnregistered(uint32_t id, const std::map<uint32_t, size_t>& separate) const;
   void globalBundleAdjustment(MapperResult& result, int max_iterations, bool timed = true);
   /// Triangulates every track not yet in the model and completes every point.
   size_t retriangulate();
