@@ -19,6 +19,7 @@
 #include "auv/sim/camera/renderer.h"
 #include "auv/sim/camera/trajectory.h"
 #include "auv/sim/raycast/ray_caster.h"
+#include "auv/sim/world/change_truth.h"
 #include "auv/sim/world/scenario.h"
 
 namespace auv::sim {
@@ -169,6 +170,10 @@ RenderRunReport renderRun(const std::string& run_dir, const RenderRunOptions& op
       options.threads > 0 ? options.threads : std::max(1u, std::thread::hardware_concurrency());
 
   const fs::path truth_dir = fs::path(run_dir) / "ground_truth";
+  // A later visit of a changing site: the true change, for `auv recon evaluate`.
+  if (writeScenarioChangeTruth(scenario, truth_dir.string()) && options.log)
+    *options.log << "render: " << scenario.changes.size() << " site changes -> "
+                 << (truth_dir / "changes.json").string() << "\n";
   std::map<int, std::string> camera_names, camera_lines;
   for (size_t i = 0; i < rig.cameras.size(); ++i) camera_names[i + 1] = rig.cameras[i].id;
 

@@ -41,6 +41,9 @@ int checkMain(const std::vector<std::string>& args) {
                 << report.bounds.max().transpose() << "] m\n"
                 << "  water attenuation (1/m) R G B = " << scenario.water.attenuation.transpose()
                 << "\n";
+      for (const SiteChange& change : scenario.changes)
+        std::cout << "  change " << change.name << ": " << toString(change.type) << " at ["
+                  << change.center.transpose() << "]\n";
       // The vehicle: read as the simulator reads it (a misspelt key is an error here too) and
       // its hull, not a default one, checked against the world at the start.
       const VehicleModel vehicle = readVehicleModel(scenario.root.child("vehicle"));

@@ -92,7 +92,7 @@ Scenario loadScenario(const std::string& path) {
   const YamlSection& root = s.root;
   root.rejectUnknownKeys({"name", "description", "world", "water", "vehicle", "navigation", "sonar",
                           "multibeam", "dvl_beams", "cameras", "lighting", "queries", "simulation",
-                          "mission"});
+                          "mission", "changes"});
   s.name = fs::path(path).stem().string();
   root.read("name", s.name);
   root.read("description", s.description);
@@ -161,10 +161,25 @@ Scenario loadScenario(const std::string& path) {
     s.queries.push_back(query);
   }
   readMissionPlanning(root.child("mission"), s.seabed_depth, s.mission);
+  s.changes = readSiteChanges(root);
   return s;
 }
 
-Mesh loadWorldMesh(const Scenario& scenario, MeshReport* report) {
+Mesh loadWorldMesh(const Scenario& scenario, MeshReport* report,
+                   std::vector<AppliedChange>* applied) {
+  Mesh mesh = loadWorldMeshBeforeChanges(scenario, report);
+  if (scenario.changes.empty()) return mesh;
+  std::vector<AppliedChange> done = applySiteChanges(mesh, scenario.changes, scenario.file);
+  MeshReport r = validateMesh(mesh);
+  if (report) {
+    r.removed_degenerate += report->removed_degenerate;
+    *report = r;
+  }
+  if (applied) *applied = std::move(done);
+  return mesh;
+}
+
+Mesh loadWorldMeshBeforeChanges(const Scenario& scenario, MeshReport* report) {
   Mesh mesh = loadMesh(scenario.mesh_path);
   if (!mesh.hasTexture() && !mesh.hasVertexColors() && scenario.default_color) {
     mesh.vertex_colors.assign(mesh.vertices.size(), *scenario.default_color);

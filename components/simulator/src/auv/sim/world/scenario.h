@@ -11,6 +11,7 @@
 
 #include "auv/sim/common/yaml_section.h"
 #include "auv/sim/world/mesh.h"
+#include "auv/sim/world/site_changes.h"
 #include "auv/sim/world/surface_detail.h"
 
 namespace auv::sim {
@@ -72,6 +73,8 @@ struct Scenario {
 
   std::vector<MissionQuery> queries;
   MissionPlanning mission;
+  /// What changed at the site since an earlier visit (`changes:`), applied by loadWorldMesh.
+  std::vector<SiteChange> changes;
 
   /// The whole file; modules read their own sections (`vehicle`, `navigation`, `sonar`,
   /// `multibeam`, `dvl_beams`, `cameras`, `simulation`) with their own options' fromYaml().
@@ -85,7 +88,12 @@ struct Scenario {
 Scenario loadScenario(const std::string& path);
 
 /// Loads the scenario's mesh, moves it into the world frame, applies the default colour and
-/// validates it. Throws ConfigError naming the mesh file.
-Mesh loadWorldMesh(const Scenario& scenario, MeshReport* report = nullptr);
+/// validates it, then applies the scenario's `changes:` (what each did into `applied`). Throws
+/// ConfigError naming the mesh file, or the scenario file and the change that cannot apply.
+Mesh loadWorldMesh(const Scenario& scenario, MeshReport* report = nullptr,
+                   std::vector<AppliedChange>* applied = nullptr);
+
+/// The world as it was before the scenario's `changes:` (the earlier visit).
+Mesh loadWorldMeshBeforeChanges(const Scenario& scenario, MeshReport* report = nullptr);
 
 }  // namespace auv::sim

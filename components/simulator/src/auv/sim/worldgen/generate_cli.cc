@@ -6,6 +6,7 @@
 #include <limits>
 #include <sstream>
 
+#include "auv/sim/worldgen/change_plan.h"
 #include "auv/sim/worldgen/world_generator.h"
 
 namespace auv::sim {
@@ -15,7 +16,8 @@ constexpr const char* kPrefix = "auv sim generate: ";
 
 void usage(std::ostream& out) {
   out << "usage: auv sim generate <world|all> [--seed N] [--out DIR] [--detail X]\n"
-         "                        [--texture-size PX]\n"
+         "                        [--texture-size PX] [--epoch 2 [--changes-seed N]\n"
+         "                        [--changes-along FROM,TO]]\n"
          "       auv sim generate --list\n\n"
          "Generates a procedural world: a textured mesh (<world>.obj, .mtl, texture .png) and a\n"
          "scenario file <world>.yaml (start, queries, water) that the simulator and\n"
@@ -28,6 +30,13 @@ void usage(std::ostream& out) {
          "  --out DIR          folder to write to, created if missing (default: .)\n"
          "  --detail X         scales triangles and texels, both ~X (default 1; 0.02..8)\n"
          "  --texture-size PX  the texture's longest side (default 4096; texels grow to fit)\n"
+         "  --epoch 2          also write <world>_epoch2.yaml: a later visit of the same site\n"
+         "                     with seeded changes (a fallen block, a removed and a moved\n"
+         "                     boulder, growth, scour, a bleached patch) under the first\n"
+         "                     query's route; render its run for ground_truth/changes.json\n"
+         "  --changes-seed N   seed of the changes (default 1)\n"
+         "  --changes-along F,T  the stretch of the first query's route they lie under, as\n"
+         "                     fractions of its length (default 0.25,0.5)\n"
          "  --list             print the worlds and exit\n"
          "  -h, --help         print this help\n";
 }
@@ -55,6 +64,8 @@ int runGenerateCommand(const std::vector<std::string>& args, std::ostream& out, 
   WorldGenOptions options;
   std::string out_dir = ".";
   std::vector<std::string> worlds;
+  int epoch = 1;
+  ChangePlanOptions changes;
   auto usageError = [&](const std::string& message) {
     err << kPrefix << message << " (see --help)\n";
     return 2;
@@ -70,8 +81,9 @@ int runGenerateCommand(const std::vector<std::string>& args, std::ostream& out, 
         out << name << "  " << worldSummary(name) << "\n";
       return 0;
     }
-    const bool takes_value =
-        arg == "--seed" || arg == "--out" || arg == "--detail" || arg == "--texture-size";
+    const bool takes_value = arg == "--seed" || arg == "--out" || arg == "--detail" ||
+                             arg == "--texture-size" || arg == "--epoch" ||
+                             arg == "--changes-seed" || arg == "--changes-along";
     if (takes_value) {
       if (i + 1 >= args.size()) return usageError(arg + " needs a value");
       const std::string& value = args[++i];
@@ -80,6 +92,27 @@ int runGenerateCommand(const std::vector<std::string>& args, std::ostream& out, 
           return usageError("--seed: expected a whole number >= 0, got '" + value + "'");
       } else if (arg == "--out") {
         out_dir = value;
+      } else if (arg == "--epoch") {
+        if (value != "1" && value != "2")
+          return usageError(
+              "--epoch: expected 1 (the site as generated) or 2 (a later visit "
+              "with changes), got '" +
+              value + "'");
+        epoch = value == "2" ? 2 : 1;
+      } else if (arg == "--changes-seed") {
+        if (!parseUnsigned(value, changes.seed))
+          return usageError("--changes-seed: expected a whole number >= 0, got '" + value + "'");
+      } else if (arg == "--changes-along") {
+        const size_t comma = value.find(',');
+        if (comma == std::string::npos ||
+            !parseDouble(value.substr(0, comma), changes.along_from) ||
+            !parseDouble(value.substr(comma + 1), changes.along_to))
+          return usageError("--changes-along: expected FROM,TO (fractions), got '" + value + "'");
+        try {
+          changes.check();
+        } catch (const ConfigError& e) {
+          return usageError(e.what());
+        }
       } else if (arg == "--detail") {
         if (!parseDouble(value, options.detail) ||
             !(options.detail >= 0.02 && options.detail <= 8.0))
@@ -117,7 +150,9 @@ int runGenerateCommand(const std::vector<std::string>& args, std::ostream& out, 
   for (const std::string& name : names) {
     try {
       const GeneratedWorld world = generateWorld(name, options);
-      const std::string yaml = writeWorld(world, out_dir);
+      std::string yaml = writeWorld(world, out_dir);
+      if (epoch == 2)
+        yaml += " and " + writeEpochScenario(world, planSiteChanges(world, changes), out_dir, 2);
       std::ostringstream line;
       line << std::fixed << std::setprecision(1) << name << ": " << world.stats.triangles
            << " triangles, texture " << world.stats.texture_width << "x"
