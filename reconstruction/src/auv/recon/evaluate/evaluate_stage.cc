@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "auv/recon/common/option_set.h"
+#include "auv/recon/evaluate/change_evaluation.h"
 #include "auv/recon/texture/textured_model.h"
 
 namespace auv::recon::evaluate {
@@ -42,6 +43,18 @@ void EvaluateStageOptions::bind(OptionSet& set) {
   set.add("write_views", &o.write_views,
           "also write evaluation/views/<frame>.png: filmed | model | true texture");
   set.add("seed", &o.seed, "sampling seed");
+  set.add("survey_1", &o.survey_1,
+          "the earlier survey of `auv recon compare` (default: survey_1 of change/report.json)");
+  set.add("change_min_magnitude_m", &o.change.min_magnitude_m,
+          "m: true changes smaller than this are not asked for");
+  set.add("change_match_radius_m", &o.change.match_radius_m,
+          "m: a change measured this near a true changed point is on it");
+  set.add("change_min_hit_fraction", &o.change.min_hit_fraction,
+          "share of a true region's measured points (of a cluster's points) that must be hit");
+  set.add("change_min_measured_fraction", &o.change.min_measured_fraction,
+          "a true region with less of it measured is `not measured` (not missed)");
+  set.add("change_min_cluster_area_m2", &o.change.min_cluster_area_m2,
+          "m²: smaller change clusters are not scored (0: compare's own minimum)");
 }
 
 EvaluateStageResult runEvaluateStage(const Survey& survey, const EvaluateStageOptions& options) {
@@ -123,6 +136,7 @@ StageReport EvaluateStage::runWith(const Survey& survey,
          << fixed(texture["median_delta_e_2000_true_texture"], 2);
   }
   report.lines.push_back(line.str());
+  report.lines.push_back("evaluate: change: " + changeSummary(result["change"]));
   report.lines.push_back("evaluate: " + fixed(result["seconds"], 1) + " s -> " +
                          evaluated.file.string());
   return report;

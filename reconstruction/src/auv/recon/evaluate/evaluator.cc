@@ -21,10 +21,12 @@
 #include "auv/recon/common/stage_error.h"
 #include "auv/recon/common/staged_output.h"
 #include "auv/recon/evaluate/alignment.h"
+#include "auv/recon/evaluate/change_evaluation.h"
 #include "auv/recon/evaluate/ground_truth.h"
 #include "auv/recon/evaluate/image_matching.h"
 #include "auv/recon/evaluate/image_metrics.h"
 #include "auv/recon/evaluate/surface_metrics.h"
+#include "auv/recon/evaluate/survey_truth.h"
 #include "auv/recon/evaluate/well_imaged_region.h"
 #include "auv/recon/scene/colmap_text.h"
 #include "auv/recon/scene/mesh_io.h"
@@ -37,7 +39,6 @@ namespace auv::recon::evaluate {
 namespace {
 
 constexpr const char* kStage = "evaluate";
-constexpr double kDefaultRange = 2.25;  // m, half the paper's visibility in the canyon (4.3)
 
 /// JSON has no infinity: such figures are written as null.
 json number(double value) { return std::isfinite(value) ? json(value) : json(nullptr); }
@@ -72,14 +73,6 @@ json similarityJson(const Similarity& s) {
 std::string cameraOfName(const std::string& name) {
   const size_t slash = name.find('/');
   return slash == std::string::npos ? std::string() : name.substr(0, slash);
-}
-
-View viewOf(const GroundTruth& truth, const GroundTruthFrame& frame) {
-  View view;
-  view.camera = truth.cameras().at(frame.image.camera_id);
-  view.rotation_cw = frame.image.rotation();
-  view.translation_cw = frame.image.t_cw;
-  return view;
 }
 
 std::vector<Eigen::Vector3d> transformed(const std::vector<Eigen::Vector3d>& points,
@@ -124,7 +117,7 @@ void EvaluateOptions::check() const {
   AUV_RECON_CHECK_OPTION(max_range_m >= 0, max_range_m, "must be >= 0 m (0 = water visibility)");
   WellImagedOptions region;
   region.min_views = min_views;
-  region.max_range_m = max_range_m > 0 ? max_range_m : kDefaultRange;
+  region.max_range_m = max_range_m > 0 ? max_range_m : kDefaultWellImagedRangeM;
   region.max_incidence_deg = max_incidence_deg;
   region.check();
   AlignmentOptions alignment;
@@ -132,6 +125,7 @@ void EvaluateOptions::check() const {
   alignment.inlier_sigmas = inlier_sigmas;
   alignment.min_inlier_m = min_inlier_m;
   alignment.check();
+  change.check();
 }
 
 fs::path recordedRun(const Survey& survey, const std::string& key) {
@@ -158,47 +152,20 @@ json evaluateSurvey(const Survey& survey, const fs::path& ground_truth_run,
   const auto started = std::chrono::steady_clock::now();
   const std::vector<double> thresholds = options.thresholds();
 
-  // Inputs: the sparse model (required: it carries the poses), the ground truth, the keyframes.
+  // The sparse model first: it carries the poses (a survey without it needs sfm, whatever
+  // the truth).
   Survey::requireExists(survey.sparse() / "images.txt", kStage, "sfm");
-  scene::Reconstruction sparse;
-  try {
-    sparse = scene::readColmapText(survey.sparse());
-  } catch (const std::exception& e) {
-    throw StageError(kStage, std::string("sparse model: ") + e.what());
-  }
-  check(!sparse.images.empty(), survey.sparse().string() + ": no registered images");
   const GroundTruth truth = GroundTruth::load(ground_truth_run);
-  std::map<std::string, std::vector<KeyframeSource>> sources;
-  if (fs::is_directory(survey.keyframes())) sources = readKeyframeSources(survey.keyframes());
-
   Progress progress("evaluate", "steps", 7);
-  // 1. Images -> ground-truth frames.
-  const ImageMatching matching = matchImages(sparse, sources, truth);
-  if (matching.matched.size() < 3) {
-    std::string examples;
-    for (size_t i = 0; i < std::min<size_t>(3, matching.unmatched.size()); ++i) {
-      examples += (i ? ", " : "") + matching.unmatched[i];
-    }
-    throw StageError(kStage, "only " + std::to_string(matching.matched.size()) + " of " +
-                                 std::to_string(sparse.images.size()) +
-                                 " registered images match a ground-truth frame of " +
-                                 ground_truth_run.string() + " (unmatched: " + examples +
-                                 "): is it the run these videos were rendered from?");
-  }
-  progress.advance();
-
-  // 2. Similarity from the camera poses; pose errors.
-  const std::vector<PosePair> pairs = posePairs(matching, sparse);
-  AlignmentOptions alignment_options;
-  alignment_options.axis_length_m = options.axis_length_m;
-  alignment_options.inlier_sigmas = options.inlier_sigmas;
-  alignment_options.min_inlier_m = options.min_inlier_m;
-  alignment_options.seed = static_cast<uint64_t>(options.seed);
-  const AlignmentResult alignment = alignToTruth(pairs, alignment_options);
-  check(alignment.status == AlignmentStatus::SUCCESS,
-        "alignment to the ground truth failed: " + alignment.message);
+  // 1.-2. Images -> ground-truth frames; similarity from the camera poses; pose errors.
+  const SurveyAlignment aligned = alignSurveyToTruth(survey, truth, options);
+  const scene::Reconstruction& sparse = aligned.sparse;
+  const auto& sources = aligned.sources;
+  const ImageMatching& matching = aligned.matching;
+  const std::vector<PosePair>& pairs = aligned.pairs;
+  const AlignmentResult& alignment = aligned.alignment;
   const Similarity& sim = alignment.similarity;
-  const PoseErrors errors = poseErrors(pairs, sim);
+  const PoseErrors& errors = aligned.errors;
   progress.advance();
 
   json result;
@@ -251,51 +218,22 @@ json evaluateSurvey(const Survey& survey, const fs::path& ground_truth_run,
                               {"max", errors.max_rotation_deg}}}};
 
   // 3. The well-imaged region: seen by min_views keyframes (their true poses), within range.
-  WellImagedOptions region_options;
-  region_options.min_views = options.min_views;
-  // Default range: half the visibility, where Koschmieder's contrast exp(-3.912 d / V) is
-  // still 14 % (the simulator's rock fades into the water beyond it).
-  region_options.max_range_m = options.max_range_m > 0  ? options.max_range_m
-                               : truth.visibility() > 0 ? 0.5 * truth.visibility()
-                                                        : kDefaultRange;
-  region_options.max_incidence_deg = options.max_incidence_deg;
-  std::vector<View> views;
-  std::set<std::string> view_keys;
-  for (const auto& [camera, list] : sources) {
-    for (const KeyframeSource& source : list) {
-      const GroundTruthFrame* frame = truth.find(source.key());
-      if (frame && view_keys.insert(source.key()).second) views.push_back(viewOf(truth, *frame));
-    }
-  }
-  for (const MatchedImage& m : matching.matched) {  // no index: the registered images
-    if (view_keys.insert(frameKey(m.truth->video, m.truth->frame)).second) {
-      views.push_back(viewOf(truth, *m.truth));
-    }
-  }
+  const std::vector<View> views = keyframeViews(truth, aligned);
   const auto mesh = truth.worldMesh();
-  std::vector<Eigen::Vector3d> centers;
-  for (const View& v : views) centers.push_back(v.center());
-  const std::vector<size_t> near = trianglesNear(*mesh, centers, region_options.max_range_m);
-  const SurfaceSamples samples =
-      sampleSurface(*mesh, options.sample_spacing_m, static_cast<uint64_t>(options.seed), &near);
-  const OcclusionTester occlusion(*mesh);
-  const std::vector<uint8_t> counts = countViews(samples, views, occlusion, region_options);
-  std::vector<bool> well_imaged(samples.size());
-  size_t region_size = 0;
-  for (size_t i = 0; i < samples.size(); ++i) {
-    well_imaged[i] = counts[i] >= options.min_views;
-    region_size += well_imaged[i] ? 1 : 0;
-  }
+  const WellImagedSamples region = wellImagedRegion(truth, views, options);
+  const SurfaceSamples& samples = region.samples;
+  const std::vector<bool>& well_imaged = region.well_imaged;
+  const size_t region_size = region.count;
   check(region_size > 0, "no part of the true surface is seen by " +
                              std::to_string(options.min_views) + " keyframes within " +
-                             std::to_string(region_options.max_range_m) + " m");
+                             std::to_string(region.max_range_m) + " m");
   const double sample_area = options.sample_spacing_m * options.sample_spacing_m;
   result["region"] = {
       {"definition",
        "true surface seen by >= min_views keyframes (true poses and lenses): inside the image, "
        "within max_range_m, not occluded, at most max_incidence_deg from the normal"},
       {"min_views", options.min_views},
-      {"max_range_m", region_options.max_range_m},
+      {"max_range_m", region.max_range_m},
       {"max_incidence_deg", options.max_incidence_deg},
       {"keyframe_views", views.size()},
       {"sample_spacing_m", options.sample_spacing_m},
@@ -476,6 +414,10 @@ json evaluateSurvey(const Survey& survey, const fs::path& ground_truth_run,
     scene::writePly(survey.root() / "evaluation" / "region.ply", ply);
   }
 
+  // 6. The change since an earlier survey, when it was compared and the truth knows it.
+  result["change"] = evaluateChange(survey, ground_truth_run, region, options);
+  progress.advance();
+
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   result["seconds"] = seconds;
@@ -492,7 +434,7 @@ json evaluateSurvey(const Survey& survey, const fs::path& ground_truth_run,
                    {{"thresholds_m", options.thresholds_m},
                     {"sample_spacing_m", options.sample_spacing_m},
                     {"min_views", options.min_views},
-                    {"max_range_m", region_options.max_range_m},
+                    {"max_range_m", region.max_range_m},
                     {"max_incidence_deg", options.max_incidence_deg},
                     {"axis_length_m", options.axis_length_m}}}};
   for (const auto& [name, s] : surfaces.items()) {
@@ -501,6 +443,17 @@ json evaluateSurvey(const Survey& survey, const fs::path& ground_truth_run,
       key << "fscore_" << name << "_" << std::lround(t["threshold_m"].get<double>() * 100) << "cm";
       section[key.str()] = t["fscore"];
     }
+  }
+  const json& change = result["change"];
+  section["change_status"] = change["status"];
+  if (change["status"] == "evaluated") {
+    section["change_recall"] = change["regions_scored"]["recall_measured"];
+    section["change_recall_all"] = change["regions_scored"]["recall_all"];
+    section["change_precision"] = change["clusters_scored"]["precision"];
+    section["change_false_area_m2"] = change["stable"]["false_area_m2"];
+    section["change_false_fraction"] = change["stable"]["false_fraction"];
+    section["change_survey_1_camera_error_median_m"] =
+        change["survey_1"]["alignment"]["camera_position_error_median_m"];
   }
   updateReport(survey.report(), kStage, section);
   return result;

@@ -8,7 +8,10 @@
 //   4. accuracy, completeness and F-score of the sparse cloud, the dense cloud and the mesh
 //      (surface_metrics.h);
 //   5. texture PSNR at held-out frames, when a renderer of the textured model is given
-//      (image_metrics.h).
+//      (image_metrics.h);
+//   6. when the survey was compared with an earlier one (`auv recon compare`) and its run has
+//      the simulator's change truth: the change found against the true change
+//      (change_evaluation.h).
 // Writes <survey>/evaluation.json and the `evaluate` section of report.json.
 
 #include <cstdint>
@@ -22,6 +25,7 @@
 #include <opencv2/core.hpp>
 
 #include "auv/recon/common/survey.h"
+#include "auv/recon/evaluate/change_scores.h"
 #include "auv/recon/scene/camera.h"
 
 namespace auv::recon::evaluate {
@@ -56,6 +60,10 @@ struct EvaluateOptions {
   /// true texture, side by side.
   bool write_views = false;
   int64_t seed = 1;
+  /// The change against the truth (change_scores.h).
+  ChangeScoreOptions change;
+  /// The earlier survey of a comparison; empty: the survey_1 that change/report.json records.
+  std::string survey_1;
 
   /// The thresholds as numbers; throws OptionError naming thresholds_m.
   std::vector<double> thresholds() const;

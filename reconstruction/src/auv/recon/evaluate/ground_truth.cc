@@ -139,6 +139,13 @@ GroundTruth GroundTruth::load(const fs::path& run) {
   } catch (const std::exception& e) {
     throw StageError(kStage, "ground truth: " + scenario.string() + ": " + e.what());
   }
+  // A visit of a site that changed (the scenario's `changes:`): the simulator writes the world
+  // as this visit saw it, already in world NED; the scenario's mesh is the earlier visit's.
+  const fs::path changed_world = truth / "world.ply";
+  if (fs::exists(changed_world)) {
+    gt.mesh_file_ = changed_world;
+    gt.mesh_to_world_ = Eigen::Matrix4d::Identity();
+  }
   return gt;
 }
 

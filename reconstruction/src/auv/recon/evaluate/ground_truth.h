@@ -8,6 +8,9 @@
 //   <run>/ground_truth/images_<camera>.txt   true world -> camera pose of every rendered frame,
 //                                            NAME = "<video file>#<frame>"
 //   <run>/ground_truth/trajectory.tum        true body trajectory; navigation.tum the estimate
+//   <run>/ground_truth/world.ply             a changed site's world as this visit saw it (world
+//                                            NED), used instead of the scenario's mesh
+//   <run>/ground_truth/changes.json, .ply    the change since the earlier visit (change_truth.h)
 //
 // The world frame is NED (x north, y east, z down), the simulator's.
 
