@@ -547,6 +547,49 @@ TEST(ChangedCellsTest, KeepsTheNewestValuePerCellThroughGrowthAndClears) {
   }
 }
 
+// insertPrior: a prior slab moved by a yaw and a sub-cell offset fills every map cell inside
+// it (no holes where the turned grid spreads cells apart), at the scaled log-odds, tracked as
+// changes; a cell the map already holds keeps its value.
+TEST(MapBuilderTest, InsertPriorFillsTheMovedPriorWithoutHolesAndKeepsObservedCells) {
+  octomap::OcTree prior(0.5);
+  for (double x = 0.25; x < 10.0; x += 0.5) {
+    for (double y = 0.25; y < 10.0; y += 0.5) prior.updateNode(x, y, 1.25, 3.0f);
+  }
+  Eigen::Isometry3d map_T_prior = Eigen::Isometry3d::Identity();
+  map_T_prior.linear() =
+      Eigen::AngleAxisd(7.0 * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  map_T_prior.translation() = Eigen::Vector3d(0.3, 0.2, 0.0);
+  MapBuilder builder;
+  builder.enableChangeTracking(true);
+  const Eigen::Vector3d observed(5.25, 5.25, 1.25);  // the vehicle saw it free
+  builder.insertCloud({Eigen::Vector3d(5.25, 5.25, 4.25)}, Eigen::Vector3d(5.25, 5.25, 0.1), 0.0);
+  const float observed_value =
+      builder.tree().search(observed.x(), observed.y(), observed.z())->getLogOdds();
+  builder.takeDiff();
+  const InsertStats stats = builder.insertPrior(prior, map_T_prior, 0.5);
+  EXPECT_GT(stats.occupied_cells, 390u);
+  EXPECT_EQ(builder.pendingChangeCount(), stats.occupied_cells + stats.free_cells);
+  const octomap::OcTree& tree = builder.tree();
+  int inside = 0;
+  for (double x = -2.25; x < 12.0; x += 0.5) {
+    for (double y = -2.25; y < 12.0; y += 0.5) {
+      const Eigen::Vector3d p = map_T_prior.inverse() * Eigen::Vector3d(x, y, 1.25);
+      if (p.x() < 0.3 || p.x() > 9.7 || p.y() < 0.3 || p.y() > 9.7) continue;  // inside
+      const octomap::OcTreeNode* cell = tree.search(x, y, 1.25);
+      ASSERT_NE(cell, nullptr) << "a hole at " << x << ", " << y;
+      if (std::abs(x - observed.x()) < 0.1 && std::abs(y - observed.y()) < 0.1) {
+        EXPECT_EQ(cell->getLogOdds(), observed_value) << "the vehicle's evidence stays";
+        continue;
+      }
+      EXPECT_FLOAT_EQ(cell->getLogOdds(), 0.5f * prior.search(p.x(), p.y(), p.z())->getLogOdds());
+      ++inside;
+    }
+  }
+  EXPECT_GT(inside, 300);
+  MapBuilder other_resolution(MapBuilder::Options{1.0});
+  EXPECT_THROW(other_resolution.insertPrior(prior, map_T_prior, 0.5), std::invalid_argument);
+}
+
 TEST(MapBuilderTest, RejectsBadOptions) {
   MapBuilder::Options options;
   options.prob_hit = 0.4;

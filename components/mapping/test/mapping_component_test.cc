@@ -2,14 +2,17 @@
 // wall; a late-joining map reader on Cyclone DDS gets a FULL map with the wall cell occupied and
 // keeps an exact replica from the increments; map/save and map/clear answer across vendors; a
 // saved map given as initial_map is the map from the start; DVL beams on dvl/beams (body-frame
-// clouds stamped past the newest odometry) wait for it and enter the map as rays.
-// Each test on its own domain id (80..89, 8).
+// clouds stamped past the newest odometry) wait for it and enter the map as rays; a repeat
+// mission's initial_map is published only once the vehicle's returns align with it.
+// Each test on its own domain id (80..89, 8, 4).
 #include <gtest/gtest.h>
 
 #include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <memory>
 #include <sstream>
 #include <thread>
@@ -18,6 +21,7 @@
 #include "auv/interfaces/executor.h"
 #include "auv/mapping/components/mapping_component.h"
 #include "auv/mapping/map_replica.h"
+#include "synthetic_scene.h"
 
 namespace auv::mapping {
 namespace {
@@ -306,9 +310,9 @@ TEST(MappingComponentTest, AReplicaInStepSkipsThePeriodicFullMapButNotAClear) {
   mapping.deactivate();
 }
 
-// initial_map: a map saved by an earlier mission is the map from the start, and the first FULL
-// gives it to a reader of the other vendor before any sonar data; a file it cannot take is
-// refused naming the parameter and the file.
+// initial_map with align_initial_map false: a map saved earlier is the map from the start, and
+// the first FULL gives it to a reader of the other vendor before any sonar data; a file it
+// cannot take is refused naming the parameter and the file.
 TEST(MappingComponentTest, StartsFromAnInitialMapAndNamesOneItCannotTake) {
   constexpr int kDomain = 85;
   const std::string path = testing::TempDir() + "mapping_component_initial.bt";
@@ -317,7 +321,9 @@ TEST(MappingComponentTest, StartsFromAnInitialMapAndNamesOneItCannotTake) {
   earlier.insertCloud(wall, Eigen::Vector3d(0.25, 0.25, 0.25), 0.0);
   ASSERT_TRUE(earlier.save(path));
 
-  Node mapping_node("mapping", nodeOptions(Vendor::FASTDDS, kDomain, {"initial_map:=" + path}));
+  // A map in this run's frame, trusted as it is (the alignment has its own test below).
+  Node mapping_node("mapping", nodeOptions(Vendor::FASTDDS, kDomain,
+                                           {"initial_map:=" + path, "align_initial_map:=false"}));
   MappingComponent mapping;
   mapping.configure(mapping_node);
   EXPECT_EQ(mapping.builder().fullBinary(), earlier.fullBinary());
@@ -414,6 +420,152 @@ TEST(MappingComponentTest, DvlBeamCloudsWaitForOdometryAndEnterTheMapAsRays) {
     ASSERT_NE(free, nullptr) << water.transpose();
     EXPECT_FALSE(tree.isNodeOccupied(free)) << water.transpose();
   }
+}
+
+// initial_map of a repeat mission (align_initial_map, the default): the first visit's map of a
+// canyon, the vehicle now in a navigation frame offset by (2.5 m, -1.5 m, yaw 4 deg) sending
+// body-frame sonar/scan fans with its odometry. Until the returns align, the published map holds
+// only them; then the FULL after alignment holds the prior's walls at the shifted place (also
+// where the vehicle has not been), and prior_alignment.json records the transform.
+TEST(MappingComponentTest, ARepeatMissionAlignsThePriorMapBeforePublishingIt) {
+  constexpr int kDomain = 4;  // 80..89 and 8 are taken (test/README.md); 4 is unused
+  const test::Scene canyon = test::canyonScene();
+  const std::string directory = testing::TempDir() + "mapping_component_prior";
+  std::filesystem::remove_all(directory);
+  std::filesystem::create_directories(directory);
+  const std::string path = directory + "/first_visit.bt";
+  MapBuilder first_visit;
+  test::mapVisit(first_visit, canyon, -24.0, 26.0);
+  ASSERT_TRUE(first_visit.save(path));
+
+  Eigen::Isometry3d navigation_T_world = Eigen::Isometry3d::Identity();
+  navigation_T_world.linear() =
+      Eigen::AngleAxisd(4.0 * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  navigation_T_world.translation() = Eigen::Vector3d(2.5, -1.5, 0.0);
+
+  Node mapping_node("mapping", nodeOptions(Vendor::CYCLONEDDS, kDomain,
+                                           {"initial_map:=" + path, "map_directory:=" + directory,
+                                            "update_rate:=20.0", "prior_min_points:=1200",
+                                            "prior_retry_points:=400"}));
+  Node vehicle_node("vehicle", nodeOptions(Vendor::CYCLONEDDS, kDomain));
+  Node reader_node("planner", nodeOptions(Vendor::FASTDDS, kDomain));
+  MappingComponent mapping;
+  mapping.configure(mapping_node);
+  ASSERT_NE(mapping.priorAlignment(), nullptr);
+  EXPECT_EQ(mapping.priorAlignment()->state, AlignmentState::COLLECTING);
+  EXPECT_EQ(mapping.builder().tree().size(), 0u) << "the prior is held aside";
+
+  std::unique_ptr<octomap::OcTree> last_full;
+  uint64_t last_full_sequence = 0;
+  auto subscription = reader_node.createSubscription<msg::OctomapUpdate>(
+      "map/update", interfaces::mapQos(),
+      std::function<void(const msg::OctomapUpdate&)>([&](const msg::OctomapUpdate& u) {
+        if (u.kind() != msg::OCTOMAP_UPDATE_FULL) return;
+        std::istringstream stream(std::string(u.data().begin(), u.data().end()));
+        last_full.reset(dynamic_cast<octomap::OcTree*>(octomap::AbstractOcTree::read(stream)));
+        last_full_sequence = u.sequence_number();
+      }));
+
+  // The vehicle (true heading +x, the body frame's axes those of the world) drives along the
+  // canyon at y = 1, z = 2.5; its navigation believes position T * p and yaw 4 deg.
+  auto odometry =
+      vehicle_node.createPublisher<msg::Odometry>("nav/odometry", interfaces::stateQos());
+  auto scans =
+      vehicle_node.createPublisher<msg::PointCloud>("sonar/scan", interfaces::sensorDataQos());
+  double x = -15.0;
+  auto timer = vehicle_node.createTimer(0.05, [&] {
+    const int64_t now = vehicle_node.clock().nowNs();
+    const Eigen::Vector3d origin(x, 1.0, 2.5);
+    msg::Odometry o;
+    setStamp(o.header(), now);
+    o.header().frame_id("world");
+    const Eigen::Vector3d believed = navigation_T_world * origin;
+    const Eigen::Quaterniond attitude(navigation_T_world.linear());
+    o.pose().pose().position().x(believed.x());
+    o.pose().pose().position().y(believed.y());
+    o.pose().pose().position().z(believed.z());
+    o.pose().pose().orientation().w(attitude.w());
+    o.pose().pose().orientation().x(attitude.x());
+    o.pose().pose().orientation().y(attitude.y());
+    o.pose().pose().orientation().z(attitude.z());
+    odometry->publish(o);
+    msg::PointCloud cloud;
+    setStamp(cloud.header(), now);
+    cloud.header().frame_id("base_link");
+    cloud.sensor_origin().orientation().w(1.0);
+    cloud.max_range(20.0f);
+    for (const Eigen::Vector3d& point : test::castFan(canyon, origin).points) {
+      msg::PointXYZI p;
+      p.x(static_cast<float>(point.x() - origin.x()));
+      p.y(static_cast<float>(point.y() - origin.y()));
+      p.z(static_cast<float>(point.z() - origin.z()));
+      cloud.points().push_back(p);
+    }
+    scans->publish(cloud);
+    x = std::min(x + 0.25, 12.0);
+  });
+
+  interfaces::Executor executor;
+  executor.add(mapping_node);
+  executor.add(vehicle_node);
+  executor.add(reader_node);
+  mapping.activate();
+  // Where the prior has the canyon's wall at x = 20 (the vehicle stays short of it).
+  const double wall_y = 7.0 + 0.8 * std::sin(2.0 * M_PI * 20.0 / 13.0);
+  const Eigen::Vector3d far_wall = navigation_T_world * Eigen::Vector3d(20.0, wall_y, 4.0);
+  const auto occupiedNear = [](const octomap::OcTree& map, const Eigen::Vector3d& p) {
+    for (double dx = -0.5; dx <= 0.5; dx += 0.5) {
+      for (double dy = -0.5; dy <= 0.5; dy += 0.5) {
+        for (double dz = -0.5; dz <= 0.5; dz += 0.5) {
+          const octomap::OcTreeNode* cell = map.search(p.x() + dx, p.y() + dy, p.z() + dz);
+          if (cell != nullptr && map.isNodeOccupied(cell)) return true;
+        }
+      }
+    }
+    return false;
+  };
+  bool prior_before_alignment = false;
+  uint64_t aligned_sequence = 0;
+  ASSERT_TRUE(executor.spinUntil(
+      [&] {
+        const AlignmentResult& r = *mapping.priorAlignment();
+        if (r.state != AlignmentState::ALIGNED) {
+          prior_before_alignment |= occupiedNear(mapping.builder().tree(), far_wall);
+          return r.finished;
+        }
+        if (aligned_sequence == 0) aligned_sequence = mapping.sequenceNumber();
+        return true;
+      },
+      60s))
+      << mapping.priorAlignment()->reason;
+  const AlignmentResult result = *mapping.priorAlignment();
+  ASSERT_EQ(result.state, AlignmentState::ALIGNED) << result.reason;
+  EXPECT_FALSE(prior_before_alignment) << "the map had prior content before the alignment";
+  EXPECT_GT(mapping.cloudsInserted(), 0u);
+  EXPECT_NEAR(result.x_m, 2.5, 0.15);
+  EXPECT_NEAR(result.y_m, -1.5, 0.15);
+  EXPECT_NEAR(result.yaw_rad * 180.0 / M_PI, 4.0, 0.5);
+
+  ASSERT_TRUE(
+      executor.spinUntil([&] { return last_full && last_full_sequence >= aligned_sequence; }, 20s))
+      << "no FULL map after the alignment (sequence " << aligned_sequence << ")";
+  timer->cancel();
+  mapping.deactivate();
+  EXPECT_TRUE(occupiedNear(*last_full, far_wall)) << "the prior's wall at the shifted place";
+  // The top of the prior's boulder at x = 21 where the moved prior puts it, not where it was.
+  const Eigen::Vector3d boulder_top(21.0, 1.4, 5.2);
+  EXPECT_TRUE(occupiedNear(*last_full, navigation_T_world * boulder_top));
+  EXPECT_FALSE(occupiedNear(*last_full, boulder_top)) << "the prior unmoved";
+
+  std::ifstream record(directory + "/prior_alignment.json");
+  ASSERT_TRUE(record) << "no prior_alignment.json in " << directory;
+  const std::string json((std::istreambuf_iterator<char>(record)),
+                         std::istreambuf_iterator<char>());
+  EXPECT_NE(json.find("\"state\": \"ALIGNED\""), std::string::npos) << json;
+  const std::size_t x_at = json.find("\"x\": ");
+  ASSERT_NE(x_at, std::string::npos) << json;
+  EXPECT_NEAR(std::stod(json.substr(x_at + 5)), result.x_m, 1e-6) << json;
+  std::filesystem::remove_all(directory);
 }
 
 TEST(MappingComponentTest, InconsistentProbabilitiesAreRefused) {

@@ -19,6 +19,12 @@ octomap::point3d toPoint(const Eigen::Vector3d& v) {
                           static_cast<float>(v.z()));
 }
 
+bool hasReturn(const BeamGeometry& beam) {
+  const double min_range = std::max(0.0, beam.min_range);
+  return beam.return_range && *beam.return_range >= min_range &&
+         *beam.return_range <= beam.max_range;
+}
+
 void requireRange(bool ok, const char* message) {
   if (!ok) throw std::invalid_argument(std::string("MapBuilder: ") + message);
 }
@@ -159,8 +165,7 @@ InsertStats MapBuilder::insertBeam(const BeamGeometry& beam,
   const Eigen::Vector3d origin = world_T_sensor.translation();
   const Eigen::Vector3d direction = (world_T_sensor.linear() * beam.direction).normalized();
   const double min_range = std::max(0.0, beam.min_range);
-  const bool has_return =
-      beam.return_range && *beam.return_range >= min_range && *beam.return_range <= beam.max_range;
+  const bool has_return = hasReturn(beam);
   // No return: free up to max_range, nothing occupied (the end cell itself stays unknown, as
   // for the truncated rays of OcTree::insertPointCloud).
   const double free_until = has_return ? *beam.return_range : beam.max_range;
@@ -192,6 +197,14 @@ InsertStats MapBuilder::insertBeam(const BeamGeometry& beam,
   return stats;
 }
 
+std::optional<Eigen::Vector3d> MapBuilder::returnPoint(const BeamGeometry& beam,
+                                                       const Eigen::Isometry3d& world_T_sensor) {
+  if (!hasReturn(beam)) return std::nullopt;
+  // insertBeam()'s end point, computed the same way.
+  const Eigen::Vector3d direction = (world_T_sensor.linear() * beam.direction).normalized();
+  return world_T_sensor.translation() + *beam.return_range * direction;
+}
+
 InsertStats MapBuilder::insertCloud(const std::vector<Eigen::Vector3d>& points_world,
                                     const Eigen::Vector3d& origin_world, double max_range) {
   free_scratch_.clear();
@@ -199,7 +212,7 @@ InsertStats MapBuilder::insertCloud(const std::vector<Eigen::Vector3d>& points_w
   const octomap::point3d origin = toPoint(origin_world);
   for (const Eigen::Vector3d& point : points_world) {
     const double distance = (point - origin_world).norm();
-    if (max_range <= 0.0 || distance <= max_range) {
+    if (isReturn(point, origin_world, max_range)) {
       if (tree_.computeRayKeys(origin, toPoint(point), ray_scratch_)) {
         free_scratch_.insert(ray_scratch_.begin(), ray_scratch_.end());
       }
@@ -213,6 +226,67 @@ InsertStats MapBuilder::insertCloud(const std::vector<Eigen::Vector3d>& points_w
     }
   }
   return integrate(free_scratch_, occupied_scratch_);
+}
+
+InsertStats MapBuilder::insertPrior(const octomap::OcTree& prior,
+                                    const Eigen::Isometry3d& map_T_prior, double log_odds_scale) {
+  if (std::abs(prior.getResolution() - tree_.getResolution()) > 1e-9) {
+    throw std::invalid_argument("insertPrior: prior resolution " +
+                                std::to_string(prior.getResolution()) + " m, the map " +
+                                std::to_string(tree_.getResolution()) + " m");
+  }
+  // Candidate map cells: where each prior cell's centre lands, and its horizontal neighbours
+  // (a yawed grid leaves some map cells without a landing centre); each then samples the prior
+  // under its own centre, so every map cell inside the moved prior gets a value once.
+  const Eigen::Isometry3d prior_T_map = map_T_prior.inverse();
+  octomap::KeySet candidates;
+  const unsigned max_depth = prior.getTreeDepth();
+  const auto addLanding = [&](const octomap::OcTreeKey& prior_key) {
+    const octomap::point3d c = prior.keyToCoord(prior_key);
+    const Eigen::Vector3d moved = map_T_prior * Eigen::Vector3d(c.x(), c.y(), c.z());
+    octomap::OcTreeKey key;
+    if (!tree_.coordToKeyChecked(toPoint(moved), key)) return;
+    for (int dx = -1; dx <= 1; ++dx) {
+      for (int dy = -1; dy <= 1; ++dy) {
+        candidates.insert(octomap::OcTreeKey(static_cast<octomap::key_type>(key[0] + dx),
+                                             static_cast<octomap::key_type>(key[1] + dy), key[2]));
+      }
+    }
+  };
+  for (auto it = prior.begin_leafs(), end = prior.end_leafs(); it != end; ++it) {
+    const octomap::OcTreeKey key = it.getKey();
+    if (it.getDepth() == max_depth) {
+      addLanding(key);
+      continue;
+    }
+    const int half = 1 << (max_depth - it.getDepth() - 1);  // a coarse leaf: all its cells
+    for (int dx = -half; dx < half; ++dx) {
+      for (int dy = -half; dy < half; ++dy) {
+        for (int dz = -half; dz < half; ++dz) {
+          addLanding(octomap::OcTreeKey(static_cast<octomap::key_type>(key[0] + dx),
+                                        static_cast<octomap::key_type>(key[1] + dy),
+                                        static_cast<octomap::key_type>(key[2] + dz)));
+        }
+      }
+    }
+  }
+  InsertStats stats;
+  for (const octomap::OcTreeKey& key : candidates) {
+    if (tree_.search(key) != nullptr) continue;  // the vehicle's own evidence stays
+    const octomap::point3d c = tree_.keyToCoord(key);
+    const Eigen::Vector3d source = prior_T_map * Eigen::Vector3d(c.x(), c.y(), c.z());
+    const octomap::OcTreeNode* node = prior.search(source.x(), source.y(), source.z());
+    if (node == nullptr) continue;
+    const float scaled = static_cast<float>(log_odds_scale * node->getLogOdds());
+    const octomap::OcTreeNode* cell = tree_.setNodeValue(key, scaled, /*lazy_eval=*/true);
+    if (track_changes_) changed_.set(key, cell->getLogOdds());  // clamped as the tree holds it
+    touched_.push_back(key);
+    ++(tree_.isNodeOccupied(cell) ? stats.occupied_cells : stats.free_cells);
+  }
+  settleInnerNodes();
+  cell_updates_ += stats.free_cells + stats.occupied_cells;
+  ++version_;
+  return stats;
 }
 
 void MapBuilder::enableChangeTracking(bool enable) {

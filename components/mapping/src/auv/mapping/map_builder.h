@@ -97,6 +97,11 @@ class MapBuilder {
   /// every cell it touched (OctoMap's own change detection only reports occupancy flips, not
   /// log-odds changes, which exact diffs need); the cell updates are the same.
   InsertStats insertBeam(const BeamGeometry& beam, const Eigen::Isometry3d& world_T_sensor);
+  /// The world point of the beam's return as insertBeam() marks it occupied; nullopt for a beam
+  /// without an echo in [min_range, max_range]. (Feeds PriorMapAlignment with what the map
+  /// takes as surface.)
+  static std::optional<Eigen::Vector3d> returnPoint(const BeamGeometry& beam,
+                                                    const Eigen::Isometry3d& world_T_sensor);
 
   /// Integrates returns `points_world` (world frame) seen from `origin_world`, like
   /// OcTree::insertPointCloud(cloud, origin, max_range): rays longer than `max_range` (> 0)
@@ -104,6 +109,21 @@ class MapBuilder {
   /// at most once per cloud, occupied winning over free.
   InsertStats insertCloud(const std::vector<Eigen::Vector3d>& points_world,
                           const Eigen::Vector3d& origin_world, double max_range);
+  /// True when insertCloud() marks `point` occupied (a return): within max_range of the
+  /// origin, or max_range <= 0.
+  static bool isReturn(const Eigen::Vector3d& point, const Eigen::Vector3d& origin_world,
+                       double max_range) {
+    return max_range <= 0.0 || (point - origin_world).norm() <= max_range;
+  }
+
+  /// Adds the cells of `prior` (another map at the same resolution, e.g. an earlier visit's)
+  /// moved by `map_T_prior` into cells this map does not hold yet: cells the map already holds
+  /// keep their own evidence. Each new cell takes `log_odds_scale` times the prior cell's
+  /// log-odds (less confident than the vehicle's own returns, so that misses clear stale prior
+  /// content quickly). Each map cell samples the prior cell under its centre (no holes where
+  /// the rotation spreads cells apart). Tracked as changes like any insertion.
+  InsertStats insertPrior(const octomap::OcTree& prior, const Eigen::Isometry3d& map_T_prior,
+                          double log_odds_scale);
 
   /// Starts (or stops) recording which cells change, for takeDiff(). Off by default.
   void enableChangeTracking(bool enable);

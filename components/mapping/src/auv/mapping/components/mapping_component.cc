@@ -4,6 +4,8 @@
 #include "auv/interfaces/option_parameters.h"
 #include "auv/mapping/components/message_conversions.h"
 
+#include <cmath>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -33,6 +35,9 @@ const config::OptionTable<MappingComponent::Options>& MappingComponent::Options:
       {"initial_map", &O::initial_map,
        "a .bt map to start from (map/save's format, same resolution), e.g. an earlier "
        "mission's at the site; empty: start empty"},
+      {"align_initial_map", &O::align_initial_map,
+       "hold initial_map aside until the vehicle's returns align with it (false: trust it as "
+       "it is, in this run's frame)"},
   };
   return kTable;
 }
@@ -44,17 +49,12 @@ void MappingComponent::configure(interfaces::Node& node) {
   interfaces::declareOptions(p, "", MapBuilder::Options::table(), options_.map, true);
   interfaces::declareOptions(p, "", PoseBuffer::Options::table(), options_.poses, true);
   interfaces::declareOptions(p, "", Options::table(), options_, /*read_only=*/true);
+  interfaces::declareOptions(p, "prior_", PriorMapAlignment::Options::table(), options_.prior,
+                             /*read_only=*/true);
+  options_.prior.check();
 
   builder_ = std::make_unique<MapBuilder>(options_.map);  // checks cross-field constraints
-  if (!options_.initial_map.empty()) {
-    try {
-      builder_->load(options_.initial_map);
-    } catch (const std::runtime_error& error) {
-      throw interfaces::ParameterError("parameter 'initial_map': " + std::string(error.what()));
-    }
-    AUV_INFO(node.logger(), "started from " << options_.initial_map << " ("
-                                            << builder_->tree().getNumLeafNodes() << " leaves)");
-  }
+  loadInitialMap();
   builder_->enableChangeTracking(true);
   poses_ = std::make_unique<PoseBuffer>(options_.poses);
 
@@ -93,6 +93,102 @@ void MappingComponent::configure(interfaces::Node& node) {
         full_due_ = true;
         reply.message("full map on the next update");
       });
+}
+
+void MappingComponent::loadInitialMap() {
+  if (options_.initial_map.empty()) return;
+  try {
+    if (!options_.align_initial_map) {
+      builder_->load(options_.initial_map);
+      AUV_INFO(node_->logger(), "started from " << options_.initial_map << " ("
+                                                << builder_->tree().getNumLeafNodes()
+                                                << " leaves)");
+      return;
+    }
+    MapBuilder loader(options_.map);  // same settings and checks as the map itself
+    loader.load(options_.initial_map);
+    aligner_ = std::make_unique<PriorMapAlignment>(std::make_unique<octomap::OcTree>(loader.tree()),
+                                                   options_.prior);
+  } catch (const std::runtime_error& error) {
+    throw interfaces::ParameterError("parameter 'initial_map': " + std::string(error.what()));
+  }
+  prior_alignment_ = aligner_->result();
+  recordAlignment(*prior_alignment_);  // the record says from the start that it is held aside
+  AUV_INFO(node_->logger(),
+           "holding " << options_.initial_map << " (" << aligner_->prior().getNumLeafNodes()
+                      << " leaves) aside until the vehicle's returns align with it; the map "
+                         "holds only new sonar evidence until then");
+}
+
+void MappingComponent::collectReturn(const Eigen::Vector3d& point) {
+  if (aligner_) aligner_->addReturn(point);
+}
+
+void MappingComponent::attemptAlignment() {
+  const AlignmentResult& result = aligner_->attempt();
+  prior_alignment_ = result;
+  std::ostringstream transform;
+  transform.precision(4);
+  transform << "x " << result.x_m << " m, y " << result.y_m << " m, z " << result.z_m << " m, yaw "
+            << result.yaw_rad * 180.0 / M_PI << " deg";
+  if (result.state == AlignmentState::ALIGNED) {
+    // The prior, moved into this run's frame, fills what the vehicle has not seen itself.
+    const InsertStats stats = builder_->insertPrior(aligner_->prior(), result.navigation_T_prior,
+                                                    options_.prior.log_odds_scale);
+    full_due_ = true;
+    AUV_INFO(node_->logger(), "prior map aligned after "
+                                  << result.points_collected << " returns: prior -> "
+                                  << options_.world_frame << " " << transform.str() << "; "
+                                  << result.reason << "; added " << stats.occupied_cells
+                                  << " occupied and " << stats.free_cells << " free cells");
+  } else if (result.finished) {
+    AUV_WARN(node_->logger(),
+             "prior map " << toString(result.state) << ", not used: " << result.reason);
+  } else {
+    AUV_INFO(node_->logger(), "prior map alignment attempt " << result.attempts << ": "
+                                                             << toString(result.state) << ", "
+                                                             << result.reason);
+  }
+  recordAlignment(result);
+  if (result.finished) aligner_.reset();  // the prior is in the map, or unused
+}
+
+void MappingComponent::recordAlignment(const AlignmentResult& result) const {
+  const std::filesystem::path path =
+      std::filesystem::path(options_.map_directory) / "prior_alignment.json";
+  std::error_code error;
+  std::filesystem::create_directories(path.parent_path(), error);
+  const auto quoted = [](const std::string& text) {
+    std::string out = "\"";
+    for (char c : text) {
+      if (c == '"' || c == '\\') out += '\\';
+      out += c;
+    }
+    return out + "\"";
+  };
+  const std::time_t now = std::time(nullptr);
+  char utc[32];
+  std::strftime(utc, sizeof(utc), "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
+  std::ofstream file(path);
+  file.precision(9);
+  file << "{\n  \"state\": " << quoted(toString(result.state))
+       << ",\n  \"finished\": " << (result.finished ? "true" : "false")
+       << ",\n  \"initial_map\": " << quoted(options_.initial_map)
+       << ",\n  \"frames\": {\"from\": \"prior\", \"to\": " << quoted(options_.world_frame)
+       << "},\n  \"transform\": {\"x\": " << result.x_m << ", \"y\": " << result.y_m
+       << ", \"z\": " << result.z_m << ", \"yaw_rad\": " << result.yaw_rad
+       << ", \"yaw_deg\": " << result.yaw_rad * 180.0 / M_PI
+       << "},\n  \"inlier_fraction\": " << result.inlier_fraction
+       << ",\n  \"rms_m\": " << result.rms_m
+       << ",\n  \"ambiguity_ratio\": " << result.ambiguity_ratio
+       << ",\n  \"constraint\": " << result.constraint
+       << ",\n  \"points_used\": " << result.points_used
+       << ",\n  \"points_collected\": " << result.points_collected
+       << ",\n  \"attempts\": " << result.attempts << ",\n  \"reason\": " << quoted(result.reason)
+       << ",\n  \"stamp\": " << 1e-9 * static_cast<double>(newest_stamp_ns_)
+       << ",\n  \"time\": " << quoted(utc) << "\n}\n";
+  file.close();
+  if (!file) AUV_WARN(node_->logger(), "cannot write " << path.string());
 }
 
 void MappingComponent::onSave(const msg::SaveMapRequest& request, msg::SaveMapReply& reply) {
@@ -179,7 +275,13 @@ bool MappingComponent::tryInsertBeam(const PendingBeam& beam) {
     AUV_DEBUG(node_->logger(), "dropped beam: " << toString(status));
     return true;
   }
-  builder_->insertBeam(beam.geometry, toIsometry(*pose) * beam.mounting);
+  const Eigen::Isometry3d world_T_sensor = toIsometry(*pose) * beam.mounting;
+  builder_->insertBeam(beam.geometry, world_T_sensor);
+  if (aligner_) {
+    if (const auto point = MapBuilder::returnPoint(beam.geometry, world_T_sensor)) {
+      collectReturn(*point);
+    }
+  }
   ++beams_inserted_;
   newest_stamp_ns_ = std::max(newest_stamp_ns_, beam.stamp_ns);
   return true;
@@ -228,6 +330,11 @@ void MappingComponent::insertWorldCloud(int64_t stamp_ns,
                                         const std::vector<Eigen::Vector3d>& points,
                                         const Eigen::Vector3d& origin, double max_range) {
   builder_->insertCloud(points, origin, max_range);
+  if (aligner_) {
+    for (const Eigen::Vector3d& point : points) {
+      if (MapBuilder::isReturn(point, origin, max_range)) collectReturn(point);
+    }
+  }
   ++clouds_inserted_;
   newest_stamp_ns_ = std::max(newest_stamp_ns_, stamp_ns);
 }
@@ -243,6 +350,7 @@ void MappingComponent::tick() {
     hold_increments_until_ns_ = now_ns + static_cast<int64_t>(options_.late_joiner_hold * 1e9);
   }
   matched_readers_ = readers;
+  if (aligner_ && aligner_->attemptDue()) attemptAlignment();  // may make a FULL due
   if (1e-9 * static_cast<double>(now_ns - last_full_ns_) >= options_.full_map_period) {
     full_due_ = true;
   }

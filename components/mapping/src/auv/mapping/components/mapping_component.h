@@ -6,11 +6,13 @@
 #include <cstdint>
 #include <deque>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "auv/interfaces/component.h"
 #include "auv/mapping/map_builder.h"
 #include "auv/mapping/pose_buffer.h"
+#include "auv/mapping/prior_map_alignment.h"
 
 namespace auv::mapping {
 
@@ -26,6 +28,10 @@ namespace auv::mapping {
 /// FULL is the version (sequence number and stamp) of the update before it, pending changes
 /// going out first as an increment, so readers that hold that version skip it (MapReplica);
 /// only a clear makes a FULL a new version.
+///
+/// initial_map (align_initial_map): held aside until the vehicle's own returns align with it
+/// (PriorMapAlignment, README "Prior maps"); then moved into the map, at prior_log_odds_scale of
+/// its confidence, and a FULL follows. Each attempt goes to the log and prior_alignment.json.
 class MappingComponent : public interfaces::Component {
  public:
   struct Options {
@@ -43,6 +49,11 @@ class MappingComponent : public interfaces::Component {
     /// A .bt map to start from (map/save's format, same resolution), e.g. the map of an
     /// earlier mission at the site; empty: start with an empty map. map/clear empties it too.
     std::string initial_map;
+    /// Hold initial_map aside until the vehicle's own returns align with it (README, "Prior
+    /// maps"); false: the map from the start, trusted as it is (a map in this run's frame).
+    bool align_initial_map = true;
+    /// The alignment's settings, declared with the prefix "prior_".
+    PriorMapAlignment::Options prior;
     /// Beams newer than the latest odometry wait for it; at most this many.
     int64_t beam_queue_length = 500;
     /// Body-frame clouds newer than the latest odometry wait for it; at most this many.
@@ -64,6 +75,11 @@ class MappingComponent : public interfaces::Component {
   /// Clouds whose pose could not be looked up (not in world_frame, odometry not covering).
   uint64_t cloudsDropped() const { return clouds_dropped_; }
   uint64_t sequenceNumber() const { return sequence_number_; }
+  /// The prior map alignment's latest result; nullptr without one (no initial_map, or
+  /// align_initial_map false).
+  const AlignmentResult* priorAlignment() const {
+    return prior_alignment_ ? &*prior_alignment_ : nullptr;
+  }
 
  private:
   void onBeam(const msg::SonarBeam& beam);
@@ -92,6 +108,14 @@ class MappingComponent : public interfaces::Component {
   void insertWorldCloud(int64_t stamp_ns, const std::vector<Eigen::Vector3d>& points,
                         const Eigen::Vector3d& origin, double max_range);
   void tick();
+  /// Loads initial_map: into the map, or aside for the alignment (align_initial_map).
+  void loadInitialMap();
+  /// Feeds returns (world frame) to the alignment while it collects.
+  void collectReturn(const Eigen::Vector3d& point);
+  /// An alignment attempt: logs and records it; once ALIGNED, the prior enters the map.
+  void attemptAlignment();
+  /// Writes prior_alignment.json into map_directory.
+  void recordAlignment(const AlignmentResult& result) const;
   void publishFull();
   void publishIncrement();
   void fillCommon(msg::OctomapUpdate& update) const;
@@ -100,6 +124,8 @@ class MappingComponent : public interfaces::Component {
   Options options_;
   std::unique_ptr<MapBuilder> builder_;
   std::unique_ptr<PoseBuffer> poses_;
+  std::unique_ptr<PriorMapAlignment> aligner_;  // while it may still align
+  std::optional<AlignmentResult> prior_alignment_;
   std::deque<PendingBeam> waiting_beams_;
   std::deque<PendingCloud> waiting_clouds_;
   std::shared_ptr<interfaces::Subscription<msg::SonarBeam>> beam_sub_;
