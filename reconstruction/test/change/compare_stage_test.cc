@@ -79,6 +79,18 @@ TEST(CompareStage, FindsTheBlockAndTheGrowthAndNothingElse) {
   EXPECT_NEAR(block["max_abs_distance_m"].get<double>(), 1.0, 0.05);
   EXPECT_NEAR(block["centroid"][0].get<double>(), 3.5, 0.3);
   EXPECT_LT(block["volume_lost_m3"].get<double>(), 0.1);
+  // The appearance: survey 2's light taken out, the bleached patch (4 × 4 m, no change of
+  // shape) the one region; the block and the growth are left to the shape's comparison.
+  const auto& colour = r["appearance"];
+  ASSERT_TRUE(colour["measured"].get<bool>()) << colour.dump(1);
+  EXPECT_NEAR(colour["normalisation"]["gain_rgb"][0].get<double>(), 1.0 / 1.15, 0.05);
+  EXPECT_LT(colour["median_delta_e"].get<double>(), 3.0);
+  ASSERT_EQ(colour["clusters"].size(), 1u) << colour["clusters"].dump(1);
+  EXPECT_NEAR(colour["clusters"][0]["centroid"][0].get<double>(), -4.0, 0.3);
+  EXPECT_NEAR(colour["clusters"][0]["centroid"][1].get<double>(), 5.0, 0.3);
+  EXPECT_GE(colour["clusters"][0]["area_m2"].get<double>(), 0.8 * 16.0);
+  // At most grown by the colour radius (0.2 m) all round and a core spacing.
+  EXPECT_LE(colour["clusters"][0]["area_m2"].get<double>(), (4.0 + 0.6) * (4.0 + 0.6));
   // The files a viewer and the next tools read.
   std::ifstream ply(second.root() / "change" / "changes.ply", std::ios::binary);
   std::string header((std::istreambuf_iterator<char>(ply)), {});

@@ -7,40 +7,32 @@
 
 namespace auv::recon::change {
 
-std::vector<ChangeCluster> clusterChanges(const std::vector<Eigen::Vector3d>& core_points,
-                                          const std::vector<M3C2Point>& comparison,
-                                          double spacing_m, double link_m, double min_area_m2) {
-  std::vector<size_t> significant;
-  for (size_t i = 0; i < comparison.size(); ++i) {
-    if (comparison[i].significant) significant.push_back(i);
+std::vector<std::vector<size_t>> linkFlagged(const std::vector<Eigen::Vector3d>& points,
+                                             const std::vector<char>& flagged, double link_m) {
+  std::vector<size_t> chosen;
+  for (size_t i = 0; i < flagged.size(); ++i) {
+    if (flagged[i]) chosen.push_back(i);
   }
-  std::vector<ChangeCluster> clusters;
-  if (significant.empty()) return clusters;
-  Eigen::MatrixXd matrix(3, static_cast<Eigen::Index>(significant.size()));
-  for (size_t k = 0; k < significant.size(); ++k) {
-    matrix.col(static_cast<Eigen::Index>(k)) = core_points[significant[k]];
+  std::vector<std::vector<size_t>> groups;
+  if (chosen.empty()) return groups;
+  Eigen::MatrixXd matrix(3, static_cast<Eigen::Index>(chosen.size()));
+  for (size_t k = 0; k < chosen.size(); ++k) {
+    matrix.col(static_cast<Eigen::Index>(k)) = points[chosen[k]];
   }
   const open3d::geometry::KDTreeFlann tree(matrix);  // refers to `matrix`: kept alive here
-  const double cell = spacing_m * spacing_m;
-  std::vector<bool> seen(significant.size(), false);
+  std::vector<bool> seen(chosen.size(), false);
   std::vector<int> near;
   std::vector<double> distance2;
-  for (size_t seed = 0; seed < significant.size(); ++seed) {
+  for (size_t seed = 0; seed < chosen.size(); ++seed) {
     if (seen[seed]) continue;
-    ChangeCluster cluster;
+    std::vector<size_t> group;
     std::vector<size_t> queue{seed};
     seen[seed] = true;
     while (!queue.empty()) {
       const size_t k = queue.back();
       queue.pop_back();
-      const size_t index = significant[k];
-      cluster.core_points.push_back(index);
-      const double d = comparison[index].distance;
-      cluster.mean_distance_m += d;
-      if (std::abs(d) > std::abs(cluster.max_abs_distance_m)) cluster.max_abs_distance_m = d;
-      (d > 0 ? cluster.volume_gained_m3 : cluster.volume_lost_m3) += std::abs(d) * cell;
-      cluster.centroid += core_points[index];
-      tree.SearchRadius(Eigen::Vector3d(core_points[index]), link_m, near, distance2);
+      group.push_back(chosen[k]);
+      tree.SearchRadius(Eigen::Vector3d(points[chosen[k]]), link_m, near, distance2);
       for (int j : near) {
         if (!seen[static_cast<size_t>(j)]) {
           seen[static_cast<size_t>(j)] = true;
@@ -48,12 +40,34 @@ std::vector<ChangeCluster> clusterChanges(const std::vector<Eigen::Vector3d>& co
         }
       }
     }
-    const double n = static_cast<double>(cluster.core_points.size());
+    std::sort(group.begin(), group.end());
+    groups.push_back(std::move(group));
+  }
+  return groups;
+}
+
+std::vector<ChangeCluster> clusterChanges(const std::vector<Eigen::Vector3d>& core_points,
+                                          const std::vector<M3C2Point>& comparison,
+                                          double spacing_m, double link_m, double min_area_m2) {
+  std::vector<char> significant(comparison.size());
+  for (size_t i = 0; i < comparison.size(); ++i) significant[i] = comparison[i].significant;
+  const double cell = spacing_m * spacing_m;
+  std::vector<ChangeCluster> clusters;
+  for (std::vector<size_t>& group : linkFlagged(core_points, significant, link_m)) {
+    ChangeCluster cluster;
+    const double n = static_cast<double>(group.size());
     cluster.area_m2 = n * cell;
     if (cluster.area_m2 < min_area_m2) continue;
+    for (size_t index : group) {
+      const double d = comparison[index].distance;
+      cluster.mean_distance_m += d;
+      if (std::abs(d) > std::abs(cluster.max_abs_distance_m)) cluster.max_abs_distance_m = d;
+      (d > 0 ? cluster.volume_gained_m3 : cluster.volume_lost_m3) += std::abs(d) * cell;
+      cluster.centroid += core_points[index];
+    }
     cluster.mean_distance_m /= n;
     cluster.centroid /= n;
-    std::sort(cluster.core_points.begin(), cluster.core_points.end());
+    cluster.core_points = std::move(group);
     clusters.push_back(std::move(cluster));
   }
   std::sort(clusters.begin(), clusters.end(),

@@ -19,6 +19,11 @@ struct ChangeCluster {
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
 };
 
+/// The flagged points joined into groups: points within `link_m` of each other are one group
+/// (indices into `points`, each group sorted).
+std::vector<std::vector<size_t>> linkFlagged(const std::vector<Eigen::Vector3d>& points,
+                                             const std::vector<char>& flagged, double link_m);
+
 /// Significant core points within `link_m` of each other form one cluster; each core point
 /// stands for `spacing_m`² of surface. Clusters smaller than `min_area_m2` are dropped (noise
 /// at the level of detection). Sorted by area, largest first.

@@ -11,6 +11,7 @@
 
 #include "auv/recon/change/change_map.h"
 #include "auv/recon/change/clusters.h"
+#include "auv/recon/change/local_bias.h"
 #include "auv/recon/common/option_set.h"
 #include "auv/recon/common/report.h"
 #include "auv/recon/common/stage_error.h"
@@ -84,21 +85,51 @@ bool writeChangeMesh(const Survey& later, const Eigen::Matrix4d& transform,
 
 /// change/changes.ply: the core points with their normals and the comparison as scalar fields.
 scene::PlyData changesPly(const std::vector<Eigen::Vector3d>& cores,
-                          const std::vector<M3C2Point>& comparison) {
+                          const std::vector<M3C2Point>& comparison,
+                          const AppearanceResult& appearance) {
   scene::PlyData ply;
   ply.positions = cores;
-  std::vector<float> distance, lod, flag;
-  for (const M3C2Point& p : comparison) {
+  std::vector<float> distance, lod, flag, delta_e, colour_flag;
+  for (size_t i = 0; i < comparison.size(); ++i) {
+    const M3C2Point& p = comparison[i];
     ply.normals.push_back(p.normal);
     distance.push_back(static_cast<float>(p.distance));
     lod.push_back(static_cast<float>(p.level_of_detection));
     flag.push_back(p.significant ? 1.0f : 0.0f);
+    delta_e.push_back(static_cast<float>(appearance.delta_e[i]));
+    colour_flag.push_back(appearance.significant[i] ? 1.0f : 0.0f);
   }
   // CloudCompare loads PLY properties named scalar_<name> as the scalar fields <name>.
   ply.scalars = {{"scalar_distance", distance},
                  {"scalar_level_of_detection", lod},
-                 {"scalar_significant", flag}};
+                 {"scalar_significant", flag},
+                 {"scalar_delta_e", delta_e},
+                 {"scalar_appearance_significant", colour_flag}};
   return ply;
+}
+
+/// The appearance change, apart from the shape's: where the shape changed significantly the
+/// colour is not compared. Not measured when a cloud has no colours.
+nlohmann::json appearanceJson(const AppearanceResult& r,
+                              const std::vector<AppearanceCluster>& clusters, bool coloured) {
+  if (!coloured) return {{"measured", false}, {"why", "a dense cloud has no colours"}};
+  nlohmann::json json = {{"measured", true},
+                         {"normalisation",
+                          {{"gain_rgb", {r.gain.x(), r.gain.y(), r.gain.z()}},
+                           {"offset_rgb", {r.offset.x(), r.offset.y(), r.offset.z()}}}},
+                         {"median_delta_e", r.median_delta_e},
+                         {"threshold_delta_e", r.threshold},
+                         {"core_points_measured", r.measured},
+                         {"core_points_significant", r.significant_count},
+                         {"clusters", nlohmann::json::array()}};
+  for (const AppearanceCluster& c : clusters) {
+    json["clusters"].push_back({{"area_m2", c.area_m2},
+                                {"core_points", c.core_points.size()},
+                                {"mean_delta_e", c.mean_delta_e},
+                                {"max_delta_e", c.max_delta_e},
+                                {"centroid", {c.centroid.x(), c.centroid.y(), c.centroid.z()}}});
+  }
+  return json;
 }
 
 /// The change shown at full colour: the largest region's, or 0.1 m without regions.
@@ -127,7 +158,10 @@ void CompareOptions::check() const {
   coregistration.check();
   m3c2.check();
   AUV_RECON_CHECK_OPTION(core_spacing_m > 0, core_spacing_m, "must be > 0");
+  AUV_RECON_CHECK_OPTION(bias_radius_m == 0 || bias_radius_m >= 2 * core_spacing_m, bias_radius_m,
+                         "must be 0 (off) or >= 2 core spacings");
   AUV_RECON_CHECK_OPTION(min_cluster_area_m2 >= 0, min_cluster_area_m2, "must be >= 0");
+  appearance.check();
 }
 
 void CompareOptions::bind(OptionSet& set) {
@@ -135,6 +169,8 @@ void CompareOptions::bind(OptionSet& set) {
                  "the later survey (reads dense/fused.ply; writes change/ and report.json's "
                  "`compare` section)");
   set.add("core_spacing_m", &core_spacing_m, "m: survey 1's cloud thinned to core points");
+  set.add("bias_radius_m", &bias_radius_m,
+          "m: the surveys' smooth deformation (median distance within it) is taken out; 0 = off");
   set.add("min_cluster_area_m2", &min_cluster_area_m2,
           "m²: smaller clusters of significant change are dropped");
   set.add("normal_scale_m", &m3c2.normal_scale_m, "m: M3C2 normal scale D (diameter)");
@@ -144,6 +180,12 @@ void CompareOptions::bind(OptionSet& set) {
   set.add("min_points", &m3c2.min_points, "M3C2: fewer points of a cloud in the cylinder: none");
   set.add("registration_error_m", &m3c2.registration_error_m,
           "m: inside the level of detection (0: the co-registration's RMS on stable points)");
+  set.add("appearance_radius_m", &appearance.radius_m,
+          "m: colours of each cloud averaged within this of a core point");
+  set.add("appearance_min_delta_e", &appearance.min_delta_e,
+          "CIE ΔE*ab below which a colour change is never significant");
+  set.add("appearance_threshold_sigmas", &appearance.threshold_sigmas,
+          "a colour change is significant above median + k robust sigmas of ΔE over the site");
   set.add("voxel_m", &coregistration.voxel_m, "m: clouds thinned for the co-registration");
   set.add("max_correspondence_m", &coregistration.max_correspondence_m,
           "m: how far the navigation frames may disagree");
@@ -180,14 +222,39 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
   phase = std::chrono::steady_clock::now();
   const std::vector<Eigen::Vector3d> cores = first.VoxelDownSample(options.core_spacing_m)->points_;
   M3C2Options m3c2_options = options.m3c2;
-  if (m3c2_options.registration_error_m == 0.0) m3c2_options.registration_error_m = aligned.rms_m;
+  const bool given_error = m3c2_options.registration_error_m > 0.0;
+  if (!given_error) m3c2_options.registration_error_m = aligned.rms_m;
   const std::vector<Eigen::Vector3d> hints = towardsCameras(survey, cores);
-  const std::vector<M3C2Point> comparison =
+  std::vector<M3C2Point> comparison =
       m3c2(first.points_, second.points_, cores, m3c2_options, hints);
+  nlohmann::json bias_json = {{"radius_m", options.bias_radius_m}};
+  std::string error_source = given_error ? "option" : "co-registration rms";
+  if (options.bias_radius_m > 0.0) {
+    const LocalBias bias = removeLocalBias(cores, comparison, options.bias_radius_m);
+    bias_json["median_abs_bias_m"] = bias.median_abs_bias_m;
+    bias_json["residual_sigma_m"] = bias.residual_sigma_m;
+    if (!given_error) {
+      m3c2_options.registration_error_m = bias.residual_sigma_m;
+      error_source = "residual spread after the local bias";
+    }
+    applyLevelOfDetection(comparison, m3c2_options.registration_error_m, m3c2_options.confidence_z);
+  }
   const std::vector<ChangeCluster> clusters =
       clusterChanges(cores, comparison, options.core_spacing_m, 1.5 * options.core_spacing_m,
                      options.min_cluster_area_m2);
   const double m3c2_s = since(phase);
+
+  phase = std::chrono::steady_clock::now();
+  std::vector<char> shape_changed(comparison.size());
+  for (size_t i = 0; i < comparison.size(); ++i) shape_changed[i] = comparison[i].significant;
+  const bool coloured = first.HasColors() && second.HasColors();
+  const AppearanceResult appearance =
+      compareAppearance(first.points_, first.colors_, second.points_, second.colors_, cores,
+                        shape_changed, options.appearance);
+  const std::vector<AppearanceCluster> appearance_clusters =
+      clusterAppearance(cores, appearance, options.core_spacing_m, 1.5 * options.core_spacing_m,
+                        options.min_cluster_area_m2);
+  const double appearance_s = since(phase);
 
   size_t valid = 0, significant = 0;
   for (const M3C2Point& p : comparison) {
@@ -196,8 +263,12 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
   }
 
   nlohmann::json report = {
-      {"survey_1", survey.root().string()},
-      {"survey_2", later.root().string()},
+      {"survey_1", fs::absolute(survey.root()).lexically_normal().string()},
+      {"survey_2", fs::absolute(later.root()).lexically_normal().string()},
+      {"options",
+       {{"core_spacing_m", options.core_spacing_m},
+        {"min_cluster_area_m2", options.min_cluster_area_m2},
+        {"bias_radius_m", options.bias_radius_m}}},
       {"registration",
        {{"rms_m", aligned.rms_m},
         {"overlap", aligned.overlap},
@@ -205,12 +276,19 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
         {"rounds", aligned.rounds},
         {"transform_2_to_1", {}}}},
       {"level_of_detection_registration_error_m", m3c2_options.registration_error_m},
+      {"level_of_detection_registration_error_source", error_source},
+      {"local_bias", bias_json},
       {"orientation", hints.empty() ? "option" : "towards survey 1's cameras"},
       {"core_points", cores.size()},
       {"core_points_measured", valid},
       {"core_points_significant", significant},
       {"clusters", nlohmann::json::array()},
-      {"seconds", {{"read", read_s}, {"coregistration", coregistration_s}, {"m3c2", m3c2_s}}}};
+      {"appearance", appearanceJson(appearance, appearance_clusters, coloured)},
+      {"seconds",
+       {{"read", read_s},
+        {"coregistration", coregistration_s},
+        {"m3c2", m3c2_s},
+        {"appearance", appearance_s}}}};
   for (int r = 0; r < 4; ++r) {
     report["registration"]["transform_2_to_1"].push_back(
         {aligned.transform(r, 0), aligned.transform(r, 1), aligned.transform(r, 2),
@@ -219,7 +297,7 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
   for (const ChangeCluster& c : clusters) report["clusters"].push_back(clusterJson(c));
 
   StagedOutput staged(later.root() / "change");
-  scene::writePly(staged.path() / "changes.ply", changesPly(cores, comparison));
+  scene::writePly(staged.path() / "changes.ply", changesPly(cores, comparison, appearance));
   const double scale_m = colourScale(clusters);
   writeChangeMap(staged.path() / "change_map.png", cores, comparison, options.core_spacing_m,
                  scale_m);
@@ -236,6 +314,8 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
   nlohmann::json section = report;
   section.erase("clusters");
   section["clusters"] = clusters.size();
+  if (section["appearance"].contains("clusters"))
+    section["appearance"]["clusters"] = appearance_clusters.size();
   updateReport(later.report(), kStage, section);
   return report;
 }
@@ -259,6 +339,15 @@ StageReport CompareStage::runWith(const Survey& survey, const CompareOptions& op
            << c["centroid"][0].get<double>() << ", " << c["centroid"][1].get<double>() << ", "
            << c["centroid"][2].get<double>() << ")";
     report.lines.push_back(region.str());
+  }
+  const nlohmann::json& colour = r["appearance"];
+  if (colour["measured"].get<bool>()) {
+    std::ostringstream line2;
+    line2 << kStage << ": appearance: " << colour["core_points_significant"].get<size_t>() << " of "
+          << colour["core_points_measured"].get<size_t>() << " core points changed colour (ΔE*ab > "
+          << colour["threshold_delta_e"].get<double>() << " after normalising survey 2's colours), "
+          << colour["clusters"].size() << " regions";
+    report.lines.push_back(line2.str());
   }
   std::ostringstream summary;
   summary << r["clusters"].size() << " changed regions";

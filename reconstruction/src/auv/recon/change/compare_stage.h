@@ -4,11 +4,13 @@
 // (coregistration.h), compared by M3C2 at core points thinned from survey 1's cloud (m3c2.h),
 // the significant changes clustered (clusters.h), and written into survey 2:
 //
-//   change/changes.ply     core points: normal, distance, level_of_detection, significant
+//   change/changes.ply     core points: normal, distance, level_of_detection, significant,
+//                          and the appearance change (appearance.h): delta_e, appearance
 //   change/change_map.png  the top-down change map (change_map.h)
 //   change/mesh_change.ply survey 2's mesh/mesh.ply, vertices coloured by the change
 //   change/report.json     the registration, the counts, every cluster (area, distances,
-//                          volumes, centroid); also the `compare` section of report.json
+//                          volumes, centroid), the appearance change (colour normalisation,
+//                          threshold, its clusters); also the `compare` section of report.json
 //
 // Not chained by `auv recon run`: it needs two surveys.
 #include <filesystem>
@@ -17,6 +19,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "auv/recon/change/appearance.h"
 #include "auv/recon/change/coregistration.h"
 #include "auv/recon/change/m3c2.h"
 #include "auv/recon/common/stage.h"
@@ -32,7 +35,12 @@ struct CompareOptions {
   std::string later;  ///< survey 2 (the positional after survey 1); the outputs go there
   CoregistrationOptions coregistration;
   M3C2Options m3c2;
-  double core_spacing_m = 0.2;        ///< survey 1's cloud thinned to one core point per voxel
+  AppearanceOptions appearance;
+  double core_spacing_m = 0.2;  ///< survey 1's cloud thinned to one core point per voxel
+  /// m: the two surveys' smooth deformation, the median distance within this radius, is taken
+  /// out of the distances (local_bias.h); 0 = off. Changes must be smaller than about half
+  /// this neighbourhood's area.
+  double bias_radius_m = 4.0;
   double min_cluster_area_m2 = 0.05;  ///< smaller clusters of significant change are dropped
 
   void check() const;

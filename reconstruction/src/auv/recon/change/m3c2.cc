@@ -5,9 +5,9 @@
 #include <stdexcept>
 #include <string>
 
-#include <open3d/geometry/KDTreeFlann.h>
 #include <Eigen/Eigenvalues>
 
+#include "auv/recon/change/indexed_cloud.h"
 #include "auv/recon/common/stage_error.h"
 
 namespace auv::recon::change {
@@ -25,34 +25,6 @@ void M3C2Options::check() const {
 }
 
 namespace {
-
-Eigen::MatrixXd toMatrix(const std::vector<Eigen::Vector3d>& points) {
-  Eigen::MatrixXd matrix(3, static_cast<Eigen::Index>(points.size()));
-  for (size_t i = 0; i < points.size(); ++i) matrix.col(static_cast<Eigen::Index>(i)) = points[i];
-  return matrix;
-}
-
-/// A cloud with its search tree (Open3D's tree refers to the matrix: both live here).
-class IndexedCloud {
- public:
-  explicit IndexedCloud(const std::vector<Eigen::Vector3d>& points)
-      : points_(points), matrix_(toMatrix(points)) {
-    if (!points.empty()) tree_.SetMatrixData(matrix_);
-  }
-  /// Indices of the points within `radius` of `centre`.
-  std::vector<int> within(const Eigen::Vector3d& centre, double radius) const {
-    std::vector<int> indices;
-    std::vector<double> distance2;
-    if (!points_.empty()) tree_.SearchRadius(centre, radius, indices, distance2);
-    return indices;
-  }
-  const Eigen::Vector3d& operator[](int i) const { return points_[static_cast<size_t>(i)]; }
-
- private:
-  const std::vector<Eigen::Vector3d>& points_;
-  Eigen::MatrixXd matrix_;
-  open3d::geometry::KDTreeFlann tree_;
-};
 
 /// Unit normal of the least-squares plane through the points (zero with fewer than three or
 /// when they are collinear).
@@ -118,6 +90,12 @@ AxisStatistics alongAxis(const IndexedCloud& cloud, const Eigen::Vector3d& core,
 
 }  // namespace
 
+double levelOfDetection(const M3C2Point& p, double registration_error_m, double confidence_z) {
+  return confidence_z *
+         (std::sqrt(p.spread1 * p.spread1 / p.count1 + p.spread2 * p.spread2 / p.count2) +
+          registration_error_m);
+}
+
 std::vector<M3C2Point> m3c2(const std::vector<Eigen::Vector3d>& cloud1,
                             const std::vector<Eigen::Vector3d>& cloud2,
                             const std::vector<Eigen::Vector3d>& core_points,
@@ -158,9 +136,7 @@ std::vector<M3C2Point> m3c2(const std::vector<Eigen::Vector3d>& cloud1,
     if (s1.count < options.min_points || s2.count < options.min_points) continue;
     out.distance = s2.mean - s1.mean;
     out.level_of_detection =
-        options.confidence_z *
-        (std::sqrt(s1.spread * s1.spread / s1.count + s2.spread * s2.spread / s2.count) +
-         options.registration_error_m);
+        levelOfDetection(out, options.registration_error_m, options.confidence_z);
     out.significant = std::abs(out.distance) > out.level_of_detection;
   }
   return result;

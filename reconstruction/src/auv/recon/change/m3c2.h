@@ -46,6 +46,9 @@ struct M3C2Point {
   bool valid() const { return distance == distance; }
 };
 
+/// z (sqrt(s1²/n1 + s2²/n2) + registration_error): the level of detection of a measured point.
+double levelOfDetection(const M3C2Point& p, double registration_error_m, double confidence_z);
+
 /// M3C2 of `cloud2` against `cloud1` at `core_points`. `orientation_hints`, when not empty (one
 /// per core point), gives each normal's side (e.g. towards the cameras that saw the point);
 /// otherwise options.orientation does. Throws OptionError on bad options and

@@ -9,6 +9,22 @@ namespace auv::recon::change {
 
 bool onSyntheticBlock(double x, double y) { return x > 2.0 && x < 5.0 && y > 1.0 && y < 4.0; }
 bool onSyntheticGrowth(double x, double y) { return x > -6.0 && x < -2.0 && y > -6.0 && y < -2.0; }
+bool onSyntheticBleaching(double x, double y) { return x > -6.0 && x < -2.0 && y > 3.0 && y < 7.0; }
+
+namespace {
+
+/// Sand and rock in bands, bleached white where the changed epoch says; the changed epoch's
+/// light is warmer and brighter.
+Eigen::Matrix<uint8_t, 3, 1> syntheticColour(double x, double y, bool changed, std::mt19937& rng) {
+  std::normal_distribution<double> noise(0.0, 0.01);
+  Eigen::Vector3d c(0.45 + 0.15 * std::sin(0.9 * x), 0.42 + 0.12 * std::cos(0.7 * y), 0.30);
+  if (changed && onSyntheticBleaching(x, y)) c = Eigen::Vector3d(0.85, 0.85, 0.80);
+  if (changed) c = Eigen::Vector3d(1.15 * c.x() + 0.03, 1.05 * c.y(), 0.9 * c.z() + 0.05);
+  c += Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+  return (255.0 * c.cwiseMax(0.0).cwiseMin(1.0)).array().round().cast<uint8_t>();
+}
+
+}  // namespace
 
 void writeSyntheticSurvey(const std::filesystem::path& root, const SyntheticSurvey& survey) {
   std::mt19937 rng(survey.seed);
@@ -22,6 +38,7 @@ void writeSyntheticSurvey(const std::filesystem::path& root, const SyntheticSurv
       if (survey.changed && onSyntheticBlock(x, y)) up += 1.0;
       if (survey.changed && onSyntheticGrowth(x, y)) up += 0.3;
       ply.positions.push_back(Eigen::Vector3d(x, y, 20.0 - up) + survey.offset);
+      ply.colors.push_back(syntheticColour(x, y, survey.changed, rng));
     }
   }
   std::filesystem::create_directories(root / "dense");
