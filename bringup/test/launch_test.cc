@@ -1071,13 +1071,24 @@ TEST(ShippedLaunchTest, VehicleGivesTheMappingItsInitialMap) {
     if (*initial_map) arguments["initial_map"] = initial_map;
     const LaunchDescription launch = parseLaunchFile(file, arguments);
     std::string given = "(no mapping)";
+    bool align = false;
     for (const ProcessDescription& process : launch.processes) {
       for (const ComponentDescription& c : process.components) {
-        if (c.component == "mapping") given = c.parameters["initial_map"].as<std::string>();
+        if (c.component != "mapping") continue;
+        given = c.parameters["initial_map"].as<std::string>();
+        align = c.parameters["align_initial_map"].as<bool>();
       }
     }
     EXPECT_EQ(given, initial_map);
+    EXPECT_TRUE(align) << "an earlier visit's map is aligned before it is trusted";
   }
+  const LaunchDescription known =
+      parseLaunchFile(file, {{"initial_map", "true.bt"}, {"align_initial_map", "false"}});
+  bool align = true;
+  for (const ProcessDescription& process : known.processes)
+    for (const ComponentDescription& c : process.components)
+      if (c.component == "mapping") align = c.parameters["align_initial_map"].as<bool>();
+  EXPECT_FALSE(align);
 }
 
 // The campaign's baseline: replanning:= reaches the planner (default: the paper's repair).

@@ -274,7 +274,9 @@ def run_mission(world, seed, planner, args, runs_dir, out_dir):
                f"replanning:={planner}"]
     command += args.launch_arg
     if args.prior_map:
-        command.append(f"initial_map:={true_map_for(world, seed, runs_dir, map_resolution(args))}")
+        # The true map is in the world frame the run navigates in: nothing to align.
+        command += [f"initial_map:={true_map_for(world, seed, runs_dir, map_resolution(args))}",
+                    "align_initial_map:=false"]
     started = time.monotonic()
     with open(os.path.join(out_dir, f"{world}-{seed}-{planner}.log"), "w") as log:
         try:
