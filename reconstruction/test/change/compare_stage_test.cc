@@ -98,6 +98,20 @@ TEST(CompareStage, FindsTheBlockAndTheGrowthAndNothingElse) {
   EXPECT_NE(header.find("property float scalar_distance"), std::string::npos) << header;
   EXPECT_NE(header.find("property float scalar_level_of_detection"), std::string::npos);
   EXPECT_EQ(readReportSection(second.report(), "compare")["clusters"].get<size_t>(), 2u);
+  // The 3-D view: the coloured mesh drawn over a white background, red on the block.
+  const cv::Mat view = cv::imread((second.root() / "change" / "change_view.png").string());
+  ASSERT_FALSE(view.empty());
+  size_t red = 0, background = 0;
+  for (int y = 0; y < view.rows; ++y) {
+    for (int x = 0; x < view.cols; ++x) {
+      const cv::Vec3b p = view.at<cv::Vec3b>(y, x);
+      red += p[2] > 150 && p[0] < 60 && p[1] < 60;
+      background += p == cv::Vec3b(255, 255, 255);
+    }
+  }
+  EXPECT_GT(red, 2000u) << "the block and the growth, in red";
+  EXPECT_GT(background, 1000u);
+  EXPECT_LT(background, static_cast<size_t>(view.total()) * 9 / 10);
   // The top-down map: north up, east right, 0.2 m cells of 4 px from (x, y) = (10, -10).
   const cv::Mat map = cv::imread((second.root() / "change" / "change_map.png").string());
   ASSERT_FALSE(map.empty());

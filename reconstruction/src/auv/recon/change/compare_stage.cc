@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <sstream>
 
 #include <open3d/geometry/KDTreeFlann.h>
@@ -10,6 +11,7 @@
 #include <open3d/geometry/TriangleMesh.h>
 
 #include "auv/recon/change/change_map.h"
+#include "auv/recon/change/change_view.h"
 #include "auv/recon/change/clusters.h"
 #include "auv/recon/change/local_bias.h"
 #include "auv/recon/common/option_set.h"
@@ -59,12 +61,13 @@ std::vector<Eigen::Vector3d> towardsCameras(const Survey& survey,
 }
 
 /// Survey 2's mesh in survey 1's frame, each vertex coloured by the change at the nearest core
-/// point within `reach_m` (grey beyond: not compared). False when survey 2 has no mesh.
-bool writeChangeMesh(const Survey& later, const Eigen::Matrix4d& transform,
-                     const std::vector<Eigen::Vector3d>& cores,
-                     const std::vector<M3C2Point>& comparison, double reach_m, double scale_m,
-                     const fs::path& file) {
-  if (!fs::exists(later.mesh() / "mesh.ply")) return false;
+/// point within `reach_m` (grey beyond: not compared), written to `file` and returned. Nothing
+/// when survey 2 has no mesh.
+std::optional<open3d::geometry::TriangleMesh> writeChangeMesh(
+    const Survey& later, const Eigen::Matrix4d& transform,
+    const std::vector<Eigen::Vector3d>& cores, const std::vector<M3C2Point>& comparison,
+    double reach_m, double scale_m, const fs::path& file) {
+  if (!fs::exists(later.mesh() / "mesh.ply")) return std::nullopt;
   open3d::geometry::TriangleMesh mesh = scene::readMesh(later.mesh() / "mesh.ply", kStage);
   mesh.Transform(transform);
   Eigen::MatrixXd matrix(3, static_cast<Eigen::Index>(cores.size()));
@@ -80,7 +83,7 @@ bool writeChangeMesh(const Survey& later, const Eigen::Matrix4d& transform,
     }
   }
   scene::writeMeshPly(file, mesh);
-  return true;
+  return mesh;
 }
 
 /// change/changes.ply: the core points with their normals and the comparison as scalar fields.
@@ -301,13 +304,14 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
   const double scale_m = colourScale(clusters);
   writeChangeMap(staged.path() / "change_map.png", cores, comparison, options.core_spacing_m,
                  scale_m);
-  report["coloured_mesh"] =
+  const std::optional<open3d::geometry::TriangleMesh> coloured_mesh =
       writeChangeMesh(later, aligned.transform, cores, comparison,
                       // a changed surface lies up to max_depth from its core point
                       std::hypot(2.0 * options.core_spacing_m, options.m3c2.max_depth_m), scale_m,
-                      staged.path() / "mesh_change.ply")
-          ? "mesh_change.ply"
-          : "none: survey 2 has no mesh/mesh.ply";
+                      staged.path() / "mesh_change.ply");
+  report["coloured_mesh"] =
+      coloured_mesh ? "mesh_change.ply" : "none: survey 2 has no mesh/mesh.ply";
+  if (coloured_mesh) writeChangeView(staged.path() / "change_view.png", *coloured_mesh);
   writeFileAtomically(staged.path() / "report.json", report.dump(2) + "\n");
   staged.commit();
   report["seconds"]["total"] = since(start);

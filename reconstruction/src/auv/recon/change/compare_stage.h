@@ -8,6 +8,7 @@
 //                          and the appearance change (appearance.h): delta_e, appearance
 //   change/change_map.png  the top-down change map (change_map.h)
 //   change/mesh_change.ply survey 2's mesh/mesh.ply, vertices coloured by the change
+//   change/change_view.png that mesh seen from above and to the side (change_view.h)
 //   change/report.json     the registration, the counts, every cluster (area, distances,
 //                          volumes, centroid), the appearance change (colour normalisation,
 //                          threshold, its clusters); also the `compare` section of report.json
