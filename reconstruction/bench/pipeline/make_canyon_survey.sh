@@ -23,7 +23,12 @@
 # traverse and most of the way round the outer rock), 4800 frames, for ~300 keyframes. Usage:
 #   reconstruction/bench/pipeline/make_canyon_survey.sh [--survey DIR] [--run DIR] [--full]
 #       [--start S] [--seconds S] [--fps F] [--width W] [--height H] [--visibility M]
-#       [--threads N] [--seed N] [--calibrate] [--no-recordings]
+#       [--threads N] [--seed N] [--world NAME|SCENARIO.yaml] [--initial-map MAP.bt]
+#       [--calibrate] [--no-recordings]
+# --world: the world of the mission (default canyon), e.g. a later visit of the canyon with its
+# changes (`auv sim generate canyon --epoch 2`: <dir>/canyon_epoch2.yaml); --seed is then the
+# sensors' noise only. --initial-map MAP.bt: the mission starts from an earlier visit's map
+# (<run>/mission/map.bt), aligned to this visit's sonar returns before it is trusted.
 # --no-recordings leaves recordings/ to `auv recon pull` from a recorder serving
 # <survey>.truth/vehicle/recordings (what scripts/run-demo.sh does).
 # Paths are relative to the workspace root (default survey auv_runs/survey-canyon-eval, mission
@@ -42,6 +47,8 @@ height=1014
 visibility=12
 threads=2
 seed=1
+world=canyon
+initial_map=
 calibrate=0
 recordings=1
 while [ $# -gt 0 ]; do
@@ -57,6 +64,8 @@ while [ $# -gt 0 ]; do
     --visibility) visibility=$2; shift 2 ;;
     --threads) threads=$2; shift 2 ;;
     --seed) seed=$2; shift 2 ;;
+    --world) world=$2; shift 2 ;;
+    --initial-map) initial_map=$2; shift 2 ;;
     --calibrate) calibrate=1; shift ;;
     --no-recordings) recordings=0; shift ;;
     -h|--help) sed -n '2,30p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
@@ -83,10 +92,11 @@ EOF
 then
   step "reusing the finished mission $run"
 else
-  step "canyon mission (seed $seed) on domain 46 -> $run"
+  step "mission in $world (seed $seed) on domain 46 -> $run"
   rm -rf "$run"
-  "${guard[@]}" auv launch bringup/launch/vehicle.yaml world:=canyon seed:="$seed" \
+  "${guard[@]}" auv launch bringup/launch/vehicle.yaml world:="$world" seed:="$seed" \
     real_time_factor:=8 domain:=46 run_dir:="$run" auto_mission:=true recorder:=false \
+    ${initial_map:+initial_map:="$initial_map"} \
     > "$run.log" 2>&1 || { echo "make_canyon_survey: the mission failed, see $run.log" >&2; exit 1; }
   python3 -c "import json,sys; s=json.load(open('$run/mission/summary.json')); print('mission:', s['state'], s['message'])"
 fi

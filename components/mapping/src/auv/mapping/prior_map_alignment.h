@@ -59,10 +59,10 @@ class PriorMapAlignment {
   /// Meaning, unit and range of each field: table() (prior_map_alignment.cc); the mapping
   /// component declares them with the prefix "prior_".
   struct Options {
-    int64_t min_points = 2000;    ///< returns (distinct cells) before the first attempt
-    int64_t retry_points = 1000;  ///< new returns between attempts
-    int64_t max_points = 40000;   ///< give up (FAILED / DEGENERATE) at this many
-    double min_extent_m = 8.0;    ///< structure returns' extent along their main direction
+    int64_t min_points = 500;    ///< returns (distinct cells) before the first attempt
+    int64_t retry_points = 250;  ///< new returns between attempts
+    int64_t max_points = 40000;  ///< give up (FAILED / DEGENERATE) at this many
+    double min_extent_m = 8.0;   ///< structure returns' extent along their main direction
     double search_radius_m = 5.0;
     double search_yaw_deg = 10.0;
     double min_inlier_fraction = 0.6;

@@ -287,7 +287,10 @@ void classify(const std::vector<Cell>& cells, const std::vector<Eigen::Vector3d>
       const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
       const Eigen::Vector3d values = solver.eigenvalues();  // ascending
       const bool planar = values(0) < 0.25 * values(1);
-      horizontal = planar && std::abs(solver.eigenvectors().col(0).z()) >= cos_30;
+      // A seabed patch spreads both ways; one line of cells (a horizontal profiling sonar's trace
+      // along a wall, all at one depth) also fits a level plane but is a wall.
+      const bool spread = values(1) > 0.1 * values(2);
+      horizontal = planar && spread && std::abs(solver.eigenvectors().col(0).z()) >= cos_30;
     }
     (horizontal ? seabed : structure)->push_back(means[i]);
   }
