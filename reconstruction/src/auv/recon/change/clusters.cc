@@ -48,7 +48,8 @@ std::vector<std::vector<size_t>> linkFlagged(const std::vector<Eigen::Vector3d>&
 
 std::vector<ChangeCluster> clusterChanges(const std::vector<Eigen::Vector3d>& core_points,
                                           const std::vector<M3C2Point>& comparison,
-                                          double spacing_m, double link_m, double min_area_m2) {
+                                          double spacing_m, double link_m, double min_area_m2,
+                                          double min_change_m) {
   std::vector<char> significant(comparison.size());
   for (size_t i = 0; i < comparison.size(); ++i) significant[i] = comparison[i].significant;
   const double cell = spacing_m * spacing_m;
@@ -65,6 +66,7 @@ std::vector<ChangeCluster> clusterChanges(const std::vector<Eigen::Vector3d>& co
       (d > 0 ? cluster.volume_gained_m3 : cluster.volume_lost_m3) += std::abs(d) * cell;
       cluster.centroid += core_points[index];
     }
+    if (std::abs(cluster.max_abs_distance_m) < min_change_m) continue;
     cluster.mean_distance_m /= n;
     cluster.centroid /= n;
     cluster.core_points = std::move(group);

@@ -164,6 +164,7 @@ void CompareOptions::check() const {
   AUV_RECON_CHECK_OPTION(bias_radius_m == 0 || bias_radius_m >= 2 * core_spacing_m, bias_radius_m,
                          "must be 0 (off) or >= 2 core spacings");
   AUV_RECON_CHECK_OPTION(min_cluster_area_m2 >= 0, min_cluster_area_m2, "must be >= 0");
+  AUV_RECON_CHECK_OPTION(min_change_m >= 0, min_change_m, "must be >= 0");
   appearance.check();
 }
 
@@ -174,6 +175,9 @@ void CompareOptions::bind(OptionSet& set) {
   set.add("core_spacing_m", &core_spacing_m, "m: survey 1's cloud thinned to core points");
   set.add("bias_radius_m", &bias_radius_m,
           "m: the surveys' smooth deformation (median distance within it) is taken out; 0 = off");
+  set.add("min_change_m", &min_change_m,
+          "m: the smallest change of interest: regions whose largest |distance| is under it are "
+          "dropped");
   set.add("min_cluster_area_m2", &min_cluster_area_m2,
           "m²: smaller clusters of significant change are dropped");
   set.add("normal_scale_m", &m3c2.normal_scale_m, "m: M3C2 normal scale D (diameter)");
@@ -244,7 +248,7 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
   }
   const std::vector<ChangeCluster> clusters =
       clusterChanges(cores, comparison, options.core_spacing_m, 1.5 * options.core_spacing_m,
-                     options.min_cluster_area_m2);
+                     options.min_cluster_area_m2, options.min_change_m);
   const double m3c2_s = since(phase);
 
   phase = std::chrono::steady_clock::now();
@@ -271,6 +275,7 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
       {"options",
        {{"core_spacing_m", options.core_spacing_m},
         {"min_cluster_area_m2", options.min_cluster_area_m2},
+        {"min_change_m", options.min_change_m},
         {"bias_radius_m", options.bias_radius_m}}},
       {"registration",
        {{"rms_m", aligned.rms_m},

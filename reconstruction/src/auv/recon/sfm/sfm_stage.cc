@@ -87,7 +87,8 @@ void SfmStageOptions::bind(OptionSet& set) {
   set.add("accept_partial", &accept_partial,
           "a partial model goes to sparse/ and the stage succeeds with a warning");
   set.add("navigation", &navigation,
-          "TUM trajectory (e.g. <run>/ground_truth/navigation.tum): metric scale and gravity");
+          "TUM trajectory (e.g. <run>/ground_truth/navigation.tum): metric scale and gravity "
+          "(default: the survey's navigation.tum, if any)");
   set.add("threads", &threads, "Ceres threads");
   set.add("refine_focal_length", &m.refine_focal_length,
           "self-calibrate the focal length of cameras that only have a prior (import)");
@@ -219,11 +220,16 @@ SfmStageResult runSfmStage(const Survey& survey, const SfmStageOptions& options)
       for (const auto& k : store.read(view.name).keypoints) c.push_back(k.rgb);
     }
   }
+  // The vehicle's navigation: the option, else the survey's navigation.tum (as match reads
+  // it), so a simulated or logged survey comes out metric, in its navigation frame.
+  fs::path navigation = options.navigation;
+  if (navigation.empty() && fs::exists(survey.root() / "navigation.tum"))
+    navigation = survey.root() / "navigation.tum";
   std::vector<TimedPosition> trajectory;
   std::map<std::string, double> times;
-  if (!options.navigation.empty()) {
+  if (!navigation.empty()) {
     try {
-      trajectory = readTumTrajectory(options.navigation);
+      trajectory = readTumTrajectory(navigation);
       times =
           readKeyframeTimes(survey.keyframes(), Survey::cameraFolders(survey.corrected(), kStage));
     } catch (const std::runtime_error& e) {
@@ -272,7 +278,7 @@ SfmStageResult runSfmStage(const Survey& survey, const SfmStageOptions& options)
     sum /= std::max<size_t>(point.track.size(), 1);
     point.rgb = sum.array().round().cast<uint8_t>();
   }
-  if (!options.navigation.empty()) {
+  if (!navigation.empty()) {
     summary.navigation = alignToNavigation(rec, times, trajectory);
     if (!summary.navigation.applied) {
       std::cerr << "sfm: navigation alignment not applied: " << summary.navigation.reason << "\n";
@@ -370,7 +376,7 @@ SfmStageResult runSfmStage(const Survey& survey, const SfmStageOptions& options)
         {"ignore_two_view_tracks", options.mapper.ignore_two_view_tracks},
         {"loss", options.loss},
         {"loss_scale_px", options.mapper.ba.loss_scale_px},
-        {"navigation", options.navigation}}}};
+        {"navigation", navigation.string()}}}};
   std::vector<std::string> unregistered;
   for (uint32_t id : result.unregistered) unregistered.push_back(names.at(id));
   section["unregistered_images"] = unregistered;
@@ -380,7 +386,7 @@ SfmStageResult runSfmStage(const Survey& survey, const SfmStageOptions& options)
   nlohmann::json reasons = nlohmann::json::object();
   for (const auto& [id, why] : result.unregistered_reasons) reasons[names.at(id)] = why;
   section["unregistered_reasons"] = reasons;
-  if (!options.navigation.empty()) {
+  if (!navigation.empty()) {
     section["navigation"] = {{"applied", summary.navigation.applied},
                              {"images", summary.navigation.images},
                              {"scale", summary.navigation.similarity.scale},

@@ -30,8 +30,8 @@ struct SfmStageOptions {
   double min_registered_ratio = 0.5;
   bool accept_partial = false;
   /// TUM trajectory of the vehicle's navigation (e.g. <run>/ground_truth/navigation.tum):
-  /// when set, the model is scaled to metres and turned into its frame (navigation.h). Empty:
-  /// the model keeps SfM's arbitrary frame and scale.
+  /// the model is scaled to metres and turned into its frame (navigation.h). Empty: the
+  /// survey's navigation.tum when it has one, else SfM's arbitrary frame and scale.
   std::string navigation;
   int threads = 2;  ///< Ceres threads
 
