@@ -15,11 +15,26 @@
 #      incremental SfM, dense matching, Poisson surface, texturing -> a textured 3D model;
 #   6. `auv recon evaluate` against the simulator's world (F-scores, camera error, texture PSNR)
 #      and `auv recon figures` (per-camera contribution, navigation vs SfM trajectory).
+# --two-visits: then a second visit of the same canyon after seeded changes (`auv sim generate
+#   canyon --epoch 2`: a fallen block, a removed and a moved boulder, growth, scour, a bleached
+#   patch under the first traverse): its mission, survey and reconstruction, `auv recon compare`
+#   of the two surveys and `auv recon evaluate` of the change against the simulator's truth.
 # Options: AUV_DEMO_WORLD (canyon), AUV_DEMO_SEED (1), AUV_DEMO_SPEED (real-time factor, 8),
 #          AUV_DEMO_VIDEO_SECONDS (simulated seconds of video from 55 s, 80),
-#          AUV_DEMO_RUN, AUV_DEMO_SURVEY (folders under auv_runs/).
+#          AUV_DEMO_RUN, AUV_DEMO_SURVEY (folders under auv_runs/),
+#          AUV_DEMO_CHANGES_SEED (1: which changes the second visit finds).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+two_visits=0
+for arg in "$@"; do
+  case "$arg" in
+    --two-visits) two_visits=1 ;;
+    -h|--help) sed -n '2,30p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    *) echo "run-demo: unknown option $arg (--two-visits, --help)" >&2; exit 2 ;;
+  esac
+done
+[ $two_visits = 1 ] && [ "${AUV_DEMO_WORLD:-canyon}" != canyon ] &&
+  { echo "run-demo: --two-visits is the canyon's (AUV_DEMO_WORLD=canyon)" >&2; exit 2; }
 ./scripts/install-deps.sh
 ./scripts/build.sh
 set +u; source install/setup.bash; set -u
@@ -86,3 +101,37 @@ exit $status
 '
 echo
 echo "demo: done (traffic stayed on loopback); run folder: $AUV_DEMO_RUN, survey: $AUV_DEMO_SURVEY"
+[ $two_visits = 1 ] || exit 0
+
+export AUV_DEMO_CHANGES_SEED=${AUV_DEMO_CHANGES_SEED:-1}
+export AUV_DEMO_SITE2=auv_runs/canyon-epoch2-site AUV_DEMO_RUN2=$AUV_DEMO_RUN-2
+export AUV_DEMO_SURVEY2=$AUV_DEMO_SURVEY-2
+"${guard[@]}" bash -c '
+set -euo pipefail
+step() { printf "\n\033[1m== %s\033[0m\n" "$*"; }
+step "auv sim generate canyon --seed $AUV_DEMO_SEED --epoch 2 --changes-seed $AUV_DEMO_CHANGES_SEED   (the site, changed)"
+auv sim generate canyon --seed "$AUV_DEMO_SEED" --epoch 2 --changes-seed "$AUV_DEMO_CHANGES_SEED" \
+  --out "$AUV_DEMO_SITE2"
+sed -n "/^changes:/,\$p" "$AUV_DEMO_SITE2/canyon_epoch2.yaml"
+step "second visit: mission from the first visit'"'"'s map, cameras and survey (make_canyon_survey.sh --world $AUV_DEMO_SITE2/canyon_epoch2.yaml --initial-map $AUV_DEMO_RUN/mission/map.bt)"
+rm -rf "$AUV_DEMO_RUN2"
+reconstruction/bench/pipeline/make_canyon_survey.sh --world "$AUV_DEMO_SITE2/canyon_epoch2.yaml" \
+  --seed 2 --run "$AUV_DEMO_RUN2" --survey "$AUV_DEMO_SURVEY2" --seconds "$AUV_DEMO_VIDEO_SECONDS" \
+  --initial-map "$AUV_DEMO_RUN/mission/map.bt"
+cat "$AUV_DEMO_RUN2/maps/prior_alignment.json" 2>/dev/null || true
+step "auv recon run $AUV_DEMO_SURVEY2"
+auv recon run "$AUV_DEMO_SURVEY2"
+step "auv recon compare $AUV_DEMO_SURVEY $AUV_DEMO_SURVEY2   (what changed)"
+status=0
+auv recon compare "$AUV_DEMO_SURVEY" "$AUV_DEMO_SURVEY2" || status=$?
+step "auv recon evaluate $AUV_DEMO_SURVEY2   (the model and the change against the truth)"
+auv recon evaluate "$AUV_DEMO_SURVEY2" || status=$?
+step "results"
+for f in change/changes.ply change/change_map.png change/mesh_change.ply change/report.json \
+         evaluation.json; do
+  echo "  $(printf "%-22s" "$f") $AUV_DEMO_SURVEY2/$f"
+done
+exit $status
+'
+echo
+echo "demo: second visit done; survey $AUV_DEMO_SURVEY2, changes in $AUV_DEMO_SURVEY2/change/"

@@ -21,9 +21,10 @@ namespace auv::recon::evaluate::testing {
 
 namespace fs = std::filesystem;
 
-/// A fresh folder under the test's working directory.
+/// A fresh folder under the system's temporary directory (not the working directory: a test
+/// run from the source tree must not leave folders in it).
 inline fs::path freshFolder(const std::string& name) {
-  const fs::path folder = fs::current_path() / ("evaluate_test_" + name);
+  const fs::path folder = fs::temp_directory_path() / ("auv_evaluate_test_" + name);
   fs::remove_all(folder);
   fs::create_directories(folder);
   return folder;
