@@ -7,6 +7,16 @@
 
 namespace auv::recon::change {
 
+nlohmann::json clusterJson(const ChangeCluster& c) {
+  return {{"area_m2", c.area_m2},
+          {"core_points", c.core_points.size()},
+          {"mean_distance_m", c.mean_distance_m},
+          {"max_abs_distance_m", c.max_abs_distance_m},
+          {"volume_gained_m3", c.volume_gained_m3},
+          {"volume_lost_m3", c.volume_lost_m3},
+          {"centroid", {c.centroid.x(), c.centroid.y(), c.centroid.z()}}};
+}
+
 std::vector<std::vector<size_t>> linkFlagged(const std::vector<Eigen::Vector3d>& points,
                                              const std::vector<char>& flagged, double link_m) {
   std::vector<size_t> chosen;

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <nlohmann/json.hpp>
 
 #include "auv/recon/change/m3c2.h"
 
@@ -18,6 +19,9 @@ struct ChangeCluster {
   double volume_lost_m3 = 0.0;      ///< sum of the negative distances × spacing² (as > 0)
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
 };
+
+/// A region as report.json lists it (area, core points, distances, volumes, centroid).
+nlohmann::json clusterJson(const ChangeCluster& cluster);
 
 /// The flagged points joined into groups: points within `link_m` of each other are one group
 /// (indices into `points`, each group sorted).

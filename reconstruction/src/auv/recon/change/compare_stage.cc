@@ -144,16 +144,6 @@ double colourScale(const std::vector<ChangeCluster>& clusters) {
   return scale_m > 0.0 ? scale_m : 0.1;
 }
 
-nlohmann::json clusterJson(const ChangeCluster& c) {
-  return {{"area_m2", c.area_m2},
-          {"core_points", c.core_points.size()},
-          {"mean_distance_m", c.mean_distance_m},
-          {"max_abs_distance_m", c.max_abs_distance_m},
-          {"volume_gained_m3", c.volume_gained_m3},
-          {"volume_lost_m3", c.volume_lost_m3},
-          {"centroid", {c.centroid.x(), c.centroid.y(), c.centroid.z()}}};
-}
-
 }  // namespace
 
 void CompareOptions::check() const {

@@ -188,16 +188,6 @@ double relativeError(double measured, double truth) {
   return truth > 0 ? (measured - truth) / truth : kNaN;
 }
 
-json clusterJson(const change::ChangeCluster& c) {
-  return {{"area_m2", c.area_m2},
-          {"core_points", c.core_points.size()},
-          {"mean_distance_m", c.mean_distance_m},
-          {"max_abs_distance_m", c.max_abs_distance_m},
-          {"volume_gained_m3", c.volume_gained_m3},
-          {"volume_lost_m3", c.volume_lost_m3},
-          {"centroid", {c.centroid.x(), c.centroid.y(), c.centroid.z()}}};
-}
-
 json regionJson(const TrueChangeRegion& truth, const RegionScore& score) {
   json j = {{"name", truth.name},
             {"change", truth.change},
@@ -214,7 +204,7 @@ json regionJson(const TrueChangeRegion& truth, const RegionScore& score) {
   const bool gained = truth.volume_gained_m3 >= truth.volume_lost_m3;
   const double true_volume = gained ? truth.volume_gained_m3 : truth.volume_lost_m3;
   const double volume = gained ? m.volume_gained_m3 : m.volume_lost_m3;
-  j["measured"] = clusterJson(m);
+  j["measured"] = change::clusterJson(m);
   j["measured"].erase("core_points");
   j["errors"] = {
       {"mean_distance_m", m.mean_distance_m - truth.mean_distance_m},
@@ -287,7 +277,7 @@ json changeScoresJson(const ChangeScores& scores, const ChangeTruth& truth,
   }
   json clusters = json::array();
   for (const ClusterScore& c : scores.clusters) {
-    json j = clusterJson(c.cluster);
+    json j = change::clusterJson(c.cluster);
     j["verdict"] = c.verdict;
     j["region"] =
         c.region >= 0 ? json(truth.regions[static_cast<size_t>(c.region)].name) : json(nullptr);
