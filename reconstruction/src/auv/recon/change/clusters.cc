@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include <open3d/geometry/KDTreeFlann.h>
+#include "auv/recon/change/indexed_cloud.h"
 
 namespace auv::recon::change {
 
@@ -25,14 +25,10 @@ std::vector<std::vector<size_t>> linkFlagged(const std::vector<Eigen::Vector3d>&
   }
   std::vector<std::vector<size_t>> groups;
   if (chosen.empty()) return groups;
-  Eigen::MatrixXd matrix(3, static_cast<Eigen::Index>(chosen.size()));
-  for (size_t k = 0; k < chosen.size(); ++k) {
-    matrix.col(static_cast<Eigen::Index>(k)) = points[chosen[k]];
-  }
-  const open3d::geometry::KDTreeFlann tree(matrix);  // refers to `matrix`: kept alive here
+  std::vector<Eigen::Vector3d> chosen_points;
+  for (size_t i : chosen) chosen_points.push_back(points[i]);
+  const IndexedCloud cloud(chosen_points);
   std::vector<bool> seen(chosen.size(), false);
-  std::vector<int> near;
-  std::vector<double> distance2;
   for (size_t seed = 0; seed < chosen.size(); ++seed) {
     if (seen[seed]) continue;
     std::vector<size_t> group;
@@ -42,8 +38,7 @@ std::vector<std::vector<size_t>> linkFlagged(const std::vector<Eigen::Vector3d>&
       const size_t k = queue.back();
       queue.pop_back();
       group.push_back(chosen[k]);
-      tree.SearchRadius(Eigen::Vector3d(points[chosen[k]]), link_m, near, distance2);
-      for (int j : near) {
+      for (int j : cloud.within(points[chosen[k]], link_m)) {
         if (!seen[static_cast<size_t>(j)]) {
           seen[static_cast<size_t>(j)] = true;
           queue.push_back(static_cast<size_t>(j));

@@ -226,9 +226,11 @@ void writeChangeTruth(const ChangeTruth& truth, const std::string& dir,
 bool writeScenarioChangeTruth(const Scenario& scenario, const std::string& dir,
                               const ChangeTruthOptions& options) {
   if (scenario.changes.empty()) return false;
-  std::vector<AppliedChange> applied;
-  const Mesh after = loadWorldMesh(scenario, nullptr, &applied);
+  // One read of the mesh file: the later world is the earlier one with the changes applied.
   const Mesh before = loadWorldMeshBeforeChanges(scenario);
+  Mesh after = before;
+  const std::vector<AppliedChange> applied =
+      applySiteChanges(after, scenario.changes, scenario.file);
   writeChangeTruth(measureChangeTruth(before, after, applied, options), dir,
                    fs::path(scenario.file).filename().string(), options);
   Mesh geometry;
