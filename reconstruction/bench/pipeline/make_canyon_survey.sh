@@ -2,7 +2,7 @@
 # The simulated canyon survey every reconstruction figure of issues 6 and 7 is measured on.
 #
 #   1. the canyon inspection mission (auv launch bringup/launch/vehicle.yaml, auto_mission) on
-#      DDS domain 46, or a finished run given with --run (reused when it succeeded);
+#      DDS domain 46 (--domain), or a finished run given with --run (reused when it succeeded);
 #   2. a render folder beside it: the run's scenario with the survey's camera settings
 #      (1352 x 1014, 4 fps, water visibility 12 m), its true and navigation trajectories, and
 #      the three cameras rendered over the chosen span with `auv sim render` (the ground truth
@@ -24,7 +24,7 @@
 #   reconstruction/bench/pipeline/make_canyon_survey.sh [--survey DIR] [--run DIR] [--full]
 #       [--start S] [--seconds S] [--fps F] [--width W] [--height H] [--visibility M]
 #       [--threads N] [--seed N] [--world NAME|SCENARIO.yaml] [--initial-map MAP.bt]
-#       [--calibrate] [--no-recordings]
+#       [--calibrate] [--no-recordings] [--domain N]
 # --world: the world of the mission (default canyon), e.g. a later visit of the canyon with its
 # changes (`auv sim generate canyon --epoch 2`: <dir>/canyon_epoch2.yaml); --seed is then the
 # sensors' noise only. --initial-map MAP.bt: the mission starts from an earlier visit's map
@@ -51,6 +51,7 @@ world=canyon
 initial_map=
 calibrate=0
 recordings=1
+domain=46
 while [ $# -gt 0 ]; do
   case "$1" in
     --survey) survey=$2; shift 2 ;;
@@ -68,6 +69,7 @@ while [ $# -gt 0 ]; do
     --initial-map) initial_map=$2; shift 2 ;;
     --calibrate) calibrate=1; shift ;;
     --no-recordings) recordings=0; shift ;;
+    --domain) domain=$2; shift 2 ;;
     -h|--help) sed -n '2,30p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) echo "make_canyon_survey: unknown option $1 (--help)" >&2; exit 2 ;;
   esac
@@ -80,7 +82,7 @@ guard=()
 step() { printf '\n\033[1m== %s\033[0m\n' "$*"; }
 t0=$(date +%s)
 
-# 1. The mission (domain 46: test/README.md's table).
+# 1. The mission (domain 46 by default: test/README.md's table; never two runs on one domain).
 if python3 - "$run" <<'EOF'
 import json, sys
 try:
@@ -92,10 +94,10 @@ EOF
 then
   step "reusing the finished mission $run"
 else
-  step "mission in $world (seed $seed) on domain 46 -> $run"
+  step "mission in $world (seed $seed) on domain $domain -> $run"
   rm -rf "$run"
   "${guard[@]}" auv launch bringup/launch/vehicle.yaml world:="$world" seed:="$seed" \
-    real_time_factor:=8 domain:=46 run_dir:="$run" auto_mission:=true recorder:=false \
+    real_time_factor:=8 domain:="$domain" run_dir:="$run" auto_mission:=true recorder:=false \
     ${initial_map:+initial_map:="$initial_map"} \
     > "$run.log" 2>&1 || { echo "make_canyon_survey: the mission failed, see $run.log" >&2; exit 1; }
   python3 -c "import json,sys; s=json.load(open('$run/mission/summary.json')); print('mission:', s['state'], s['message'])"
