@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <set>
+#include <fstream>
 #include <sstream>
 
 #include "auv/sim/world/change_truth.h"
@@ -94,6 +95,33 @@ TEST(ChangePlanTest, GenerateEpoch2WritesALaterVisitThatLoadsWithItsTruth) {
             2);
   EXPECT_NE(err.str().find("--changes-along: expected 0 <= from < to <= 1"), std::string::npos)
       << err.str();
+}
+
+TEST(ChangePlanTest, NoChangesWritesAControlVisitWithAnEmptyTruth) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("auv_change_control_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  std::ostringstream out, err;
+  ASSERT_EQ(runGenerateCommand(
+                {"canyon", "--detail", "0.3", "--epoch", "2", "--no-changes", "--out", dir.string()},
+                out, err),
+            0)
+      << err.str();
+  const Scenario later = loadScenario((dir / "canyon_epoch2.yaml").string());
+  EXPECT_TRUE(later.changes.empty());
+  EXPECT_TRUE(later.later_visit);
+  EXPECT_FALSE(loadScenario((dir / "canyon.yaml").string()).later_visit);
+  ASSERT_TRUE(writeScenarioChangeTruth(later, (dir / "truth").string()));
+  std::ifstream json(dir / "truth" / "changes.json");
+  const std::string text((std::istreambuf_iterator<char>(json)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("\"regions\": []"), std::string::npos) << text;
+  EXPECT_TRUE(fs::is_regular_file(dir / "truth" / "world.ply"));
+  EXPECT_FALSE(writeScenarioChangeTruth(loadScenario((dir / "canyon.yaml").string()),
+                                        (dir / "none").string()));
+  fs::remove_all(dir);
+
+  EXPECT_EQ(runGenerateCommand({"canyon", "--no-changes"}, out, err), 2);
+  EXPECT_NE(err.str().find("--no-changes is for --epoch 2"), std::string::npos) << err.str();
 }
 
 }  // namespace

@@ -185,7 +185,8 @@ ChangeTruth readChangeTruth(const fs::path& json_file) {
       in.fail(path + ".name", "\"" + truth.regions.back().name + "\" twice");
     }
   }
-  readPoints(truth.ply_file, truth);
+  // A control visit (`changes: []`) has no regions and so no points: every change is false.
+  if (!truth.regions.empty()) readPoints(truth.ply_file, truth);
   return truth;
 }
 

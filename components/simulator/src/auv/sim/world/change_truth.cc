@@ -225,7 +225,7 @@ void writeChangeTruth(const ChangeTruth& truth, const std::string& dir,
 
 bool writeScenarioChangeTruth(const Scenario& scenario, const std::string& dir,
                               const ChangeTruthOptions& options) {
-  if (scenario.changes.empty()) return false;
+  if (!scenario.later_visit) return false;
   // One read of the mesh file: the later world is the earlier one with the changes applied.
   const Mesh before = loadWorldMeshBeforeChanges(scenario);
   Mesh after = before;

@@ -63,8 +63,9 @@ void writeChangeTruth(const ChangeTruth& truth, const std::string& dir,
 
 /// For a scenario with `changes:`: measures the true change and writes changes.json,
 /// changes.ply and the later visit's world geometry `world.ply` (world frame, what the
-/// evaluation measures a reconstruction of this visit against) into `dir`. Returns false (and
-/// writes nothing) for a scenario without changes.
+/// evaluation measures a reconstruction of this visit against) into `dir`; `changes: []` gives
+/// a truth with no regions (a control: every change found is false). Returns false (and
+/// writes nothing) for a scenario without a `changes:` section.
 bool writeScenarioChangeTruth(const Scenario& scenario, const std::string& dir,
                               const ChangeTruthOptions& options = {});
 

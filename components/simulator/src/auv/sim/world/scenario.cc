@@ -162,6 +162,7 @@ Scenario loadScenario(const std::string& path) {
   }
   readMissionPlanning(root.child("mission"), s.seabed_depth, s.mission);
   s.changes = readSiteChanges(root);
+  s.later_visit = root.has("changes");
   return s;
 }
 

@@ -75,6 +75,9 @@ struct Scenario {
   MissionPlanning mission;
   /// What changed at the site since an earlier visit (`changes:`), applied by loadWorldMesh.
   std::vector<SiteChange> changes;
+  /// The scenario has a `changes:` section, even an empty one (`changes: []`, a later visit
+  /// where nothing changed: a control); `auv sim render` then writes the change truth.
+  bool later_visit = false;
 
   /// The whole file; modules read their own sections (`vehicle`, `navigation`, `sonar`,
   /// `multibeam`, `dvl_beams`, `cameras`, `simulation`) with their own options' fromYaml().

@@ -249,7 +249,7 @@ std::vector<SiteChange> planSiteChanges(const GeneratedWorld& world,
 std::string siteChangesYaml(const std::vector<SiteChange>& changes) {
   std::ostringstream out;
   out << "# What changed since the earlier visit (components/simulator/README.md, Sites that "
-         "change).\nchanges:\n";
+         "change).\nchanges:" << (changes.empty() ? " []  # none: a control visit" : "") << "\n";
   for (const SiteChange& c : changes) {
     out << "  - {name: " << c.name << ", type: " << toString(c.type);
     switch (c.type) {

@@ -37,6 +37,8 @@ void usage(std::ostream& out) {
          "  --changes-seed N   seed of the changes (default 1)\n"
          "  --changes-along F,T  the stretch of the first query's route they lie under, as\n"
          "                     fractions of its length (default 0.25,0.5)\n"
+         "  --no-changes       --epoch 2 with `changes: []`: a later visit where nothing\n"
+         "                     changed (a control: every change found in it is false)\n"
          "  --list             print the worlds and exit\n"
          "  -h, --help         print this help\n";
 }
@@ -66,6 +68,7 @@ int runGenerateCommand(const std::vector<std::string>& args, std::ostream& out, 
   std::vector<std::string> worlds;
   int epoch = 1;
   ChangePlanOptions changes;
+  bool no_changes = false;
   auto usageError = [&](const std::string& message) {
     err << kPrefix << message << " (see --help)\n";
     return 2;
@@ -125,9 +128,14 @@ int runGenerateCommand(const std::vector<std::string>& args, std::ostream& out, 
       }
       continue;
     }
+    if (arg == "--no-changes") {
+      no_changes = true;
+      continue;
+    }
     if (!arg.empty() && arg[0] == '-') return usageError("unknown option '" + arg + "'");
     worlds.push_back(arg);
   }
+  if (no_changes && epoch != 2) return usageError("--no-changes is for --epoch 2");
   if (worlds.empty())
     return usageError("which world? give one of " + [] {
       std::string names;
@@ -152,7 +160,10 @@ int runGenerateCommand(const std::vector<std::string>& args, std::ostream& out, 
       const GeneratedWorld world = generateWorld(name, options);
       std::string yaml = writeWorld(world, out_dir);
       if (epoch == 2)
-        yaml += " and " + writeEpochScenario(world, planSiteChanges(world, changes), out_dir, 2);
+        yaml += " and " + writeEpochScenario(
+                              world,
+                              no_changes ? std::vector<SiteChange>{} : planSiteChanges(world, changes),
+                              out_dir, 2);
       std::ostringstream line;
       line << std::fixed << std::setprecision(1) << name << ": " << world.stats.triangles
            << " triangles, texture " << world.stats.texture_width << "x"
