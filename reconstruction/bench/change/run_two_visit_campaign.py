@@ -23,9 +23,12 @@ in progress is redone); files from several machines are merged by --report, whic
 
   reconstruction/bench/change/run_two_visit_campaign.py [--seeds 8] [--first-seed 1]
       [--world-seed 1] [--changes-along F,T] [--work DIR] [--results FILE.jsonl] [--domain 47]
-      [--keep-runs]
+      [--keep-runs] [--control]
   reconstruction/bench/change/run_two_visit_campaign.py --report ROWS.jsonl...
   reconstruction/bench/change/run_two_visit_campaign.py --rescore --results NEW.jsonl [--work DIR]
+
+--control also flies a control visit: the site unchanged (`auv sim generate --epoch 2
+--no-changes`), where every change found is false (key changes_seed "none").
 
 --rescore runs only compare and evaluate again on every finished seed in --work (after a change
 to either; the missions and reconstructions are kept) and writes their rows to --results.
@@ -49,6 +52,7 @@ ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "..")
 SURVEY_SCRIPT = os.path.join(ROOT, "reconstruction", "bench", "pipeline", "make_canyon_survey.sh")
 RESULTS = os.path.join(ROOT, "bench_results", "two_visit_campaign.jsonl")
 WORK = os.path.join(ROOT, "bench_results", "two_visit")
+CONTROL = "none"  # the changes seed of a control visit: nothing changed
 WORLD = "canyon"  # make_canyon_survey.sh films the canyon's first traverse
 
 
@@ -145,8 +149,9 @@ def second_visit(args, seed, visit1_run, visit1_survey):
 
     try:
         generate = ["auv", "sim", "generate", WORLD, "--seed", str(args.world_seed), "--epoch",
-                    "2", "--changes-seed", str(seed), "--out", site]
-        if args.changes_along:
+                    "2", "--out", site]
+        generate += ["--no-changes"] if seed == CONTROL else ["--changes-seed", str(seed)]
+        if args.changes_along and seed != CONTROL:
             generate += ["--changes-along", args.changes_along]
         timed("generate", generate)
         timed("mission_and_render",
@@ -199,7 +204,7 @@ def rescore(args):
     """compare + evaluate again on the finished seeds of --work; rows to --results."""
     visit1_survey = os.path.join(args.work, f"{WORLD}-w{args.world_seed}-visit1", "survey")
     old = {json.dumps(r["key"], sort_keys=True): r for r in load_rows([args.old_results])}
-    for seed in range(args.first_seed, args.first_seed + args.seeds):
+    for seed in [CONTROL] + list(range(args.first_seed, args.first_seed + args.seeds)):
         folder = os.path.join(args.work, f"{WORLD}-w{args.world_seed}-changes{seed}")
         if not os.path.exists(os.path.join(folder, "survey", "report.json")):
             continue
@@ -245,14 +250,14 @@ def percent(part, whole):
 def report(paths):
     """Per seed and pooled figures of one or more result files (later rows of a key win)."""
     rows = {json.dumps(r["key"], sort_keys=True): r for r in load_rows(paths)}
-    rows = sorted(rows.values(), key=lambda r: (r["world_seed"], r["changes_seed"]))
+    rows = sorted(rows.values(), key=lambda r: (r["world_seed"], str(r["changes_seed"]).zfill(6)))
     print("| change seed | mission | prior aligned | detected / measured | not measured | "
           "true / false clusters | false change (clusters) | block volumes | reg. RMS | "
           "recon + compare |")
     print("|---|---|---|---|---|---|---|---|---|---|")
     pooled = {"detected": 0, "missed": 0, "not_measured": 0, "true": 0, "false": 0,
               "stable": 0, "stable_false": 0}
-    volumes, by_type, failed = [], {}, 0
+    volumes, by_type, failed, controls = [], {}, 0, []
     for r in rows:
         if r.get("status") != "evaluated":
             failed += 1
@@ -262,6 +267,12 @@ def report(paths):
             continue
         s = r["scores"]
         rs, cs, st = s["regions_scored"], s["clusters_scored"], s["stable"]
+        if r["changes_seed"] == CONTROL:  # not pooled: its clusters are all false
+            controls.append(f"control visit (nothing changed): {cs['false']} false clusters, "
+                            f"false change in clusters "
+                            f"{percent(st['core_points_significant_in_clusters'], st['core_points_measured'])}"
+                            f", all significant {percent(st['core_points_significant'], st['core_points_measured'])}")
+            continue
         pooled["detected"] += rs["detected"]
         pooled["missed"] += rs["missed"]
         pooled["not_measured"] += rs["not_measured"]
@@ -300,6 +311,8 @@ def report(paths):
           f"block volumes within 20 %: {within}/{len(volumes)}"
           + (f" (median |error| {100 * statistics.median(abs(v) for v in volumes):.0f} %)"
              if volumes else ""))
+    for line in controls:
+        print(line)
     print("per type: " + "; ".join(f"{t}: " + ", ".join(f"{k} {v}" for k, v in sorted(c.items()))
                                    for t, c in sorted(by_type.items())))
 
@@ -317,6 +330,8 @@ def parse_args():
     parser.add_argument("--domain", type=int, default=47, help="DDS domain of the missions")
     parser.add_argument("--keep-runs", action="store_true",
                         help="keep the second visits' videos and renders")
+    parser.add_argument("--control", action="store_true",
+                        help="also a control visit of the unchanged site")
     parser.add_argument("--rescore", action="store_true",
                         help="compare + evaluate again on the finished seeds of --work")
     parser.add_argument("--old-results", default=RESULTS,
@@ -342,9 +357,10 @@ def main():
         rescore(args)
         return
     done = {json.dumps(r["key"], sort_keys=True) for r in load_rows([args.results])}
-    seeds = [s for s in range(args.first_seed, args.first_seed + args.seeds)
-             if json.dumps(key(args, s), sort_keys=True) not in done]
-    log(f"{len(seeds)} change seeds to run ({args.seeds - len(seeds)} already in {args.results})")
+    seeds = [CONTROL] if args.control else []
+    seeds += list(range(args.first_seed, args.first_seed + args.seeds))
+    seeds = [s for s in seeds if json.dumps(key(args, s), sort_keys=True) not in done]
+    log(f"{len(seeds)} visits to run (the others are in {args.results})")
     if not seeds:
         report([args.results])
         return
