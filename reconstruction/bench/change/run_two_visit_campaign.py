@@ -23,7 +23,7 @@ in progress is redone); files from several machines are merged by --report, whic
 
   reconstruction/bench/change/run_two_visit_campaign.py [--seeds 8] [--first-seed 1]
       [--world-seed 1] [--changes-along F,T] [--work DIR] [--results FILE.jsonl] [--domain 47]
-      [--keep-runs] [--control]
+      [--control]
   reconstruction/bench/change/run_two_visit_campaign.py --report ROWS.jsonl...
   reconstruction/bench/change/run_two_visit_campaign.py --rescore --results NEW.jsonl [--work DIR]
 
@@ -158,21 +158,22 @@ def second_visit(args, seed, visit1_run, visit1_survey):
               [SURVEY_SCRIPT, "--world", os.path.join(site, f"{WORLD}_epoch2.yaml"), "--seed",
                str(args.world_seed + 1), "--run", run_dir, "--survey", survey, "--initial-map",
                os.path.join(visit1_run, "mission", "map.bt"), "--domain", str(args.domain)])
-        summary = read_json(os.path.join(run_dir, "mission", "summary.json"), {})
-        row["mission"] = {k: summary.get(k) for k in ("state", "collisions", "min_true_clearance_m",
-                                                   "max_navigation_error_m", "duration_s")}
-        row["prior_alignment"] = read_json(
-            os.path.join(run_dir, "maps", "prior_alignment.json"))
+        mission_facts(row, run_dir)
         timed("reconstruction", ["auv", "recon", "run", survey])
     except RuntimeError as error:
         row["status"] = "failed"
         row["error"] = str(error)
         return row
     score(row, folder, visit1_survey)
-    if not args.keep_runs:  # the videos and renders: gigabytes per seed
-        for big in (os.path.join(survey + ".truth", "vehicle"), os.path.join(survey, "recordings")):
-            shutil.rmtree(big, ignore_errors=True)
     return row
+
+
+def mission_facts(row, run_dir):
+    """The second visit's mission outcome and its prior map's alignment, into its row."""
+    summary = read_json(os.path.join(run_dir, "mission", "summary.json"), {})
+    row["mission"] = {k: summary.get(k) for k in ("state", "collisions", "min_true_clearance_m",
+                                               "max_navigation_error_m", "duration_s")}
+    row["prior_alignment"] = read_json(os.path.join(run_dir, "maps", "prior_alignment.json"))
 
 
 def score(row, folder, visit1_survey):
@@ -206,14 +207,14 @@ def rescore(args):
     old = {json.dumps(r["key"], sort_keys=True): r for r in load_rows([args.old_results])}
     for seed in [CONTROL] + list(range(args.first_seed, args.first_seed + args.seeds)):
         folder = os.path.join(args.work, f"{WORLD}-w{args.world_seed}-changes{seed}")
-        if not os.path.exists(os.path.join(folder, "survey", "report.json")):
-            continue
+        if not os.path.exists(os.path.join(folder, "survey", "evaluation.json")):
+            continue  # not finished (or in progress in another campaign)
         row = dict(old.get(json.dumps(key(args, seed), sort_keys=True), {}))
         row.update({"key": key(args, seed), "world": WORLD, "world_seed": args.world_seed,
                     "changes_seed": seed, "changes_along": args.changes_along,
                     "commit": git_commit(), "date": datetime.date.today().isoformat()})
         row.setdefault("seconds", {})
-        row.setdefault("mission", {})
+        mission_facts(row, os.path.join(folder, "run"))
         log(f"rescoring change seed {seed}")
         score(row, folder, visit1_survey)
         with open(args.results, "a") as out:
@@ -328,8 +329,6 @@ def parse_args():
     parser.add_argument("--work", default=WORK, help="folder of the visits")
     parser.add_argument("--results", default=RESULTS)
     parser.add_argument("--domain", type=int, default=47, help="DDS domain of the missions")
-    parser.add_argument("--keep-runs", action="store_true",
-                        help="keep the second visits' videos and renders")
     parser.add_argument("--control", action="store_true",
                         help="also a control visit of the unchanged site")
     parser.add_argument("--rescore", action="store_true",

@@ -64,14 +64,18 @@ std::vector<ChangeCluster> clusterChanges(const std::vector<Eigen::Vector3d>& co
     const double n = static_cast<double>(group.size());
     cluster.area_m2 = n * cell;
     if (cluster.area_m2 < min_area_m2) continue;
+    size_t of_interest = 0;  // points changed by at least min_change_m
     for (size_t index : group) {
       const double d = comparison[index].distance;
+      of_interest += std::abs(d) >= min_change_m ? 1 : 0;
       cluster.mean_distance_m += d;
       if (std::abs(d) > std::abs(cluster.max_abs_distance_m)) cluster.max_abs_distance_m = d;
       (d > 0 ? cluster.volume_gained_m3 : cluster.volume_lost_m3) += std::abs(d) * cell;
       cluster.centroid += core_points[index];
     }
-    if (std::abs(cluster.max_abs_distance_m) < min_change_m) continue;
+    // A change of interest has min_change_m over min_area_m2, not at one point: a lone spike of
+    // reconstruction noise on a patch that moved a few centimetres is not one.
+    if (of_interest == 0 || static_cast<double>(of_interest) * cell < min_area_m2) continue;
     cluster.mean_distance_m /= n;
     cluster.centroid /= n;
     cluster.core_points = std::move(group);

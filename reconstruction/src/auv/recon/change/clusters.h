@@ -30,9 +30,9 @@ std::vector<std::vector<size_t>> linkFlagged(const std::vector<Eigen::Vector3d>&
 
 /// Significant core points within `link_m` of each other form one cluster; each core point
 /// stands for `spacing_m`² of surface. Clusters smaller than `min_area_m2` are dropped (noise
-/// at the level of detection), and those whose largest |distance| is under `min_change_m` (the
-/// smallest change of interest: significant, but not a change anyone asked about). Sorted by
-/// area, largest first.
+/// at the level of detection), and those whose points changed by at least `min_change_m` (the
+/// smallest change of interest) cover less than `min_area_m2`: significant, but not a change
+/// anyone asked about. Sorted by area, largest first.
 std::vector<ChangeCluster> clusterChanges(const std::vector<Eigen::Vector3d>& core_points,
                                           const std::vector<M3C2Point>& comparison,
                                           double spacing_m, double link_m, double min_area_m2,

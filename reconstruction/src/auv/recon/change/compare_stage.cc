@@ -166,8 +166,8 @@ void CompareOptions::bind(OptionSet& set) {
   set.add("bias_radius_m", &bias_radius_m,
           "m: the surveys' smooth deformation (median distance within it) is taken out; 0 = off");
   set.add("min_change_m", &min_change_m,
-          "m: the smallest change of interest: regions whose largest |distance| is under it are "
-          "dropped");
+          "m: the smallest change of interest: regions where less than min_cluster_area_m2 "
+          "changed by at least this much are dropped");
   set.add("min_cluster_area_m2", &min_cluster_area_m2,
           "m²: smaller clusters of significant change are dropped");
   set.add("normal_scale_m", &m3c2.normal_scale_m, "m: M3C2 normal scale D (diameter)");

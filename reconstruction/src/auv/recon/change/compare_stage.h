@@ -43,7 +43,8 @@ struct CompareOptions {
   /// this neighbourhood's area.
   double bias_radius_m = 4.0;
   double min_cluster_area_m2 = 0.05;  ///< smaller clusters of significant change are dropped
-  double min_change_m = 0.1;          ///< regions whose largest |distance| is smaller are dropped
+  double min_change_m =
+      0.1;  ///< regions with less than min_cluster_area_m2 changed this much: dropped
 
   void check() const;
   void bind(OptionSet& set);

@@ -315,6 +315,7 @@ json evaluateSurvey(const Survey& survey, const fs::path& ground_truth_run,
                                           : fs::path(options.true_texture_run);
     texture["true_texture_run"] = true_texture_run.string();
     json frames = json::array();
+    json missing_videos = json::array();  // deleted after the reconstruction: the rest is scored
     for (const auto& [stem, list] : keyframes_of) {
       if (!frame_count.count(stem)) continue;
       const std::vector<int64_t> held = heldOutFrames(list, frame_count[stem], per_video);
@@ -322,6 +323,10 @@ json evaluateSurvey(const Survey& survey, const fs::path& ground_truth_run,
       fs::path video = survey.recordings() / camera_of[stem] / video_file[stem];
       if (!fs::exists(video))
         video = ground_truth_run / "vehicle" / "recordings" / camera_of[stem] / video_file[stem];
+      if (!fs::exists(video)) {
+        missing_videos.push_back(video.string());
+        continue;
+      }
       const std::vector<cv::Mat> references = readVideoFrames(video, held);
       // The same frames rendered in clear water (the true texture), when there is such a run.
       std::vector<cv::Mat> true_frames;
@@ -389,8 +394,11 @@ json evaluateSurvey(const Survey& survey, const fs::path& ground_truth_run,
         frames.push_back(entry);
       }
     }
-    texture["status"] = raw.empty() ? "no held-out frame could be rendered" : "evaluated";
+    texture["status"] = !raw.empty()              ? "evaluated"
+                        : !missing_videos.empty() ? "the filmed videos are gone"
+                                                  : "no held-out frame could be rendered";
     texture["frames"] = frames;
+    if (!missing_videos.empty()) texture["missing_videos"] = missing_videos;
     if (!raw.empty()) {
       texture["median_psnr_db"] = number(median(raw));
       texture["median_psnr_gain_offset_db"] = number(median(gain));
