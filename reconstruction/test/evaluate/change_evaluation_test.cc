@@ -273,7 +273,9 @@ TEST(ChangeTruthFile, MalformedNamedByFileAndField) {
 /// where a 1 x 1 x 0.5 m pile appeared, and compare's output in survey 1's frame.
 class ChangeEvaluationTest : public testing::SyntheticSurvey {
  protected:
-  void makeLaterSurvey() {
+  /// `with_stain`: also a bleached stain on the seabed (x -0.6..0.2, y -1.2..-0.4), an albedo
+  /// region of the truth.
+  void makeLaterSurvey(bool with_stain = false) {
     survey2_ = root_ / "survey2";
     run2_ = root_ / "run2";
     fs::copy(survey_, survey2_, fs::copy_options::recursive);
@@ -292,13 +294,18 @@ class ChangeEvaluationTest : public testing::SyntheticSurvey {
           {static_cast<uint32_t>(t(0)), static_cast<uint32_t>(t(1)), static_cast<uint32_t>(t(2))});
     }
     scene::writePly(run2_ / "ground_truth" / "world.ply", ply);
-    testing::writeChangeTruthFiles(run2_ / "ground_truth",
-                                   {rectangleRegion("pile", "add", -2, -1, -0.6, 0.4, 4.5, 0.5)});
+    std::vector<TruthRegionFixture> regions = {
+        rectangleRegion("pile", "add", -2, -1, -0.6, 0.4, 4.5, 0.5)};
+    if (with_stain)
+      regions.push_back(rectangleRegion("stain", "albedo", -0.6, 0.2, -1.2, -0.4, 5.0, 0));
+    testing::writeChangeTruthFiles(run2_ / "ground_truth", regions);
   }
 
   /// compare's core points every 0.2 m of the seabed under the cameras (not on the rock), the
   /// pile's +0.5 m significant, all in survey 1's reconstruction frame (sim_ inverse).
-  void writeLaterComparison() {
+  /// `with_appearance`: also the colour change (ΔE 2, the stain's 16 core points ΔE 20 and
+  /// significant, the pile's not compared); without, as an older compare wrote changes.ply.
+  void writeLaterComparison(bool with_appearance = false) {
     ComparisonFixture c;
     const Similarity to_model = sim_.inverse();
     for (int i = 0; i < 30; ++i) {
@@ -308,8 +315,12 @@ class ChangeEvaluationTest : public testing::SyntheticSurvey {
         const bool on_pile = x > -2 && x < -1 && y > -0.6 && y < 0.4;
         c.add(to_model.apply(Eigen::Vector3d(x, y, 5.0)), (on_pile ? 0.5 : 0.0) / sim_.scale,
               on_pile, to_model.rotation * Eigen::Vector3d(0, 0, -1));
+        const bool on_stain = x > -0.6 && x < 0.2 && y > -1.2 && y < -0.4;
+        c.delta_e.push_back(on_pile ? kNaN : on_stain ? 20.0 : 2.0);
+        c.appearance_significant.push_back(on_stain);
       }
     }
+    if (!with_appearance) c.delta_e.clear(), c.appearance_significant.clear();
     const double spacing = 0.2 / sim_.scale;  // compare ran in the model's frame
     testing::writeComparison(
         survey2_, c,
@@ -317,7 +328,8 @@ class ChangeEvaluationTest : public testing::SyntheticSurvey {
          {"registration", {{"rms_m", 0.004}, {"overlap", 0.9}, {"stable_fraction", 0.97}}},
          {"options",
           {{"core_spacing_m", spacing}, {"min_cluster_area_m2", 0.05 / (sim_.scale * sim_.scale)}}},
-         {"clusters", json::array({json::object()})}});
+         {"clusters", json::array({json::object()})},
+         {"appearance", {{"measured", true}, {"clusters", json::array({json::object()})}}}});
   }
 
   fs::path survey2_, run2_;
@@ -391,6 +403,66 @@ TEST_F(ChangeEvaluationTest, LaterSurveyScoredInTheWorldFrame) {
   EXPECT_DOUBLE_EQ(section["change_precision"].get<double>(), 1.0);
   EXPECT_NE(changeSummary(change).find("1 of 1 measured true regions detected"), std::string::npos)
       << changeSummary(change);
+}
+
+TEST_F(ChangeEvaluationTest, AppearanceScoredInTheWorldFrame) {
+  makeLaterSurvey(true);
+  writeLaterComparison(true);
+  const json r = evaluateSurvey(Survey(survey2_), run2_, quickOptions());
+  const json& change = r["change"];
+  ASSERT_EQ(change["status"], "evaluated") << change;
+  const json& a = change["appearance"];
+  ASSERT_EQ(a["status"], "evaluated") << a;
+  ASSERT_EQ(a["regions"].size(), 1u);
+  EXPECT_EQ(a["regions"][0]["name"], "stain");
+  EXPECT_EQ(a["regions"][0]["status"], "detected") << a["regions"][0];
+  EXPECT_EQ(a["clusters_scored"]["true"], 1);
+  EXPECT_EQ(a["clusters_scored"]["false"], 0);
+  EXPECT_DOUBLE_EQ(a["clusters_scored"]["precision"].get<double>(), 1.0);
+  EXPECT_DOUBLE_EQ(a["regions_scored"]["recall_measured"].get<double>(), 1.0);
+  EXPECT_EQ(a["stable"]["core_points_significant"], 0);
+  // 16 core points x (0.2 m)² in the world: the scale of survey 1's frame undone.
+  ASSERT_EQ(a["clusters"].size(), 1u);
+  EXPECT_NEAR(a["clusters"][0]["area_m2"].get<double>(), 0.64, 1e-6);
+  EXPECT_NEAR(a["clusters"][0]["centroid"][0].get<double>(), -0.2, 1e-6);
+  EXPECT_EQ(a["compare"]["clusters_in_report"], 1);
+  EXPECT_EQ(a["compare"]["clusters_rebuilt"], 1);
+  // The stain in the shape's list is the appearance's, as before.
+  EXPECT_EQ(change["regions"][1]["status"], "appearance");
+  std::ifstream in(survey2_ / "report.json");
+  const json section = json::parse(in)["stages"]["evaluate"];
+  EXPECT_EQ(section["change_appearance_status"], "evaluated");
+  EXPECT_DOUBLE_EQ(section["change_appearance_precision"].get<double>(), 1.0);
+  EXPECT_NE(changeSummary(change).find("appearance: 1 of 1 measured albedo regions detected"),
+            std::string::npos)
+      << changeSummary(change);
+}
+
+TEST_F(ChangeEvaluationTest, OlderCompareWithoutAppearanceScoresTheShapeAlone) {
+  makeLaterSurvey(true);
+  writeLaterComparison(true);
+  const json with = evaluateSurvey(Survey(survey2_), run2_, quickOptions())["change"];
+  writeLaterComparison(false);
+  const json without = evaluateSurvey(Survey(survey2_), run2_, quickOptions())["change"];
+  ASSERT_EQ(without["status"], "evaluated") << without;
+  EXPECT_EQ(without["appearance"]["status"], "not evaluated");
+  const std::string why = without["appearance"]["why"];
+  EXPECT_NE(why.find("has no scalar_delta_e, scalar_appearance_significant"), std::string::npos)
+      << why;
+  EXPECT_NE(why.find("older auv recon compare"), std::string::npos) << why;
+  ASSERT_EQ(with["appearance"]["status"], "evaluated");
+  for (const char* key : {"regions_scored", "clusters_scored", "stable", "regions", "clusters"}) {
+    EXPECT_EQ(without[key], with[key]) << key;
+  }
+  EXPECT_EQ(without["regions"][0]["status"], "detected");
+  const std::string summary = changeSummary(without);
+  EXPECT_NE(summary.find("1 of 1 measured true regions detected"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("appearance not evaluated: " + why), std::string::npos) << summary;
+  std::ifstream in(survey2_ / "report.json");
+  const json section = json::parse(in)["stages"]["evaluate"];
+  EXPECT_EQ(section["change_appearance_status"], "not evaluated");
+  EXPECT_FALSE(section.contains("change_appearance_precision"));
+  EXPECT_DOUBLE_EQ(section["change_precision"].get<double>(), 1.0);
 }
 
 TEST_F(ChangeEvaluationTest, MalformedTruthFailsTheEvaluationNamingIt) {

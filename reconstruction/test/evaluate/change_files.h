@@ -51,6 +51,29 @@ inline TruthRegionFixture rectangleRegion(const std::string& name, const std::st
   return r;
 }
 
+/// A block standing on the seabed at depth `z_base` (NED, z down) up to `z_top`, over the
+/// rectangle [x0, x1] x [y0, y1]: its top and its four sides every `step` m, as the simulator
+/// samples an added block's surface (the sides reach down to the seabed), each point with the
+/// block's height as distance.
+inline TruthRegionFixture boxRegion(const std::string& name, const std::string& type, double x0,
+                                    double x1, double y0, double y1, double z_top, double z_base,
+                                    double step = 0.05) {
+  const double height = z_base - z_top;
+  TruthRegionFixture r = rectangleRegion(name, type, x0, x1, y0, y1, z_top, height, step);
+  for (double z = z_top + step; z <= z_base + 1e-9; z += step) {
+    for (double x = x0; x <= x1 + 1e-9; x += step) {
+      r.points.emplace_back(x, y0, z);
+      r.points.emplace_back(x, y1, z);
+    }
+    for (double y = y0 + step; y < y1 - 1e-9; y += step) {
+      r.points.emplace_back(x0, y, z);
+      r.points.emplace_back(x1, y, z);
+    }
+  }
+  r.region["area_m2"] = (x1 - x0) * (y1 - y0) + 2 * ((x1 - x0) + (y1 - y0)) * height;
+  return r;
+}
+
 /// <folder>/changes.json and changes.ply of `regions`: binary little-endian PLY, float x y z,
 /// float distance, int region.
 inline void writeChangeTruthFiles(const std::filesystem::path& folder,
@@ -85,11 +108,14 @@ inline void writeChangeTruthFiles(const std::filesystem::path& folder,
   }
 }
 
-/// compare's core points: positions, normals, distances (NaN: not measured), significance.
+/// compare's core points: positions, normals, distances (NaN: not measured), significance;
+/// optionally the appearance change (empty: written as an older compare wrote them, without).
 struct ComparisonFixture {
   std::vector<Eigen::Vector3d> points, normals;
   std::vector<double> distances;
   std::vector<char> significant;
+  std::vector<double> delta_e;  ///< NaN: colour not compared
+  std::vector<char> appearance_significant;
 
   void add(const Eigen::Vector3d& p, double distance, bool significant_change,
            const Eigen::Vector3d& normal = Eigen::Vector3d(0, 0, -1)) {
@@ -100,7 +126,8 @@ struct ComparisonFixture {
   }
 };
 
-/// <survey>/change/changes.ply and report.json as compare writes them.
+/// <survey>/change/changes.ply and report.json as compare writes them (an older compare: without
+/// the appearance fields when `c` has none).
 inline void writeComparison(const std::filesystem::path& survey, const ComparisonFixture& c,
                             const nlohmann::json& report) {
   scene::PlyData ply;
@@ -115,6 +142,15 @@ inline void writeComparison(const std::filesystem::path& survey, const Compariso
   ply.scalars = {{"scalar_distance", distance},
                  {"scalar_level_of_detection", lod},
                  {"scalar_significant", flag}};
+  if (!c.appearance_significant.empty()) {
+    std::vector<float> delta_e, colour_flag;
+    for (size_t i = 0; i < c.points.size(); ++i) {
+      delta_e.push_back(static_cast<float>(c.delta_e[i]));
+      colour_flag.push_back(c.appearance_significant[i] ? 1.0f : 0.0f);
+    }
+    ply.scalars.emplace_back("scalar_delta_e", delta_e);
+    ply.scalars.emplace_back("scalar_appearance_significant", colour_flag);
+  }
   std::filesystem::create_directories(survey / "change");
   scene::writePly(survey / "change" / "changes.ply", ply);
   std::ofstream(survey / "change" / "report.json") << report.dump(2);

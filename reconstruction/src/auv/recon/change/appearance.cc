@@ -140,6 +140,14 @@ AppearanceResult compareAppearance(const std::vector<Eigen::Vector3d>& cloud1,
   return result;
 }
 
+nlohmann::json appearanceClusterJson(const AppearanceCluster& c) {
+  return {{"area_m2", c.area_m2},
+          {"core_points", c.core_points.size()},
+          {"mean_delta_e", c.mean_delta_e},
+          {"max_delta_e", c.max_delta_e},
+          {"centroid", {c.centroid.x(), c.centroid.y(), c.centroid.z()}}};
+}
+
 std::vector<AppearanceCluster> clusterAppearance(const std::vector<Eigen::Vector3d>& core_points,
                                                  const AppearanceResult& result, double spacing_m,
                                                  double link_m, double min_area_m2) {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <nlohmann/json.hpp>
 
 namespace auv::recon::change {
 
@@ -49,6 +50,9 @@ struct AppearanceCluster {
   double mean_delta_e = 0.0, max_delta_e = 0.0;
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
 };
+
+/// A region as report.json's `appearance.clusters` lists it (area, core points, ΔE, centroid).
+nlohmann::json appearanceClusterJson(const AppearanceCluster& cluster);
 
 /// Largest first; smaller than `min_area_m2` dropped.
 std::vector<AppearanceCluster> clusterAppearance(const std::vector<Eigen::Vector3d>& core_points,

@@ -125,13 +125,7 @@ nlohmann::json appearanceJson(const AppearanceResult& r,
                          {"core_points_measured", r.measured},
                          {"core_points_significant", r.significant_count},
                          {"clusters", nlohmann::json::array()}};
-  for (const AppearanceCluster& c : clusters) {
-    json["clusters"].push_back({{"area_m2", c.area_m2},
-                                {"core_points", c.core_points.size()},
-                                {"mean_delta_e", c.mean_delta_e},
-                                {"max_delta_e", c.max_delta_e},
-                                {"centroid", {c.centroid.x(), c.centroid.y(), c.centroid.z()}}});
-  }
+  for (const AppearanceCluster& c : clusters) json["clusters"].push_back(appearanceClusterJson(c));
   return json;
 }
 

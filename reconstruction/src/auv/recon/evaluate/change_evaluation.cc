@@ -10,6 +10,7 @@
 #include <open3d/t/io/PointCloudIO.h>
 
 #include "auv/recon/common/stage_error.h"
+#include "auv/recon/evaluate/appearance_scores.h"
 #include "auv/recon/evaluate/change_scores.h"
 #include "auv/recon/evaluate/change_truth.h"
 
@@ -37,8 +38,9 @@ json readJson(const fs::path& file) {
 }
 
 /// compare's change/changes.ply: the core points with normals, scalar_distance and
-/// scalar_significant (survey 1's reconstruction frame).
-WorldChange readComparison(const fs::path& file) {
+/// scalar_significant (survey 1's reconstruction frame), and scalar_delta_e and
+/// scalar_appearance_significant when compare wrote them (`missing` names those it did not).
+WorldChange readComparison(const fs::path& file, std::string& missing) {
   open3d::t::geometry::PointCloud cloud;
   if (!open3d::t::io::ReadPointCloud(file.string(), cloud,
                                      open3d::t::io::ReadPointCloudOption("ply"))) {
@@ -68,6 +70,24 @@ WorldChange readComparison(const fs::path& file) {
     change.normals.emplace_back(q[0], q[1], q[2]);
     change.distances.push_back(distance.GetDataPtr<double>()[i]);
     change.significant.push_back(flag.GetDataPtr<double>()[i] > 0.5 ? 1 : 0);
+  }
+  // The appearance fields came later: an older compare's file has the shape's change only.
+  missing.clear();
+  for (const char* property : {"scalar_delta_e", "scalar_appearance_significant"}) {
+    if (!cloud.HasPointAttr(property)) {
+      missing += (missing.empty() ? "" : ", ") + std::string(property);
+    }
+  }
+  if (!missing.empty()) return change;
+  const core::Tensor delta_e =
+      cloud.GetPointAttr("scalar_delta_e").To(core::Float64).Reshape({-1}).Contiguous();
+  const core::Tensor colour_flag = cloud.GetPointAttr("scalar_appearance_significant")
+                                       .To(core::Float64)
+                                       .Reshape({-1})
+                                       .Contiguous();
+  for (size_t i = 0; i < n; ++i) {
+    change.delta_e.push_back(delta_e.GetDataPtr<double>()[i]);
+    change.appearance_significant.push_back(colour_flag.GetDataPtr<double>()[i] > 0.5 ? 1 : 0);
   }
   return change;
 }
@@ -133,6 +153,37 @@ std::vector<char> inBothRegions(const WorldChange& change, const WellImagedSampl
   return inside;
 }
 
+/// The `appearance` object of the change section: scored, or why not (an older compare's
+/// changes.ply, clouds without colours).
+json evaluateAppearance(const ChangeTruth& truth, const WorldChange& change,
+                        const std::string& missing, const json& report,
+                        const fs::path& changes_file, const ChangeScoreOptions& options) {
+  if (!missing.empty()) {
+    return notEvaluated(changes_file.string() + " has no " + missing +
+                        ": written by an older auv recon compare; run it again to score the "
+                        "appearance");
+  }
+  const json compared = report.value("appearance", json::object());
+  size_t colour = 0, significant = 0;
+  for (size_t i = 0; i < change.points.size(); ++i) {
+    colour += change.colourMeasured(i) ? 1 : 0;
+    significant += change.colourMeasured(i) && change.appearance_significant[i] ? 1 : 0;
+  }
+  if (colour == 0) {
+    const std::string why = compared.value("why", std::string());
+    return notEvaluated("compare compared no colours" + (why.empty() ? "" : " (" + why + ")"));
+  }
+  const AppearanceScores scores = scoreAppearance(truth, change, options);
+  json result = appearanceScoresJson(scores, truth);
+  const json listed = compared.value("clusters", json::array());
+  result["compare"] = {
+      {"core_points_colour_measured", colour},
+      {"core_points_significant", significant},
+      {"clusters_in_report", listed.is_array() ? json(listed.size()) : json(nullptr)},
+      {"clusters_rebuilt", scores.clusters.size()}};
+  return result;
+}
+
 json alignmentJson(const SurveyAlignment& aligned) {
   const AlignmentResult& a = aligned.alignment;
   return {{"scale", a.similarity.scale},
@@ -141,6 +192,36 @@ json alignmentJson(const SurveyAlignment& aligned) {
           {"robust_sigma_m", a.robust_sigma_m},
           {"camera_position_error_median_m", aligned.errors.median_position_m},
           {"camera_position_error_rms_m", aligned.errors.rms_position_m}};
+}
+
+/// `value` with `digits` decimals (times `factor`), n/a when not a number (null: NaN).
+std::string fixed(const json& value, int digits, double factor = 1.0) {
+  if (!value.is_number()) return "n/a";
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(digits) << factor * value.get<double>();
+  return out.str();
+}
+
+/// The colour's scores in one clause of changeSummary's line.
+std::string appearanceClause(const json& change) {
+  if (!change.contains("appearance")) return "appearance not scored";
+  const json& a = change["appearance"];
+  if (a.value("status", "") != "evaluated") {
+    return "appearance not evaluated: " + a.value("why", std::string());
+  }
+  const json& r = a["regions_scored"];
+  const json& c = a["clusters_scored"];
+  const json& s = a["stable"];
+  std::ostringstream clause;
+  clause << "appearance: " << r["detected"].get<size_t>() << " of "
+         << r["detected"].get<size_t>() + r["missed"].get<size_t>()
+         << " measured albedo regions detected (" << r["not_measured"].get<size_t>()
+         << " not measured), precision " << fixed(c["precision"], 2) << " ("
+         << c["true"].get<size_t>() << " true, " << c["false"].get<size_t>() << " false, "
+         << c["explained_by_geometry"].get<size_t>() << " explained by geometry), false "
+         << fixed(s["false_cluster_area_m2"], 2) << " m2 in clusters ("
+         << fixed(s["false_fraction"], 2, 100.0) << " % of the stable core points with a colour)";
+  return clause.str();
 }
 
 }  // namespace
@@ -173,7 +254,8 @@ json evaluateChange(const Survey& survey, const fs::path& ground_truth_run,
   const GroundTruth truth1 = GroundTruth::load(run1);
   const SurveyAlignment aligned1 = alignSurveyToTruth(survey1, truth1, options);
   const Similarity& sim = aligned1.alignment.similarity;
-  WorldChange change = readComparison(changes_file);
+  std::string appearance_missing;
+  WorldChange change = readComparison(changes_file, appearance_missing);
   const json compare_options = report.value("options", json::object());
   change.core_spacing_m = sim.scale * compare_options.value("core_spacing_m", kCompareCoreSpacingM);
   change.min_cluster_area_m2 =
@@ -224,17 +306,13 @@ json evaluateChange(const Survey& survey, const fs::path& ground_truth_run,
       {"core_points_measured_in_both", measured_inside},
       {"visit_1_samples_well_imaged", region1.count},
       {"visit_2_samples_well_imaged", region2.count}};
+  result["appearance"] =
+      evaluateAppearance(truth, change, appearance_missing, report, changes_file, options.change);
   return result;
 }
 
 std::string changeSummary(const json& change) {
   if (change.value("status", "") != "evaluated") return change.value("why", "");
-  auto fixed = [](const json& value, int digits, double factor = 1.0) {
-    if (!value.is_number()) return std::string("n/a");
-    std::ostringstream out;
-    out << std::fixed << std::setprecision(digits) << factor * value.get<double>();
-    return out.str();
-  };
   const json& r = change["regions_scored"];
   const json& c = change["clusters_scored"];
   const json& s = change["stable"];
@@ -246,7 +324,8 @@ std::string changeSummary(const json& change) {
        << fixed(c["precision"], 2) << " (" << c["true"].get<size_t>() << " true, "
        << c["false"].get<size_t>() << " false clusters), false change "
        << fixed(s["false_area_m2"], 2) << " m2 (" << fixed(s["false_fraction"], 2, 100.0)
-       << " % of the stable core points); survey 1 aligned to its truth with camera error "
+       << " % of the stable core points); " << appearanceClause(change)
+       << "; survey 1 aligned to its truth with camera error "
        << fixed(change["survey_1"]["alignment"]["camera_position_error_median_m"], 3)
        << " m, compare's registration rms " << fixed(change["registration"]["rms_m"], 3) << " m";
   return line.str();

@@ -1,13 +1,10 @@
 #include "auv/recon/evaluate/change_scores.h"
 
-#include <algorithm>
 #include <cmath>
 #include <limits>
-#include <map>
-
-#include <open3d/geometry/KDTreeFlann.h>
 
 #include "auv/recon/common/stage_error.h"
+#include "auv/recon/evaluate/change_reach.h"
 
 using nlohmann::json;
 
@@ -16,76 +13,11 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-/// JSON has no NaN: such figures are written as null.
-json number(double value) { return std::isfinite(value) ? json(value) : json(nullptr); }
-
-double ratio(size_t part, size_t whole) {
-  return whole == 0 ? kNaN : static_cast<double>(part) / static_cast<double>(whole);
-}
-
-double segmentDistance(const Eigen::Vector3d& q, const Eigen::Vector3d& a,
-                       const Eigen::Vector3d& b) {
-  const Eigen::Vector3d ab = b - a;
-  const double length2 = ab.squaredNorm();
-  const double t = length2 > 0 ? std::clamp((q - a).dot(ab) / length2, 0.0, 1.0) : 0.0;
-  return (q - (a + t * ab)).norm();
-}
-
-/// Which true points the measured core points reach, and which region each reaches first.
-struct Reach {
-  std::vector<char> truth_measured, truth_hit;  ///< per true point
-  std::vector<int> core_region;  ///< per measured core point: the nearest region it reaches, -1
-};
-
-Reach reachTruth(const ChangeTruth& truth, const WorldChange& change, double radius_m) {
-  Reach reach;
-  reach.truth_measured.assign(truth.points.size(), 0);
-  reach.truth_hit.assign(truth.points.size(), 0);
-  reach.core_region.assign(change.points.size(), -1);
-  if (truth.points.empty()) return reach;
-  Eigen::MatrixXd matrix(3, static_cast<Eigen::Index>(truth.points.size()));
-  for (size_t j = 0; j < truth.points.size(); ++j) {
-    matrix.col(static_cast<Eigen::Index>(j)) = truth.points[j];
-  }
-  const open3d::geometry::KDTreeFlann tree(matrix);  // refers to `matrix`: kept alive here
-  std::vector<int> near;
-  std::vector<double> distance2;
-  for (size_t i = 0; i < change.points.size(); ++i) {
-    if (!change.inRegion(i) || !change.measured(i)) continue;
-    const Eigen::Vector3d a = change.points[i];
-    const Eigen::Vector3d b = a + change.distances[i] * change.normals[i];
-    tree.SearchRadius(Eigen::Vector3d(0.5 * (a + b)),
-                      radius_m + 0.5 * std::abs(change.distances[i]), near, distance2);
-    double nearest = std::numeric_limits<double>::infinity();
-    for (int index : near) {
-      const size_t j = static_cast<size_t>(index);
-      const double d = segmentDistance(truth.points[j], a, b);
-      if (d > radius_m) continue;
-      reach.truth_measured[j] = 1;
-      if (change.significant[i]) reach.truth_hit[j] = 1;
-      if (d < nearest) {
-        nearest = d;
-        reach.core_region[i] = truth.region_of_point[j];
-      }
-    }
-  }
-  return reach;
-}
-
-std::string regionStatus(const TrueChangeRegion& region, const RegionScore& score,
+std::string regionStatus(const TrueChangeRegion& region, const RegionTally& tally,
                          const ChangeScoreOptions& options) {
   if (!region.geometric) return "appearance";
   if (region.magnitude() < options.min_magnitude_m) return "below_min_magnitude";
-  if (score.truth_points == 0 ||
-      static_cast<double>(score.measured_points) <
-          options.min_measured_fraction * static_cast<double>(score.truth_points)) {
-    return "not_measured";
-  }
-  return score.hit_points > 0 &&
-                 static_cast<double>(score.hit_points) >=
-                     options.min_hit_fraction * static_cast<double>(score.measured_points)
-             ? "detected"
-             : "missed";
+  return measuredStatus(tally, options);
 }
 
 /// Each cluster: on which region, if any, and whether it counts as true, false or neither.
@@ -107,25 +39,12 @@ std::vector<ClusterScore> scoreClusters(const ChangeTruth& truth, const WorldCha
   for (const change::ChangeCluster& cluster : clusters) {
     ClusterScore score;
     score.cluster = cluster;
-    size_t inside = 0;
-    std::map<int, size_t> tally;
-    for (size_t i : cluster.core_points) {
-      inside += change.inRegion(i) ? 1 : 0;
-      if (reach.core_region[i] >= 0) ++tally[reach.core_region[i]];
-    }
-    size_t most = 0;
-    for (const auto& [region, count] : tally) {
-      score.hit_points += count;
-      if (count > most) {
-        most = count;
-        score.region = region;
-      }
-    }
-    const double n = static_cast<double>(cluster.core_points.size());
-    if (2 * inside < cluster.core_points.size()) {
+    const ClusterReach on = reachOfCluster(cluster.core_points, reach.core_region);
+    score.hit_points = on.hit_points;
+    score.region = on.region;
+    if (mostlyOutsideRegion(change, cluster.core_points)) {
       score.verdict = "outside_region";
-    } else if (score.hit_points > 0 &&
-               static_cast<double>(score.hit_points) >= options.min_hit_fraction * n) {
+    } else if (enoughHits(score.hit_points, cluster.core_points.size(), options)) {
       score.verdict =
           truth.regions[static_cast<size_t>(score.region)].geometric ? "true" : "appearance";
     } else {
@@ -195,8 +114,8 @@ json regionJson(const TrueChangeRegion& truth, const RegionScore& score) {
             {"status", score.status},
             {"magnitude_m", truth.magnitude()},
             {"truth_points", score.truth_points},
-            {"measured_fraction", number(ratio(score.measured_points, score.truth_points))},
-            {"hit_fraction", number(ratio(score.hit_points, score.measured_points))},
+            {"measured_fraction", finiteOrNull(ratio(score.measured_points, score.truth_points))},
+            {"hit_fraction", finiteOrNull(ratio(score.hit_points, score.measured_points))},
             {"clusters", score.clusters}};
   if (score.clusters.empty()) return j;
   const change::ChangeCluster& m = score.measured;
@@ -206,15 +125,16 @@ json regionJson(const TrueChangeRegion& truth, const RegionScore& score) {
   const double volume = gained ? m.volume_gained_m3 : m.volume_lost_m3;
   j["measured"] = change::clusterJson(m);
   j["measured"].erase("core_points");
-  j["errors"] = {
-      {"mean_distance_m", m.mean_distance_m - truth.mean_distance_m},
-      {"max_distance_m", m.max_abs_distance_m - truth.max_distance_m},
-      {"volume_side", gained ? "gained" : "lost"},
-      {"volume_true_m3", true_volume},
-      {"volume_measured_m3", volume},
-      {"volume_relative", number(relativeError(volume, true_volume))},
-      {"volume_gained_relative", number(relativeError(m.volume_gained_m3, truth.volume_gained_m3))},
-      {"volume_lost_relative", number(relativeError(m.volume_lost_m3, truth.volume_lost_m3))}};
+  j["errors"] = {{"mean_distance_m", m.mean_distance_m - truth.mean_distance_m},
+                 {"max_distance_m", m.max_abs_distance_m - truth.max_distance_m},
+                 {"volume_side", gained ? "gained" : "lost"},
+                 {"volume_true_m3", true_volume},
+                 {"volume_measured_m3", volume},
+                 {"volume_relative", finiteOrNull(relativeError(volume, true_volume))},
+                 {"volume_gained_relative",
+                  finiteOrNull(relativeError(m.volume_gained_m3, truth.volume_gained_m3))},
+                 {"volume_lost_relative",
+                  finiteOrNull(relativeError(m.volume_lost_m3, truth.volume_lost_m3))}};
   if (truth.isBlock()) {
     const double relative = relativeError(volume, true_volume);
     j["errors"]["volume_within_20_percent"] = std::isfinite(relative) && std::abs(relative) <= 0.2;
@@ -238,14 +158,17 @@ void ChangeScoreOptions::check() const {
 ChangeScores scoreChanges(const ChangeTruth& truth, const WorldChange& change,
                           const ChangeScoreOptions& options) {
   options.check();
-  const Reach reach = reachTruth(truth, change, options.match_radius_m);
+  std::vector<char> measured(change.points.size());
+  for (size_t i = 0; i < measured.size(); ++i) measured[i] = change.measured(i);
+  const Reach reach =
+      reachTruth(truth, change, measured, change.significant, options.match_radius_m);
+  const std::vector<RegionTally> tally = tallyRegions(truth, reach);
   ChangeScores scores;
   scores.regions.resize(truth.regions.size());
-  for (size_t j = 0; j < truth.points.size(); ++j) {
-    RegionScore& r = scores.regions[static_cast<size_t>(truth.region_of_point[j])];
-    ++r.truth_points;
-    r.measured_points += reach.truth_measured[j] ? 1 : 0;
-    r.hit_points += reach.truth_hit[j] ? 1 : 0;
+  for (size_t k = 0; k < truth.regions.size(); ++k) {
+    scores.regions[k].truth_points = tally[k].truth_points;
+    scores.regions[k].measured_points = tally[k].measured_points;
+    scores.regions[k].hit_points = tally[k].hit_points;
   }
   scores.clusters = scoreClusters(truth, change, reach, options);
   for (size_t k = 0; k < scores.clusters.size(); ++k) {
@@ -256,7 +179,7 @@ ChangeScores scoreChanges(const ChangeTruth& truth, const WorldChange& change,
   }
   for (size_t k = 0; k < truth.regions.size(); ++k) {
     RegionScore& r = scores.regions[k];
-    r.status = regionStatus(truth.regions[k], r, options);
+    r.status = regionStatus(truth.regions[k], tally[k], options);
     r.measured = combine(scores.clusters, r.clusters);
     scores.detected += r.status == "detected" ? 1 : 0;
     scores.missed += r.status == "missed" ? 1 : 0;
@@ -281,7 +204,7 @@ json changeScoresJson(const ChangeScores& scores, const ChangeTruth& truth,
     j["verdict"] = c.verdict;
     j["region"] =
         c.region >= 0 ? json(truth.regions[static_cast<size_t>(c.region)].name) : json(nullptr);
-    j["hit_fraction"] = number(ratio(c.hit_points, c.cluster.core_points.size()));
+    j["hit_fraction"] = finiteOrNull(ratio(c.hit_points, c.cluster.core_points.size()));
     clusters.push_back(j);
   }
   const StableScore& s = scores.stable;
@@ -289,17 +212,17 @@ json changeScoresJson(const ChangeScores& scores, const ChangeTruth& truth,
            {{"detected", scores.detected},
             {"missed", scores.missed},
             {"not_measured", scores.not_measured},
-            {"recall_measured", number(scores.recall_measured)},
-            {"recall_all", number(scores.recall_all)}}},
+            {"recall_measured", finiteOrNull(scores.recall_measured)},
+            {"recall_all", finiteOrNull(scores.recall_all)}}},
           {"clusters_scored",
            {{"true", scores.true_clusters},
             {"false", scores.false_clusters},
-            {"precision", number(scores.precision)}}},
+            {"precision", finiteOrNull(scores.precision)}}},
           {"stable",
            {{"core_points_measured", s.measured},
             {"core_points_significant", s.significant},
             {"core_points_significant_in_clusters", s.significant_in_clusters},
-            {"false_fraction", number(s.fraction)},
+            {"false_fraction", finiteOrNull(s.fraction)},
             {"false_area_m2", s.area_m2},
             {"false_cluster_area_m2", s.cluster_area_m2}}},
           {"regions", regions},

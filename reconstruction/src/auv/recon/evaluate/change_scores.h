@@ -46,6 +46,10 @@ struct WorldChange {
   std::vector<Eigen::Vector3d> normals;  ///< unit, the side + distances point to
   std::vector<double> distances;         ///< m; NaN: not measured
   std::vector<char> significant;
+  /// Per core point: compare's colour difference ΔE*ab (NaN: colours not compared) and whether
+  /// it is significant. Both empty when changes.ply has none (an older compare).
+  std::vector<double> delta_e;
+  std::vector<char> appearance_significant;
   /// Per core point: in the well-imaged region of both visits; empty = everywhere.
   std::vector<char> in_region;
   double core_spacing_m = 0.2;        ///< m, each core point stands for its square
@@ -54,6 +58,8 @@ struct WorldChange {
 
   bool inRegion(size_t i) const { return in_region.empty() || in_region[i]; }
   bool measured(size_t i) const { return distances[i] == distances[i]; }
+  bool hasAppearance() const { return !appearance_significant.empty(); }
+  bool colourMeasured(size_t i) const { return hasAppearance() && delta_e[i] == delta_e[i]; }
 };
 
 /// One true region against the comparison.
@@ -77,12 +83,14 @@ struct ClusterScore {
   size_t hit_points = 0;  ///< its core points reaching a true point
 };
 
-/// Significant change where nothing changed.
+/// Significant change where nothing changed (of the shape here; of the colour in
+/// appearance_scores.h).
 struct StableScore {
-  size_t measured = 0;                      ///< measured core points farther than match radius
-  size_t significant = 0;                   ///< of them significant
-  size_t significant_in_clusters = 0;       ///< of those in a scored cluster
-  double fraction = 0;                      ///< significant / measured
+  size_t measured = 0;                 ///< measured core points farther than match radius
+  size_t significant = 0;              ///< of them significant
+  size_t significant_in_clusters = 0;  ///< of those in a scored cluster
+  /// significant / measured; of the colour: significant_in_clusters / measured
+  double fraction = 0;
   double area_m2 = 0, cluster_area_m2 = 0;  ///< counts x core spacing²
 };
 

@@ -462,6 +462,13 @@ json evaluateSurvey(const Survey& survey, const fs::path& ground_truth_run,
     section["change_false_fraction"] = change["stable"]["false_fraction"];
     section["change_survey_1_camera_error_median_m"] =
         change["survey_1"]["alignment"]["camera_position_error_median_m"];
+    const json& appearance = change["appearance"];
+    section["change_appearance_status"] = appearance["status"];
+    if (appearance["status"] == "evaluated") {
+      section["change_appearance_recall"] = appearance["regions_scored"]["recall_measured"];
+      section["change_appearance_precision"] = appearance["clusters_scored"]["precision"];
+      section["change_appearance_false_area_m2"] = appearance["stable"]["false_cluster_area_m2"];
+    }
   }
   updateReport(survey.report(), kStage, section);
   return result;
