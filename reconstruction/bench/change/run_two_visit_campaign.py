@@ -136,9 +136,7 @@ def second_visit(args, seed, visit1_run, visit1_survey):
     log_file = os.path.join(folder, "log.txt")
     site, run_dir = os.path.join(folder, "site"), os.path.join(folder, "run")
     survey = os.path.join(folder, "survey")
-    row = {"key": key(args, seed), "world": WORLD, "world_seed": args.world_seed,
-           "changes_seed": seed, "changes_along": args.changes_along, "commit": git_commit(),
-           "date": datetime.date.today().isoformat(), "seconds": {}}
+    row = new_row(args, seed)
     step_start = time.time()
 
     def timed(name, command):
@@ -209,17 +207,21 @@ def rescore(args):
         folder = os.path.join(args.work, f"{WORLD}-w{args.world_seed}-changes{seed}")
         if not os.path.exists(os.path.join(folder, "survey", "evaluation.json")):
             continue  # not finished (or in progress in another campaign)
-        row = dict(old.get(json.dumps(key(args, seed), sort_keys=True), {}))
-        row.update({"key": key(args, seed), "world": WORLD, "world_seed": args.world_seed,
-                    "changes_seed": seed, "changes_along": args.changes_along,
-                    "commit": git_commit(), "date": datetime.date.today().isoformat()})
-        row.setdefault("seconds", {})
+        row = new_row(args, seed)
+        row["seconds"] = old.get(json.dumps(key(args, seed), sort_keys=True), {}).get(
+            "seconds", {})  # the mission's and reconstruction's, kept
         mission_facts(row, os.path.join(folder, "run"))
         log(f"rescoring change seed {seed}")
         score(row, folder, visit1_survey)
         with open(args.results, "a") as out:
             out.write(json.dumps(row) + "\n")
     report([args.results])
+
+
+def new_row(args, seed):
+    return {"key": key(args, seed), "world": WORLD, "world_seed": args.world_seed,
+            "changes_seed": seed, "changes_along": args.changes_along, "commit": git_commit(),
+            "date": datetime.date.today().isoformat(), "seconds": {}}
 
 
 def key(args, seed):

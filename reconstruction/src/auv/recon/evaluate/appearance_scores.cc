@@ -60,26 +60,16 @@ StableScore scoreStable(const WorldChange& change, const std::vector<char>& colo
                         const std::vector<char>& flagged, const Reach& on_albedo,
                         const Reach& on_shape,
                         const std::vector<AppearanceClusterScore>& clusters) {
-  std::vector<char> in_cluster(change.points.size(), 0);
-  for (const AppearanceClusterScore& c : clusters) {
-    if (c.verdict == "outside_region") continue;
-    for (size_t i : c.cluster.core_points) in_cluster[i] = 1;
-  }
-  StableScore stable;
+  std::vector<char> stable_points(change.points.size(), 0);
   for (size_t i = 0; i < change.points.size(); ++i) {
-    if (!change.inRegion(i) || !colour[i]) continue;
-    if (on_albedo.core_region[i] >= 0 || on_shape.core_region[i] >= 0) continue;
-    ++stable.measured;
-    if (!flagged[i]) continue;
-    ++stable.significant;
-    stable.significant_in_clusters += in_cluster[i] ? 1 : 0;
+    stable_points[i] = change.inRegion(i) && colour[i] && on_albedo.core_region[i] < 0 &&
+                       on_shape.core_region[i] < 0;
   }
-  const double cell = change.core_spacing_m * change.core_spacing_m;
+  StableScore stable =
+      tallyStable(change, stable_points, flagged, inScoredClusters(change.points.size(), clusters));
   // Lone significant points are the threshold's tail (median + k robust sigmas), which compare
   // does not report: the false share counts the clustered ones, as the campaign pools them.
   stable.fraction = ratio(stable.significant_in_clusters, stable.measured);
-  stable.area_m2 = static_cast<double>(stable.significant) * cell;
-  stable.cluster_area_m2 = static_cast<double>(stable.significant_in_clusters) * cell;
   return stable;
 }
 

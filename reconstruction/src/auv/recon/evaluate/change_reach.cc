@@ -101,6 +101,22 @@ bool mostlyOutsideRegion(const WorldChange& change, const std::vector<size_t>& c
   return 2 * inside < core_points.size();
 }
 
+StableScore tallyStable(const WorldChange& change, const std::vector<char>& stable,
+                        const std::vector<char>& flagged, const std::vector<char>& in_cluster) {
+  StableScore score;
+  for (size_t i = 0; i < change.points.size(); ++i) {
+    if (!stable[i]) continue;
+    ++score.measured;
+    if (!flagged[i]) continue;
+    ++score.significant;
+    score.significant_in_clusters += in_cluster[i] ? 1 : 0;
+  }
+  const double cell = change.core_spacing_m * change.core_spacing_m;
+  score.area_m2 = static_cast<double>(score.significant) * cell;
+  score.cluster_area_m2 = static_cast<double>(score.significant_in_clusters) * cell;
+  return score;
+}
+
 double ratio(size_t part, size_t whole) {
   return whole == 0 ? std::numeric_limits<double>::quiet_NaN()
                     : static_cast<double>(part) / static_cast<double>(whole);

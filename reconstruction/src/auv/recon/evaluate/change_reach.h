@@ -50,6 +50,22 @@ ClusterReach reachOfCluster(const std::vector<size_t>& core_points,
 /// Most of a cluster's core points outside the region of both visits: not scored.
 bool mostlyOutsideRegion(const WorldChange& change, const std::vector<size_t>& core_points);
 
+/// Per core point: in a cluster that is scored (its verdict is not outside_region).
+template <class ClusterScores>
+std::vector<char> inScoredClusters(size_t core_points, const ClusterScores& clusters) {
+  std::vector<char> in_cluster(core_points, 0);
+  for (const auto& c : clusters) {
+    if (c.verdict == "outside_region") continue;
+    for (size_t i : c.cluster.core_points) in_cluster[i] = 1;
+  }
+  return in_cluster;
+}
+
+/// The `stable` core points (measured, in the region of both visits, reaching no truth), those
+/// of them `flagged` and of those `in_cluster`, and their areas; the fraction is the caller's.
+StableScore tallyStable(const WorldChange& change, const std::vector<char>& stable,
+                        const std::vector<char>& flagged, const std::vector<char>& in_cluster);
+
 /// part / whole; NaN when whole is 0.
 double ratio(size_t part, size_t whole);
 

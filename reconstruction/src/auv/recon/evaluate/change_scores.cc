@@ -82,23 +82,13 @@ change::ChangeCluster combine(const std::vector<ClusterScore>& clusters,
 
 StableScore scoreStable(const WorldChange& change, const Reach& reach,
                         const std::vector<ClusterScore>& clusters) {
-  std::vector<char> in_cluster(change.points.size(), 0);
-  for (const ClusterScore& c : clusters) {
-    if (c.verdict == "outside_region") continue;
-    for (size_t i : c.cluster.core_points) in_cluster[i] = 1;
-  }
-  StableScore stable;
+  std::vector<char> stable_points(change.points.size(), 0);
   for (size_t i = 0; i < change.points.size(); ++i) {
-    if (!change.inRegion(i) || !change.measured(i) || reach.core_region[i] >= 0) continue;
-    ++stable.measured;
-    if (!change.significant[i]) continue;
-    ++stable.significant;
-    stable.significant_in_clusters += in_cluster[i] ? 1 : 0;
+    stable_points[i] = change.inRegion(i) && change.measured(i) && reach.core_region[i] < 0;
   }
-  const double cell = change.core_spacing_m * change.core_spacing_m;
+  StableScore stable = tallyStable(change, stable_points, change.significant,
+                                   inScoredClusters(change.points.size(), clusters));
   stable.fraction = ratio(stable.significant, stable.measured);
-  stable.area_m2 = static_cast<double>(stable.significant) * cell;
-  stable.cluster_area_m2 = static_cast<double>(stable.significant_in_clusters) * cell;
   return stable;
 }
 
