@@ -32,6 +32,8 @@ PACKAGES=(
   time
   # change detection: CloudCompare (command-line mode) reads the change clouds in the tests
   cloudcompare
+  # bags (MCAP chunk compression) and the Foxglove bridge (WebSocket server, header-only)
+  libzstd-dev liblz4-dev libwebsocketpp-dev
 )
 
 echo "install-deps: apt-get update"
@@ -45,4 +47,17 @@ if [ ${#missing[@]} -eq 0 ]; then
 else
   echo "install-deps: installing ${missing[*]}"
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y --no-install-recommends "${missing[@]}"
+fi
+
+# Reference clients the tests check us against (js/README.md): Node.js and npm from Debian
+# unless the machine already has them, then the pinned modules of js/package-lock.json.
+if ! command -v npm >/dev/null 2>&1; then
+  echo "install-deps: installing nodejs npm"
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y --no-install-recommends nodejs npm
+fi
+js_dir="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)/js"
+if [ ! -d "$js_dir/node_modules" ] || [ "$js_dir/package-lock.json" -nt "$js_dir/node_modules" ]; then
+  echo "install-deps: npm ci in js/"
+  (cd "$js_dir" && npm ci --no-audit --no-fund)
+  touch "$js_dir/node_modules"
 fi
