@@ -1,6 +1,7 @@
 // M3C2 on synthetic pairs with analytic answers: parallel planes, concentric spheres, a step,
 // no change with noise (about 5 % significant at 95 %), the registration error inside the
-// level of detection, too few points, and the option checks.
+// level of detection, points of one depth map counted as one measurement, too few points,
+// and the option checks.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -151,6 +152,61 @@ TEST(M3C2, TheRegistrationErrorRaisesTheLevelOfDetection) {
   EXPECT_DOUBLE_EQ(loose.distance, tight.distance);
   EXPECT_TRUE(tight.significant);
   EXPECT_FALSE(loose.significant) << "5 cm within a 6 cm registration error is no change";
+}
+
+/// A flat site seen by `maps` depth maps, as a fused MVS cloud is: each map samples every 1 m
+/// tile (spacing 0.1 m) with an error of its own there (sd 1 cm) and 2 mm of pixel noise; the
+/// points' sources are their map's id.
+std::pair<std::vector<Eigen::Vector3d>, PointSources> depthMaps(int maps, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> tile_error(0.0, 0.01), pixel(0.0, 0.002);
+  std::vector<Eigen::Vector3d> points;
+  PointSources sources;
+  for (int map = 0; map < maps; ++map) {
+    for (int tx = 0; tx < 10; ++tx) {
+      for (int ty = 0; ty < 10; ++ty) {
+        const double offset = tile_error(rng);
+        for (double x = 0.05; x < 1.0; x += 0.1) {
+          for (double y = 0.05; y < 1.0; y += 0.1) {
+            points.emplace_back(tx + x, ty + y, offset + pixel(rng));
+            sources.add({static_cast<uint32_t>(map)});
+          }
+        }
+      }
+    }
+  }
+  return {points, sources};
+}
+
+TEST(M3C2, PointsOfOneDepthMapCountAsOneMeasurement) {
+  // Nothing moved, but each cylinder's ~100 points rest on five maps: with n = points the LoD
+  // shrinks by sqrt(20) and most core points look changed; with n = sources ~5 % do.
+  const auto [before, sources1] = depthMaps(5, 21);
+  const auto [after, sources2] = depthMaps(5, 22);
+  std::vector<Eigen::Vector3d> cores;
+  for (int tx = 0; tx < 10; ++tx) {
+    for (int ty = 0; ty < 10; ++ty) cores.emplace_back(tx + 0.5, ty + 0.5, 0.0);
+  }
+  const auto share = [&](const std::vector<M3C2Point>& result) {
+    int significant = 0;
+    for (const M3C2Point& p : result) significant += p.significant;
+    return static_cast<double>(significant) / static_cast<double>(result.size());
+  };
+  const auto by_points = m3c2(before, after, cores, upwards());
+  const auto by_sources = m3c2(before, after, cores, upwards(), {}, &sources1, &sources2);
+  EXPECT_EQ(by_sources[0].sources1, 5);
+  EXPECT_EQ(by_sources[0].independent2(), 5);
+  EXPECT_EQ(by_points[0].sources1, 0);
+  EXPECT_GT(by_points[0].independent1(), 50);
+  std::printf("correlated maps: %.2f significant with n = points, %.2f with n = sources\n",
+              share(by_points), share(by_sources));
+  EXPECT_GT(share(by_points), 0.3);
+  EXPECT_LT(share(by_sources), 0.15);
+  // Sources that do not fit the cloud are refused.
+  PointSources short_list = sources1;
+  short_list.offsets.pop_back();
+  EXPECT_THROW(m3c2(before, after, cores, upwards(), {}, &short_list, &sources2),
+               std::invalid_argument);
 }
 
 TEST(M3C2, TheCylinderHoldsExactlyThePointsInsideIt) {

@@ -34,6 +34,26 @@ double since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+/// The images fused into each point of a survey's dense cloud (dense/fused_views.bin), which
+/// make M3C2's n the independent measurements; none when the dense stage did not write them
+/// (a cloud made elsewhere). Throws StageError naming the file when it does not fit the cloud.
+std::optional<PointSources> readSources(const Survey& survey, size_t points) {
+  const fs::path file = survey.dense() / "fused_views.bin";
+  if (!fs::exists(file)) return std::nullopt;
+  PointSources sources;
+  try {
+    sources = dense::readPointViews(file);
+  } catch (const std::exception& e) {
+    throw StageError(kStage, e.what());
+  }
+  if (sources.size() != points) {
+    throw StageError(kStage, file.string() + ": lists " + std::to_string(sources.size()) +
+                                 " points, dense/fused.ply has " + std::to_string(points) +
+                                 " (run the dense stage again)");
+  }
+  return sources;
+}
+
 /// Per core point, the direction to the nearest camera of survey 1 (the side its surface was
 /// seen from); empty when survey 1 has no readable sparse model.
 std::vector<Eigen::Vector3d> towardsCameras(const Survey& survey,
@@ -196,6 +216,9 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
       scene::readCloud(survey.dense() / "fused.ply", kStage, "dense");
   open3d::geometry::PointCloud second =
       scene::readCloud(later.dense() / "fused.ply", kStage, "dense");
+  std::optional<PointSources> sources1 = readSources(survey, first.points_.size());
+  std::optional<PointSources> sources2 = readSources(later, second.points_.size());
+  if (!sources1 || !sources2) sources1 = sources2 = std::nullopt;  // n alike on both sides
   const double read_s = since(start);
 
   auto phase = std::chrono::steady_clock::now();
@@ -217,7 +240,8 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
   if (!given_error) m3c2_options.registration_error_m = aligned.rms_m;
   const std::vector<Eigen::Vector3d> hints = towardsCameras(survey, cores);
   std::vector<M3C2Point> comparison =
-      m3c2(first.points_, second.points_, cores, m3c2_options, hints);
+      m3c2(first.points_, second.points_, cores, m3c2_options, hints,
+           sources1 ? &*sources1 : nullptr, sources2 ? &*sources2 : nullptr);
   nlohmann::json bias_json = {{"radius_m", options.bias_radius_m}};
   std::string error_source = given_error ? "option" : "co-registration rms";
   if (options.bias_radius_m > 0.0) {
@@ -270,6 +294,8 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
       {"level_of_detection_registration_error_m", m3c2_options.registration_error_m},
       {"level_of_detection_registration_error_source", error_source},
       {"local_bias", bias_json},
+      {"level_of_detection_n",
+       sources1 ? "distinct images fused into the cylinder's points" : "points in the cylinder"},
       {"orientation", hints.empty() ? "option" : "towards survey 1's cameras"},
       {"core_points", cores.size()},
       {"core_points_measured", valid},

@@ -49,13 +49,15 @@ Eigen::Vector3d planeNormal(const IndexedCloud& a, const std::vector<int>& in_a,
 
 struct AxisStatistics {
   int count = 0;
+  int sources = 0;  ///< distinct sources of the points (0 without `sources`)
   double mean = 0.0, spread = 0.0;
 };
 
 /// Mean and standard deviation of the positions along `normal` of the cloud's points inside
-/// the cylinder around `core`.
-AxisStatistics alongAxis(const IndexedCloud& cloud, const Eigen::Vector3d& core,
-                         const Eigen::Vector3d& normal, const M3C2Options& options) {
+/// the cylinder around `core`, and how many distinct sources they came from.
+AxisStatistics alongAxis(const IndexedCloud& cloud, const PointSources* sources,
+                         const Eigen::Vector3d& core, const Eigen::Vector3d& normal,
+                         const M3C2Options& options) {
   const double radius = 0.5 * options.projection_scale_m;
   const double depth = options.max_depth_m;
   // The cylinder is searched as a row of short segments, each inside a small sphere: one
@@ -66,6 +68,7 @@ AxisStatistics alongAxis(const IndexedCloud& cloud, const Eigen::Vector3d& core,
   const double sphere = std::hypot(radius, half);
   AxisStatistics s;
   double sum = 0.0, sum2 = 0.0;
+  std::vector<uint32_t> seen;  // source ids, duplicates included
   for (int j = 0; j < segments; ++j) {
     const double low = -depth + 2.0 * half * j;
     const double high = j + 1 == segments ? depth : low + 2.0 * half;
@@ -77,9 +80,16 @@ AxisStatistics alongAxis(const IndexedCloud& cloud, const Eigen::Vector3d& core,
       ++s.count;
       sum += along;
       sum2 += along * along;
+      if (sources) {
+        const size_t p = static_cast<size_t>(i);
+        seen.insert(seen.end(), sources->ids.begin() + sources->offsets[p],
+                    sources->ids.begin() + sources->offsets[p + 1]);
+      }
     }
   }
   if (s.count == 0) return s;
+  std::sort(seen.begin(), seen.end());
+  s.sources = static_cast<int>(std::unique(seen.begin(), seen.end()) - seen.begin());
   s.mean = sum / s.count;
   // Sample standard deviation; clamped at 0 against rounding.
   s.spread = s.count > 1
@@ -88,25 +98,38 @@ AxisStatistics alongAxis(const IndexedCloud& cloud, const Eigen::Vector3d& core,
   return s;
 }
 
+void checkSources(const PointSources* sources, const std::vector<Eigen::Vector3d>& cloud,
+                  const char* which) {
+  if (!sources) return;
+  if (sources->size() != cloud.size() || sources->offsets.back() != sources->ids.size()) {
+    throw std::invalid_argument(std::string("m3c2: the sources of ") + which + " list " +
+                                std::to_string(sources->size()) + " points for " +
+                                std::to_string(cloud.size()));
+  }
+}
+
 }  // namespace
 
 double levelOfDetection(const M3C2Point& p, double registration_error_m, double confidence_z) {
-  return confidence_z *
-         (std::sqrt(p.spread1 * p.spread1 / p.count1 + p.spread2 * p.spread2 / p.count2) +
-          registration_error_m);
+  return confidence_z * (std::sqrt(p.spread1 * p.spread1 / p.independent1() +
+                                   p.spread2 * p.spread2 / p.independent2()) +
+                         registration_error_m);
 }
 
 std::vector<M3C2Point> m3c2(const std::vector<Eigen::Vector3d>& cloud1,
                             const std::vector<Eigen::Vector3d>& cloud2,
                             const std::vector<Eigen::Vector3d>& core_points,
                             const M3C2Options& options,
-                            const std::vector<Eigen::Vector3d>& orientation_hints) {
+                            const std::vector<Eigen::Vector3d>& orientation_hints,
+                            const PointSources* sources1, const PointSources* sources2) {
   options.check();
   if (!orientation_hints.empty() && orientation_hints.size() != core_points.size()) {
     throw std::invalid_argument("m3c2: " + std::to_string(orientation_hints.size()) +
                                 " orientation hints for " + std::to_string(core_points.size()) +
                                 " core points");
   }
+  checkSources(sources1, cloud1, "cloud 1");
+  checkSources(sources2, cloud2, "cloud 2");
   const IndexedCloud first(cloud1);
   const IndexedCloud second(cloud2);
   std::vector<M3C2Point> result(core_points.size());
@@ -127,10 +150,12 @@ std::vector<M3C2Point> m3c2(const std::vector<Eigen::Vector3d>& cloud1,
         orientation_hints.empty() ? options.orientation : orientation_hints[c];
     if (normal.dot(hint) < 0) normal = -normal;
     out.normal = normal;
-    const AxisStatistics s1 = alongAxis(first, core, normal, options);
-    const AxisStatistics s2 = alongAxis(second, core, normal, options);
+    const AxisStatistics s1 = alongAxis(first, sources1, core, normal, options);
+    const AxisStatistics s2 = alongAxis(second, sources2, core, normal, options);
     out.count1 = s1.count;
     out.count2 = s2.count;
+    out.sources1 = s1.sources;
+    out.sources2 = s2.sources;
     out.spread1 = s1.spread;
     out.spread2 = s2.spread;
     if (s1.count < options.min_points || s2.count < options.min_points) continue;

@@ -11,10 +11,19 @@
 // mean 2 - mean 1 and the level of detection at 95 %
 //   LoD = z (sqrt(s1²/n1 + s2²/n2) + registration_error),  z = 1.96,
 // as in the paper's Eq. (1), py4dgeo and CloudCompare's plugin.
+//
+// n counts independent measurements. A laser scanner's points are; a photogrammetric cloud's
+// are not: the points of one depth map share its error, so hundreds of fused points in a
+// cylinder may rest on five images and σ/√n would promise a precision they do not have. When
+// each point's sources are given (the images fused into it, dense/fused_views.bin), n is the
+// number of distinct sources in the cylinder (at most its point count).
+#include <algorithm>
 #include <limits>
 #include <vector>
 
 #include <Eigen/Core>
+
+#include "auv/recon/dense/fusion.h"
 
 namespace auv::recon::change {
 
@@ -41,22 +50,35 @@ struct M3C2Point {
   double level_of_detection = std::numeric_limits<double>::quiet_NaN();  ///< m
   double spread1 = 0.0, spread2 = 0.0;  ///< m, standard deviations along the normal
   int count1 = 0, count2 = 0;           ///< points in the cylinder
-  bool significant = false;             ///< |distance| > level_of_detection
+  /// Distinct sources (images) of those points; 0 when the cloud's sources were not given.
+  int sources1 = 0, sources2 = 0;
+  bool significant = false;  ///< |distance| > level_of_detection
 
   bool valid() const { return distance == distance; }
+  /// The n of the level of detection: the sources where known, else the points.
+  int independent1() const { return sources1 > 0 ? std::min(count1, sources1) : count1; }
+  int independent2() const { return sources2 > 0 ? std::min(count2, sources2) : count2; }
 };
 
-/// z (sqrt(s1²/n1 + s2²/n2) + registration_error): the level of detection of a measured point.
+/// Per point of a cloud, the ids of the independent measurements it came from (for a fused
+/// MVS cloud, the images whose depth maps gave it).
+using PointSources = dense::PointViews;
+
+/// z (sqrt(s1²/n1 + s2²/n2) + registration_error) with n the independent measurements: the
+/// level of detection of a measured point.
 double levelOfDetection(const M3C2Point& p, double registration_error_m, double confidence_z);
 
 /// M3C2 of `cloud2` against `cloud1` at `core_points`. `orientation_hints`, when not empty (one
 /// per core point), gives each normal's side (e.g. towards the cameras that saw the point);
-/// otherwise options.orientation does. Throws OptionError on bad options and
-/// std::invalid_argument when the hints do not match the core points.
+/// otherwise options.orientation does. `sources1`/`sources2`, when given (one list per point of
+/// the cloud), make n the distinct sources (see above). Throws OptionError on bad options and
+/// std::invalid_argument when the hints or sources do not match the core points or clouds.
 std::vector<M3C2Point> m3c2(const std::vector<Eigen::Vector3d>& cloud1,
                             const std::vector<Eigen::Vector3d>& cloud2,
                             const std::vector<Eigen::Vector3d>& core_points,
                             const M3C2Options& options,
-                            const std::vector<Eigen::Vector3d>& orientation_hints = {});
+                            const std::vector<Eigen::Vector3d>& orientation_hints = {},
+                            const PointSources* sources1 = nullptr,
+                            const PointSources* sources2 = nullptr);
 
 }  // namespace auv::recon::change
