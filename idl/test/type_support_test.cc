@@ -126,5 +126,34 @@ TEST(TypeSupportTest, BadYamlNamesTheField) {
   EXPECT_THROW(fromYaml(YAML::Load("{sec: 99999999999}"), t, ""), std::invalid_argument);
 }
 
+// The schemas themselves are decoded by Foxglove's reader in interfaces/test/serialized_test.cc;
+// this checks what makes them self-contained and readable by it.
+TEST(TypeSupportTest, EverySchemaDeclaresWhatItUsesBeforeTheType) {
+  for (const TypeSupport& ts : allTypes()) {
+    const std::string idl = ts.omg_idl;
+    const std::string short_name = ts.name.substr(ts.name.rfind(':') + 1);
+    const size_t root = idl.find("struct " + short_name + " {");
+    ASSERT_NE(root, std::string::npos) << ts.name << ":\n" << idl;
+    EXPECT_EQ(idl.find("struct ", root + 1), std::string::npos) << ts.name << ": root not last";
+    EXPECT_EQ(idl.find("module auv {\nmodule msg {"), idl.find("module")) << ts.name;
+    for (const char* absent :
+         {"#include", "#ifndef", "#define", "= 0x", " _header;", "struct _String"})
+      EXPECT_EQ(idl.find(absent), std::string::npos) << ts.name << " holds " << absent;
+  }
+  const std::string odometry = findType("Odometry")->omg_idl;
+  const size_t time = odometry.find("struct Time {");
+  const size_t header = odometry.find("struct Header {");
+  ASSERT_NE(time, std::string::npos);
+  ASSERT_NE(header, std::string::npos);
+  EXPECT_LT(time, header);
+  EXPECT_LT(header, odometry.find("struct Odometry {"));
+  EXPECT_NE(odometry.find("  Header header;"), std::string::npos);
+  EXPECT_NE(odometry.find("ODOMETRY_SOURCE_GROUND_TRUTH   = 64;"), std::string::npos);
+  EXPECT_NE(odometry.find("// m, distance to the seabed"), std::string::npos);  // comments kept
+  // Each declaration once, even when two members use it.
+  const std::string update = findType("OctomapUpdate")->omg_idl;
+  EXPECT_EQ(update.find("struct Point {"), update.rfind("struct Point {"));
+}
+
 }  // namespace
 }  // namespace auv::msg

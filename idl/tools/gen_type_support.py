@@ -3,8 +3,9 @@
 
 fastddsgen gives the C++ types and their CDR code; this script adds what neither
 vendor generator gives: a MessageTraits<T> specialisation per struct (topic type
-name and Fast DDS TopicDataType), YAML conversion in both directions (for
-`auv topic echo|pub` and for tests), and a registry of every type by name.
+name, Fast DDS TopicDataType and the self-contained OMG IDL schema of
+idl_schema.py), YAML conversion in both directions (for `auv topic echo|pub` and
+for tests), and a registry of every type by name.
 
 Only the IDL subset the message set uses is understood: modules, @final structs
 with @key members, enums, typedefs, sequences, fixed arrays and #include lines.
@@ -14,6 +15,8 @@ silently.
 import os
 import re
 import sys
+
+import idl_schema
 
 PRIMITIVES = {
     "boolean": "bool", "octet": "uint8_t", "char": "char",
@@ -212,7 +215,8 @@ def main():
             structs += p.structs
             enums += p.enums
             typedefs.update(p.typedefs)
-    except IdlError as e:
+        schemas = idl_schema.build_schemas(idls, structs, typedefs)
+    except (IdlError, idl_schema.SchemaError) as e:
         sys.exit(f"gen_type_support: {e}")
     enum_names = {e[0] for e in enums}
     struct_names = {s[0] for s in structs}
@@ -245,6 +249,7 @@ def main():
         h.append(f"  using PubSubType = {name}PubSubType;")
         h.append(f'  static constexpr const char* kTypeName = "{name}";')
         h.append(f"  static constexpr bool kKeyed = {'true' if keyed else 'false'};")
+        h.append("  static const char* omgIdl();  // the schema text, see TypeSupport::omg_idl")
         h.append("};")
         h.append("")
     h += ["}  // namespace auv::msg", ""]
@@ -265,6 +270,13 @@ def main():
         cc.append(f"  detail::checkFields(node, path, {{{fields}}});")
         for m, t, _ in members:
             cc.append(f'  if (node["{m}"]) detail::decode(node["{m}"], msg.{m}(), detail::join(path, "{m}"));')
+        cc.append("}")
+        cc.append("")
+    for name, _, _ in structs:
+        if ")auv_idl\"" in schemas[name]:
+            sys.exit(f"gen_type_support: {name}: schema text holds the raw string delimiter")
+        cc.append(f"const char* MessageTraits<{name}>::omgIdl() {{")
+        cc.append(f'  return R"auv_idl({schemas[name]})auv_idl";')
         cc.append("}")
         cc.append("")
     cc.append("const std::vector<TypeSupport>& allTypes() {")

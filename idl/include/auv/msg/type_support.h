@@ -27,6 +27,10 @@ struct EnumTraits {
 struct TypeSupport {
   std::string name;    ///< DDS type name, identical on both vendors, e.g. "auv::msg::Odometry".
   bool keyed = false;  ///< True when the type has @key members (instances matter).
+  /// Self-contained OMG IDL of the type: its declaration and every struct and enum it uses,
+  /// in dependency order, generated from idl/msg/*.idl. The schema of MCAP and Foxglove's
+  /// `omgidl` encoding, named `name`; how it is normalised: idl/README.md, "Schemas".
+  const char* omg_idl = "";
   /// A new Fast DDS TopicDataType (fastddsgen's CDR code); the caller owns it.
   std::function<eprosima::fastdds::dds::TopicDataType*()> make_topic_data_type;
   std::function<std::shared_ptr<void>()> create_sample;  ///< A default-constructed sample.
@@ -63,6 +67,7 @@ TypeSupport makeTypeSupport() {
   TypeSupport ts;
   ts.name = Traits::kTypeName;
   ts.keyed = Traits::kKeyed;
+  ts.omg_idl = Traits::omgIdl();
   ts.make_topic_data_type = [] { return new GuardedPubSubType<typename Traits::PubSubType>(); };
   ts.create_sample = [] { return std::shared_ptr<void>(std::make_shared<T>()); };
   ts.to_yaml = [](const void* sample) { return toYaml(*static_cast<const T*>(sample)); };
