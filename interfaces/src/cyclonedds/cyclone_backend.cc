@@ -17,6 +17,7 @@
 #include "auv/interfaces/backend.h"
 #include "cyclone_config.h"
 #include "cyclone_sertype.h"
+#include "serialized_sample.h"
 
 namespace auv::interfaces::detail {
 namespace {
@@ -208,9 +209,11 @@ class CycloneReader : public DataReader {
     for (;;) {
       void* buffers[1] = {sample};
       dds_sample_info_t si;
+      takeFailed();  // a stale flag must not drop a good sample
       const dds_return_t n = dds_take(reader_, buffers, &si, 1, 1);
       if (n <= 0) return false;
       if (!si.valid_data) continue;  // dispose/unregister notifications carry no data
+      if (takeFailed()) continue;    // malformed: taken out, not handed on half-filled
       if (info != nullptr) {
         info->source_timestamp_ns = si.source_timestamp;
         info->publication = publicationGuid(si.publication_handle);
@@ -280,16 +283,43 @@ class CycloneParticipant : public Participant {
 
   std::unique_ptr<DataWriter> createWriter(const std::string& topic, const msg::TypeSupport& type,
                                            const QosProfile& qos) override {
-    const dds_entity_t t = createTopic(topic, type);
+    return makeWriter(topic, type, qos, false);
+  }
+
+  std::unique_ptr<DataReader> createReader(const std::string& topic, const msg::TypeSupport& type,
+                                           const QosProfile& qos, DataCallback on_data) override {
+    return makeReader(topic, type, qos, std::move(on_data), false);
+  }
+
+  std::unique_ptr<SerializedWriter> createSerializedWriter(const std::string& topic,
+                                                           const msg::TypeSupport& type,
+                                                           const QosProfile& qos) override {
+    return makeSerializedWriter(makeWriter(topic, type, qos, true), type);
+  }
+
+  std::unique_ptr<SerializedReader> createSerializedReader(
+      const std::string& topic, const msg::TypeSupport& type, const QosProfile& qos,
+      SerializedDataCallback on_data) override {
+    auto adapter = std::make_unique<SerializedReaderAdapter>(std::move(on_data));
+    adapter->attach(makeReader(topic, type, qos, adapter->dataCallback(), true));
+    return adapter;
+  }
+
+ private:
+  // `serialized`: over the serialized sertype, moving RawSamples (serialized_sample.h).
+  std::unique_ptr<DataWriter> makeWriter(const std::string& topic, const msg::TypeSupport& type,
+                                         const QosProfile& qos, bool serialized) {
+    const dds_entity_t t = createTopic(topic, type, serialized);
     QosPtr q = toCycloneQos(qos);
     const dds_entity_t w = dds_create_writer(participant_, t, q.get(), nullptr);
     check(w, "create writer on '" + topic + "'");
     return std::make_unique<CycloneWriter>(w);
   }
 
-  std::unique_ptr<DataReader> createReader(const std::string& topic, const msg::TypeSupport& type,
-                                           const QosProfile& qos, DataCallback on_data) override {
-    const dds_entity_t t = createTopic(topic, type);
+  std::unique_ptr<DataReader> makeReader(const std::string& topic, const msg::TypeSupport& type,
+                                         const QosProfile& qos, DataCallback on_data,
+                                         bool serialized) {
+    const dds_entity_t t = createTopic(topic, type, serialized);
     QosPtr q = toCycloneQos(qos);
     auto reader = std::make_unique<CycloneReader>(std::move(on_data));
     dds_listener_t* listener = dds_create_listener(reader.get());
@@ -301,10 +331,18 @@ class CycloneParticipant : public Participant {
     return reader;
   }
 
- private:
-  dds_entity_t createTopic(const std::string& topic, const msg::TypeSupport& type) {
+  dds_entity_t createTopic(const std::string& topic, const msg::TypeSupport& type,
+                           bool serialized) {
     const std::string name = toDdsTopicName(topic);
     std::lock_guard<std::mutex> lock(mutex_);
+    // Typed or serialized per type name, as Fast DDS requires: the same rule on both vendors.
+    const auto kind = serialized_types_.emplace(type.name, serialized).first;
+    if (kind->second != serialized)
+      throw std::runtime_error("cyclonedds: type " + type.name + " is used by " +
+                               (kind->second ? "serialized" : "typed") +
+                               " endpoints of this participant; " +
+                               (serialized ? "serialized" : "typed") +
+                               " endpoints of it need a participant of their own");
     auto it = topics_.find(name);
     if (it != topics_.end()) {
       if (it->second.second != type.name)
@@ -312,7 +350,7 @@ class CycloneParticipant : public Participant {
                                  ", not " + type.name);
       return it->second.first;
     }
-    ddsi_sertype* sertype = createSertype(type);
+    ddsi_sertype* sertype = createSertype(type, serialized);
     const dds_entity_t t =
         dds_create_topic_sertype(participant_, name.c_str(), &sertype, nullptr, nullptr, nullptr);
     check(t, "create topic '" + topic + "' of type " + type.name);
@@ -323,6 +361,7 @@ class CycloneParticipant : public Participant {
   dds_entity_t participant_;
   std::mutex mutex_;
   std::map<std::string, std::pair<dds_entity_t, std::string>> topics_;
+  std::map<std::string, bool> serialized_types_;  // type name -> used by serialized endpoints
 };
 
 }  // namespace

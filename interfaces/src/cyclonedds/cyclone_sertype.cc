@@ -4,16 +4,22 @@
 #include "cyclone_sertype.h"
 
 #include <algorithm>
+#include <cstdlib>
 #include <cstring>
 #include <memory>
 #include <mutex>
+#include <new>
 #include <string>
 
 #include <dds/dds.h>
 #include <dds/ddsi/ddsi_serdata.h>
 #include <dds/ddsi/ddsi_sertype.h>
+#include <dds/ddsi/q_protocol.h>
 #include <dds/ddsi/q_radmin.h>
 #include <dds/ddsrt/mh3.h>
+#include <dds/ddsrt/time.h>
+
+#include "serialized_sample.h"
 
 namespace auv::interfaces::detail {
 namespace {
@@ -25,14 +31,22 @@ using eprosima::fastrtps::rtps::SerializedPayload_t;
 struct Sertype : ddsi_sertype {
   std::unique_ptr<TopicDataType> topic_type;
   msg::TypeSupport support;
-  std::mutex key_mutex;  // TopicDataType::getKey uses a shared buffer
+  bool serialized = false;  // samples are RawSamples (kRawSerdataOps)
+  std::mutex key_mutex;     // TopicDataType::getKey uses a shared buffer
 };
 
+struct FreeBytes {
+  void operator()(unsigned char* p) const { std::free(p); }
+};
+using Bytes = std::unique_ptr<unsigned char[], FreeBytes>;  // malloc'ed: see allocate*
+
 struct Serdata : ddsi_serdata {
-  std::unique_ptr<unsigned char[]> cdr;     // encapsulation header + XCDR1 body, padded to 4 bytes
+  Bytes cdr;                                // encapsulation header + XCDR1 body, padded to 4 bytes
   uint32_t size = 0;                        // serialized size without the padding
   std::array<unsigned char, 16> key{};      // keyhash as computed without forcing MD5
   std::array<unsigned char, 16> key_md5{};  // keyhash with MD5 forced
+  int64_t reception_ns = 0;                 // serialized sertype only: when it arrived
+  int64_t sequence = -1;                    // serialized sertype only: the writer's, if known
 };
 
 const Sertype* sertypeOf(const ddsi_sertype* type) { return static_cast<const Sertype*>(type); }
@@ -64,8 +78,19 @@ Serdata* newSerdata(const ddsi_sertype* type, ddsi_serdata_kind kind) {
 // padding is zeroed.
 void allocate(Serdata* d, size_t size) {
   const size_t padded = (size + 3) & ~size_t(3);
-  d->cdr.reset(new unsigned char[padded]);
+  d->cdr = Bytes(static_cast<unsigned char*>(std::malloc(padded)));
+  if (!d->cdr) throw std::bad_alloc();
   std::memset(d->cdr.get() + size, 0, padded - size);
+  d->size = static_cast<uint32_t>(size);
+}
+
+// The same, all zeroed, for serializing a sample: fastcdr skips alignment padding without
+// writing it, which would otherwise send uninitialised heap bytes. calloc costs no extra pass
+// for large payloads (fresh pages come zeroed) and a small memset for the rest.
+void allocateZeroed(Serdata* d, size_t size) {
+  const size_t padded = (size + 3) & ~size_t(3);
+  d->cdr = Bytes(static_cast<unsigned char*>(std::calloc(padded, 1)));
+  if (!d->cdr) throw std::bad_alloc();
   d->size = static_cast<uint32_t>(size);
 }
 
@@ -150,16 +175,14 @@ ddsi_serdata* fromSample(const ddsi_sertype* type, ddsi_serdata_kind kind, const
   void* data = const_cast<void*>(sample);
   const uint32_t max_size = st->topic_type->getSerializedSizeProvider(data)();
   Serdata* d = newSerdata(type, kind);
-  allocate(d, max_size);
+  allocateZeroed(d, max_size);
   BorrowedPayload payload(d->cdr.get(), 0);
   payload.max_size = max_size;
   if (!st->topic_type->serialize(data, &payload)) {
     delete d;
     return nullptr;
   }
-  // Normally exactly max_size; if less, zero the tail so the padding stays zero.
-  std::memset(d->cdr.get() + payload.length, 0, max_size - payload.length);
-  d->size = payload.length;
+  d->size = payload.length;  // normally exactly max_size; the rest stays zero
   computeKey(type, sample, d);
   return d;
 }
@@ -178,15 +201,23 @@ ddsi_serdata* toSerRef(const ddsi_serdata* dcmn, size_t off, size_t sz, ddsrt_io
 
 void toSerUnref(ddsi_serdata* d, const ddsrt_iovec_t*) { ddsi_serdata_unref(d); }
 
+// Set by a failed to_sample on the thread that takes (Cyclone converts inside dds_take).
+thread_local bool t_take_failed = false;
+
+bool failed() {
+  t_take_failed = true;
+  return false;
+}
+
 bool toSample(const ddsi_serdata* dcmn, void* sample, void**, void*) {
   const auto* d = static_cast<const Serdata*>(dcmn);
-  if (d->kind != SDK_DATA || d->size == 0) return false;
+  if (d->kind != SDK_DATA || d->size == 0) return failed();
   BorrowedPayload payload(d->cdr.get(), d->size);
   try {
-    return sertypeOf(d->type)->topic_type->deserialize(&payload, sample);
+    if (sertypeOf(d->type)->topic_type->deserialize(&payload, sample)) return true;
   } catch (...) {
-    return false;  // malformed data: reported as a failed take, never a crash
   }
+  return failed();  // malformed data: dropped by the reader (takeFailed), never a crash
 }
 
 ddsi_serdata* toUntyped(const ddsi_serdata* dcmn) {
@@ -231,6 +262,65 @@ const ddsi_serdata_ops kSerdataOps = {
 #endif
 };
 
+// The serialized sertype: the same serdata, moved to and from RawSamples as bytes.
+
+// The writer's sequence number, from the DATA or DATA_FRAG submessage the first fragment came
+// in (Cyclone has byte-swapped its header fields to native order while validating it).
+int64_t sequenceOf(const nn_rdata* fragchain) {
+  if (fragchain == nullptr || fragchain->rmsg == nullptr) return -1;
+  const auto* common = reinterpret_cast<const Data_DataFrag_common_t*>(
+      NN_RMSG_PAYLOADOFF(fragchain->rmsg, NN_RDATA_SUBMSG_OFF(fragchain)));
+  const unsigned id = common->smhdr.submessageId;
+  if (id != SMID_DATA && id != SMID_DATA_FRAG) return -1;
+  return (static_cast<int64_t>(common->writerSN.high) << 32) | common->writerSN.low;
+}
+
+ddsi_serdata* rawFromSer(const ddsi_sertype* type, ddsi_serdata_kind kind,
+                         const nn_rdata* fragchain, size_t size) {
+  auto* d = static_cast<Serdata*>(fromSer(type, kind, fragchain, size));
+  if (d != nullptr) {
+    d->reception_ns = dds_time();
+    d->sequence = sequenceOf(fragchain);
+  }
+  return d;
+}
+
+// From a writer in this process (local delivery converts its serdata through the bytes).
+ddsi_serdata* rawFromSerIov(const ddsi_sertype* type, ddsi_serdata_kind kind,
+                            ddsrt_msg_iovlen_t niov, const ddsrt_iovec_t* iov, size_t size) {
+  auto* d = static_cast<Serdata*>(fromSerIov(type, kind, niov, iov, size));
+  if (d != nullptr) d->reception_ns = dds_time();
+  return d;
+}
+
+ddsi_serdata* rawFromSample(const ddsi_sertype* type, ddsi_serdata_kind kind, const void* sample) {
+  const auto* raw = static_cast<const RawSample*>(sample);
+  Serdata* d = newSerdata(type, kind);
+  allocate(d, raw->size());
+  std::memcpy(d->cdr.get(), raw->data(), raw->size());
+  return finishFromSer(type, d);  // keyed: decoded for the key, nullptr if it does not decode
+}
+
+bool rawToSample(const ddsi_serdata* dcmn, void* sample, void**, void*) {
+  const auto* d = static_cast<const Serdata*>(dcmn);
+  if (d->kind != SDK_DATA || d->size == 0) return failed();
+  auto* raw = static_cast<RawSample*>(sample);
+  raw->view = nullptr;
+  raw->bytes.assign(d->cdr.get(), d->cdr.get() + d->size);
+  raw->reception_timestamp_ns = d->reception_ns;
+  raw->sequence_number = d->sequence;
+  return true;
+}
+
+const ddsi_serdata_ops kRawSerdataOps = {
+    &eqkey,         &getSize,         &rawFromSer,  &rawFromSerIov, &fromKeyhash,
+    &rawFromSample, &toSer,           &toSerRef,    &toSerUnref,    &rawToSample,
+    &toUntyped,     &untypedToSample, &freeSerdata, &print,         &getKeyhash,
+#ifdef DDS_HAS_SHM
+    nullptr,        nullptr,
+#endif
+};
+
 void freeSertype(ddsi_sertype* type) {
   ddsi_sertype_fini(type);
   delete static_cast<Sertype*>(type);
@@ -241,12 +331,20 @@ void zeroSamples(const ddsi_sertype*, void*, size_t) {}
 // Our readers always pass their own sample buffers, so Cyclone never needs to allocate
 // C++ samples (loans are not used); these keep the contract for completeness.
 void reallocSamples(void** ptrs, const ddsi_sertype* type, void*, size_t oldcount, size_t count) {
-  for (size_t i = oldcount; i < count; ++i) ptrs[i] = sertypeOf(type)->topic_type->createData();
+  const Sertype* st = sertypeOf(type);
+  for (size_t i = oldcount; i < count; ++i)
+    ptrs[i] = st->serialized ? new RawSample() : st->topic_type->createData();
 }
 
 void freeSamples(const ddsi_sertype* type, void** ptrs, size_t count, dds_free_op_t op) {
   if ((op & DDS_FREE_ALL_BIT) == 0) return;
-  for (size_t i = 0; i < count; ++i) sertypeOf(type)->topic_type->deleteData(ptrs[i]);
+  const Sertype* st = sertypeOf(type);
+  for (size_t i = 0; i < count; ++i) {
+    if (st->serialized)
+      delete static_cast<RawSample*>(ptrs[i]);
+    else
+      st->topic_type->deleteData(ptrs[i]);
+  }
 }
 
 bool equal(const ddsi_sertype* a, const ddsi_sertype* b) {
@@ -264,11 +362,21 @@ const ddsi_sertype_ops kSertypeOps = {
 
 }  // namespace
 
-ddsi_sertype* createSertype(const msg::TypeSupport& type) {
+bool takeFailed() {
+  const bool was = t_take_failed;
+  t_take_failed = false;
+  return was;
+}
+
+ddsi_sertype* createSertype(const msg::TypeSupport& type, bool serialized) {
   auto* st = new Sertype();
   st->support = type;
+  st->serialized = serialized;
   st->topic_type.reset(type.make_topic_data_type());
-  ddsi_sertype_init(st, type.name.c_str(), &kSertypeOps, &kSerdataOps, !type.keyed);
+  // Distinct serdata ops also keep the two kinds of one type name apart in Cyclone's sertype
+  // registry (ddsi_sertype_equal compares them).
+  ddsi_sertype_init(st, type.name.c_str(), &kSertypeOps,
+                    serialized ? &kRawSerdataOps : &kSerdataOps, !type.keyed);
   st->allowed_data_representation = DDS_DATA_REPRESENTATION_FLAG_XCDR1;
   return st;
 }

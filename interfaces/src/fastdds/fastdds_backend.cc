@@ -23,6 +23,8 @@
 
 #include "auv/interfaces/backend.h"
 #include "fastdds_config.h"
+#include "fastdds_raw_type.h"
+#include "serialized_sample.h"
 
 namespace auv::interfaces::detail {
 namespace {
@@ -152,11 +154,17 @@ class FastddsWriter : public DataWriter {
   std::chrono::steady_clock::duration max_blocking_;
 };
 
+int64_t toNanoseconds(const eprosima::fastrtps::rtps::Time_t& t) {
+  return static_cast<int64_t>(t.seconds()) * 1000000000LL + t.nanosec();
+}
+
 SampleInfo toSampleInfo(const dds::SampleInfo& si) {
   SampleInfo info;
-  info.source_timestamp_ns = static_cast<int64_t>(si.source_timestamp.seconds()) * 1000000000LL +
-                             si.source_timestamp.nanosec();
+  info.source_timestamp_ns = toNanoseconds(si.source_timestamp);
   std::memcpy(info.publication.data(), si.publication_handle.value, 16);
+  info.reception_timestamp_ns = toNanoseconds(si.reception_timestamp);
+  info.sequence_number = si.sample_identity.sequence_number().to64long();
+  if (info.sequence_number <= 0) info.sequence_number = -1;  // SequenceNumber_t::unknown()
   return info;
 }
 
@@ -350,7 +358,33 @@ class FastddsParticipant : public Participant {
 
   std::unique_ptr<DataWriter> createWriter(const std::string& topic, const msg::TypeSupport& type,
                                            const QosProfile& qos) override {
-    dds::Topic* t = createTopic(topic, type);
+    return makeWriter(topic, type, qos, false);
+  }
+
+  std::unique_ptr<DataReader> createReader(const std::string& topic, const msg::TypeSupport& type,
+                                           const QosProfile& qos, DataCallback on_data) override {
+    return makeReader(topic, type, qos, std::move(on_data), false);
+  }
+
+  std::unique_ptr<SerializedWriter> createSerializedWriter(const std::string& topic,
+                                                           const msg::TypeSupport& type,
+                                                           const QosProfile& qos) override {
+    return makeSerializedWriter(makeWriter(topic, type, qos, true), type);
+  }
+
+  std::unique_ptr<SerializedReader> createSerializedReader(
+      const std::string& topic, const msg::TypeSupport& type, const QosProfile& qos,
+      SerializedDataCallback on_data) override {
+    auto adapter = std::make_unique<SerializedReaderAdapter>(std::move(on_data));
+    adapter->attach(makeReader(topic, type, qos, adapter->dataCallback(), true));
+    return adapter;
+  }
+
+ private:
+  // `serialized`: over RawPubSubType, moving RawSamples (serialized_sample.h).
+  std::unique_ptr<DataWriter> makeWriter(const std::string& topic, const msg::TypeSupport& type,
+                                         const QosProfile& qos, bool serialized) {
+    dds::Topic* t = createTopic(topic, type, serialized);
     dds::DataWriterQos wqos = publisher_->get_default_datawriter_qos();
     applyCommon(qos, wqos);
     // Fast DDS heartbeats every 3 s by default, so a late joiner (transient local) or a
@@ -367,9 +401,10 @@ class FastddsParticipant : public Participant {
     return std::make_unique<FastddsWriter>(domain_, w, qos.max_blocking_time_s);
   }
 
-  std::unique_ptr<DataReader> createReader(const std::string& topic, const msg::TypeSupport& type,
-                                           const QosProfile& qos, DataCallback on_data) override {
-    dds::Topic* t = createTopic(topic, type);
+  std::unique_ptr<DataReader> makeReader(const std::string& topic, const msg::TypeSupport& type,
+                                         const QosProfile& qos, DataCallback on_data,
+                                         bool serialized) {
+    dds::Topic* t = createTopic(topic, type, serialized);
     dds::DataReaderQos rqos = subscriber_->get_default_datareader_qos();
     applyCommon(qos, rqos);
     // Keep-all readers acknowledge a heartbeat at once (Fast DDS waits 5 ms by default): a
@@ -390,12 +425,18 @@ class FastddsParticipant : public Participant {
     return reader;
   }
 
- private:
-  dds::Topic* createTopic(const std::string& topic, const msg::TypeSupport& type) {
+  dds::Topic* createTopic(const std::string& topic, const msg::TypeSupport& type, bool serialized) {
     const std::string name = toDdsTopicName(topic);
     std::lock_guard<std::mutex> lock(mutex_);
+    // One TopicDataType per type name and participant: typed or raw, never both.
+    const auto kind = serialized_types_.emplace(type.name, serialized).first;
+    if (kind->second != serialized)
+      throw std::runtime_error(
+          "fastdds: type " + type.name + " is used by " + (kind->second ? "serialized" : "typed") +
+          " endpoints of this participant; " + (serialized ? "serialized" : "typed") +
+          " endpoints of it need a participant of their own");
     if (participant_->find_type(type.name).empty()) {
-      dds::TypeSupport support(type.make_topic_data_type());
+      dds::TypeSupport support(serialized ? new RawPubSubType(type) : type.make_topic_data_type());
       // Type information would make Cyclone reject our discovery data (docs/library-notes.md).
       support->auto_fill_type_information(false);
       support->auto_fill_type_object(false);
@@ -421,6 +462,7 @@ class FastddsParticipant : public Participant {
   dds::Subscriber* subscriber_ = nullptr;
   std::mutex mutex_;
   std::map<std::string, dds::Topic*> topics_;
+  std::map<std::string, bool> serialized_types_;  // type name -> registered as raw
 };
 
 }  // namespace

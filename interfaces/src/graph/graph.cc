@@ -45,6 +45,28 @@ std::string vendorNameFromGuid(const Guid& guid) {
   return hex;
 }
 
+QosProfile compatibleReaderQos(const std::vector<EndpointInfo>& writers, int32_t depth) {
+  QosProfile qos;
+  qos.name = "compatible";
+  qos.reliability = writers.empty() ? Reliability::BEST_EFFORT : Reliability::RELIABLE;
+  qos.durability = writers.empty() ? Durability::VOLATILE : Durability::TRANSIENT_LOCAL;
+  qos.history = History::KEEP_LAST;
+  qos.depth = std::max<int32_t>(depth, 1);
+  for (const EndpointInfo& w : writers) {
+    if (w.qos.reliability != Reliability::RELIABLE) qos.reliability = Reliability::BEST_EFFORT;
+    if (w.qos.durability != Durability::TRANSIENT_LOCAL) qos.durability = Durability::VOLATILE;
+    if (w.history_known && w.qos.history == History::KEEP_LAST)
+      qos.depth = std::max(qos.depth, w.qos.depth);
+  }
+  // A best-effort transient-local reader delivers nothing historical across vendors
+  // (QosProfile::check): such writers are read as volatile.
+  if (qos.reliability == Reliability::BEST_EFFORT) qos.durability = Durability::VOLATILE;
+  qos.deadline_s = 0;
+  qos.liveliness = Liveliness::AUTOMATIC;
+  qos.liveliness_lease_s = 0;
+  return qos;
+}
+
 namespace detail {
 
 ParticipantInfo makeParticipantInfo(const Guid& guid, const std::string& user_data,

@@ -36,6 +36,12 @@ std::string toString(const Guid& guid);
 struct SampleInfo {
   int64_t source_timestamp_ns = 0;  ///< Writer's clock at write time (system time).
   Guid publication{};               ///< GUID of the writer that wrote the sample.
+  /// This process's system clock when the sample arrived; 0 when the vendor does not say
+  /// (Cyclone's typed readers; serialized readers always fill it in).
+  int64_t reception_timestamp_ns = 0;
+  /// The writer's RTPS sequence number; -1 when the vendor does not say (Cyclone's typed
+  /// readers).
+  int64_t sequence_number = -1;
 };
 
 /// A typed DDS data writer of one vendor.
@@ -131,6 +137,11 @@ std::optional<SecurityFiles> participantSecurity(const ParticipantOptions& optio
 /// from `reader`, never destroy it: deleting a reader waits for its running callbacks.
 using DataCallback = std::function<void(DataReader& reader)>;
 
+class SerializedWriter;  // auv/interfaces/serialized.h
+class SerializedReader;
+/// As DataCallback, for a serialized reader.
+using SerializedDataCallback = std::function<void(SerializedReader& reader)>;
+
 /// One DDS domain participant of one vendor.
 class Participant {
  public:
@@ -145,6 +156,16 @@ class Participant {
   virtual std::unique_ptr<DataReader> createReader(const std::string& topic,
                                                    const msg::TypeSupport& type,
                                                    const QosProfile& qos, DataCallback on_data) = 0;
+  /// A writer of CDR bytes of `type` on `topic` (serialized.h). Throws std::runtime_error
+  /// when this participant already uses `type` for typed endpoints, and the reverse.
+  virtual std::unique_ptr<SerializedWriter> createSerializedWriter(const std::string& topic,
+                                                                   const msg::TypeSupport& type,
+                                                                   const QosProfile& qos) = 0;
+  /// A reader that delivers samples of `type` on `topic` as CDR bytes (serialized.h);
+  /// `on_data` as for createReader.
+  virtual std::unique_ptr<SerializedReader> createSerializedReader(
+      const std::string& topic, const msg::TypeSupport& type, const QosProfile& qos,
+      SerializedDataCallback on_data) = 0;
 };
 
 /// Creates a participant of `vendor`. Unless the user set the vendor's own configuration

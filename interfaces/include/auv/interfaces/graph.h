@@ -113,6 +113,16 @@ class GraphInspector {
   std::unique_ptr<Impl> impl_;
 };
 
+/// The QoS for a reader that matches every writer in `writers` (their announced QoS, e.g.
+/// GraphSnapshot::endpointsOn(topic, true)): for a tool that records or relays topics it did
+/// not create. Reliable only if every writer is and transient local only if every writer is
+/// (a stricter reader would not match the others); no deadline and automatic liveliness with
+/// an infinite lease (they accept any offer); keep last max(`depth`, each writer's announced
+/// depth), so a writer's transient-local history arrives whole; unlimited resources. Without
+/// writers: best effort and volatile, which matches any writer that appears later. Named
+/// "compatible".
+QosProfile compatibleReaderQos(const std::vector<EndpointInfo>& writers, int32_t depth = 100);
+
 /// Vendor name from a GUID's first two bytes (the RTPS vendor id both vendors put there):
 /// 0x010f "fastdds" (eProsima), 0x0110 "cyclonedds" (Eclipse), 0x0101 "connext" (RTI),
 /// 0x0103 "opendds", otherwise "vendor 0x...." in hex.
