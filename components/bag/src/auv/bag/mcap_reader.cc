@@ -232,6 +232,9 @@ bool McapReader::readSummary() {
     return a.chunk_start_offset < b.chunk_start_offset;
   });
   if (!checkSummaryIndexes(footer.summary_start)) return false;
+  // Messages outside chunks have no index: such a file is read in order (the scan finds its
+  // Metadata records itself).
+  if (chunks_.empty() && (!have_statistics || statistics_.message_count > 0)) return false;
   chunk_states_.assign(chunks_.size(), ChunkState::UNCHECKED);
   for (const MetadataIndex& index : metadata_indexes) {
     if (index.length < kRecordHeaderSize || index.offset < kMagicSize ||
@@ -255,8 +258,6 @@ bool McapReader::readSummary() {
     }
   }
   if (!have_statistics) statisticsFromMessageIndexes();
-  // Messages outside chunks have no index: such a file is read in order.
-  if (chunks_.empty() && (!have_statistics || statistics_.message_count > 0)) return false;
   return true;
 }
 
