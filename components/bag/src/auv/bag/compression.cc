@@ -12,6 +12,10 @@ uint32_t crc32Update(uint32_t crc, const uint8_t* data, size_t size) {
   return static_cast<uint32_t>(::crc32_z(crc, data, size));
 }
 
+uint32_t crc32Combine(uint32_t crc_a, uint32_t crc_b, uint64_t size_b) {
+  return static_cast<uint32_t>(::crc32_combine64(crc_a, crc_b, static_cast<z_off64_t>(size_b)));
+}
+
 const char* compressionName(Compression compression) {
   switch (compression) {
     case Compression::ZSTD:

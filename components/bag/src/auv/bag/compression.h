@@ -14,6 +14,8 @@ namespace auv::bag {
 /// CRC-32 (IEEE 802.3, as zlib and MCAP compute it) of `size` bytes, continuing `crc`
 /// (0 to start).
 uint32_t crc32Update(uint32_t crc, const uint8_t* data, size_t size);
+/// The CRC-32 of A followed by B from their CRCs and B's size (no pass over the bytes).
+uint32_t crc32Combine(uint32_t crc_a, uint32_t crc_b, uint64_t size_b);
 
 enum class Compression { NONE, ZSTD, LZ4 };
 

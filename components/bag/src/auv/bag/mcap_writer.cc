@@ -107,7 +107,7 @@ void McapWriter::open(const fs::path& path) {
   writeRecords(start);
 }
 
-void McapWriter::writeBytes(const uint8_t* data, size_t size) {
+void McapWriter::writeBytes(const uint8_t* data, size_t size, const uint32_t* crc) {
   const size_t total = size;
   while (size > 0) {
     const ssize_t n = ::write(fd_, data, size);
@@ -120,7 +120,8 @@ void McapWriter::writeBytes(const uint8_t* data, size_t size) {
     data += n;
     size -= static_cast<size_t>(n);
   }
-  data_crc_ = crc32Update(data_crc_, data - total, total);
+  data_crc_ =
+      crc ? crc32Combine(data_crc_, *crc, total) : crc32Update(data_crc_, data - total, total);
   offset_ += total;
   stats_.file_bytes = offset_;
 }
@@ -207,20 +208,23 @@ void McapWriter::writeChunk() {
   header.uncompressed_size = records.size();
   header.uncompressed_crc = crc32Update(0, records.data(), records.size());
   header.compression = compressionName(compressor_->compression());
-  compressor_->compress(records.data(), records.size(), compressed_);
-  header.records_size = compressed_.size();
+  // Uncompressed chunks are written from the chunk itself, with the CRC already computed.
+  const bool stored = compressor_->compression() == Compression::NONE;
+  if (!stored) compressor_->compress(records.data(), records.size(), compressed_);
+  const std::vector<uint8_t>& payload = stored ? records : compressed_;
+  header.records_size = payload.size();
 
   ChunkIndex index;
   index.message_start_time = chunk_start_;
   index.message_end_time = chunk_end_;
   index.chunk_start_offset = offset_;
   index.compression = header.compression;
-  index.compressed_size = compressed_.size();
+  index.compressed_size = payload.size();
   index.uncompressed_size = records.size();
 
   RecordBuffer prefix;
   prefix.chunkPrefix(header);
-  index.chunk_length = prefix.size() + compressed_.size();
+  index.chunk_length = prefix.size() + payload.size();
   // Message Index records, each channel's entries in log-time order (readers bisect them).
   RecordBuffer indexes;
   const uint64_t indexes_start = offset_ + index.chunk_length;
@@ -234,7 +238,7 @@ void McapWriter::writeChunk() {
   index.message_index_length = indexes.size();
 
   writeRecords(prefix);
-  writeBytes(compressed_.data(), compressed_.size());
+  writeBytes(payload.data(), payload.size(), stored ? &header.uncompressed_crc : nullptr);
   writeRecords(indexes);
   if (options_.fsync_chunks && ::fdatasync(fd_) != 0) {
     const std::string why = std::strerror(errno);

@@ -88,7 +88,8 @@ class McapWriter {
 
  private:
   void requireOpen(const char* what) const;
-  void writeBytes(const uint8_t* data, size_t size);
+  /// Writes `size` bytes; `crc`, when given, is theirs (the data CRC needs no pass over them).
+  void writeBytes(const uint8_t* data, size_t size, const uint32_t* crc = nullptr);
   void writeRecords(const RecordBuffer& records);
   void writeChunk();
   void writeSummary();
