@@ -143,14 +143,10 @@ void McapReader::open(const std::filesystem::path& path) {
 bool McapReader::readSummary() {
   constexpr uint64_t kTail = kFooterRecordSize + kMagicSize;
   const char* kLinear = "; read by a linear scan";
-  if (size_ < kMagicSize + kTail) {
-    addDamage(size_, "no footer: the file ends at byte " + str(size_) +
-                         " (cut short, or not closed)" + kLinear);
-    return false;
-  }
-  const uint64_t footer_offset = size_ - kTail;
-  const std::vector<uint8_t> tail = readAt(footer_offset, kTail);
-  if (std::memcmp(tail.data() + kFooterRecordSize, kMagic, kMagicSize) != 0 ||
+  const uint64_t footer_offset = size_ >= kMagicSize + kTail ? size_ - kTail : 0;
+  const std::vector<uint8_t> tail =
+      footer_offset > 0 ? readAt(footer_offset, kTail) : std::vector<uint8_t>();
+  if (tail.empty() || std::memcmp(tail.data() + kFooterRecordSize, kMagic, kMagicSize) != 0 ||
       tail[0] != static_cast<uint8_t>(Opcode::FOOTER) || readU64(&tail[1]) != kFooterContentSize) {
     addDamage(size_, "no footer at the end of the file (byte " + str(size_) +
                          "): cut short, or not closed" + kLinear);
