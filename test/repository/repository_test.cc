@@ -1,7 +1,7 @@
 // The repository stands alone (docs/contributing.md, "The repository stands alone"): no file
 // sends a reader to design notes kept outside the repository, and every relative Markdown link
 // points to a file that exists. Walks the source tree given as AUV_SOURCE_DIR, skipping build
-// outputs (build/, install/, log/, build-*/, auv_runs/, bench_results/) and .git.
+// outputs (build/, install/, log/, build-*/, auv_runs/, bench_results/), node_modules/ and .git.
 //
 // The names of the outside notes are assembled at run time below, so that this file does not
 // contain the references it looks for.
@@ -30,12 +30,13 @@ fs::path repositoryRoot() {
 
 const fs::path kRoot = repositoryRoot();
 
-/// Directories never searched: build outputs and version control.
+/// Directories never searched: build outputs, version control, and the npm packages
+/// `npm ci` installs in js/ (other people's files, whose READMEs link to files npm leaves out).
 bool skippedDirectory(const fs::path& dir) {
   const std::string name = dir.filename().string();
   return name == ".git" || name == "build" || name == "install" || name == "log" ||
          name.rfind("build-", 0) == 0 || name == "auv_runs" || name == "bench_results" ||
-         name == "__pycache__";
+         name == "__pycache__" || name == "node_modules";
 }
 
 struct TextFile {
