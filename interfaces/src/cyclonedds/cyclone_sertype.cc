@@ -85,8 +85,8 @@ void allocate(Serdata* d, size_t size) {
 }
 
 // The same, all zeroed, for serializing a sample: fastcdr skips alignment padding without
-// writing it, which would otherwise send uninitialised heap bytes. calloc costs no extra pass
-// for large payloads (fresh pages come zeroed) and a small memset for the rest.
+// writing it, which would otherwise send uninitialised heap bytes. Measured: no cost up to
+// 1 MiB, 74 us per 4 MiB sample (~2 % of its latency, docs/architecture.md).
 void allocateZeroed(Serdata* d, size_t size) {
   const size_t padded = (size + 3) & ~size_t(3);
   d->cdr = Bytes(static_cast<unsigned char*>(std::calloc(padded, 1)));
