@@ -33,7 +33,7 @@ struct SerializedSample {
   int64_t reception_timestamp_ns = 0;  ///< This process's system clock when it arrived.
   Guid publication{};                  ///< GUID of the writer.
   /// The writer's RTPS sequence number (from 1, +1 per sample it wrote, so gaps show lost
-  /// samples); -1 when the vendor does not say (Cyclone DDS, a writer in the same process).
+  /// samples); -1 when the vendor does not say (a Cyclone reader of a writer in its process).
   int64_t sequence_number = -1;
 };
 
