@@ -33,7 +33,7 @@ PACKAGES=(
   # change detection: CloudCompare (command-line mode) reads the change clouds in the tests
   cloudcompare
   # bags (MCAP chunk compression) and the Foxglove bridge (WebSocket server, header-only)
-  libzstd-dev liblz4-dev libwebsocketpp-dev
+  libzstd-dev liblz4-dev zlib1g-dev libwebsocketpp-dev
 )
 
 echo "install-deps: apt-get update"

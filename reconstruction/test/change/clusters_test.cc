@@ -1,5 +1,6 @@
 // Regions of significant change: near points join, small ones are dropped, and a region counts
-// as a change of interest only where min_change_m is reached over min_area_m2, not at one point.
+// as a change of interest only where min_change_m is reached over min_area_m2, not at one point;
+// a region's volume takes the rim M3C2 blurred it into.
 #include "auv/recon/change/clusters.h"
 
 #include <gtest/gtest.h>
@@ -11,14 +12,14 @@ struct Patch {
   std::vector<Eigen::Vector3d> cores;
   std::vector<M3C2Point> comparison;
 
-  /// Significant core points 0.2 m apart on a `side` x `side` square at x0, all `distance`.
-  void add(double x0, int side, double distance) {
+  /// Core points 0.2 m apart on a `side` x `side` square at (x0, y0), all `distance`.
+  void add(double x0, int side, double distance, bool significant = true, double y0 = 0.0) {
     for (int i = 0; i < side; ++i) {
       for (int j = 0; j < side; ++j) {
-        cores.emplace_back(x0 + 0.2 * i, 0.2 * j, 10.0);
+        cores.emplace_back(x0 + 0.2 * i, y0 + 0.2 * j, 10.0);
         M3C2Point p;
         p.distance = distance;
-        p.significant = true;
+        p.significant = significant;
         comparison.push_back(p);
       }
     }
@@ -54,6 +55,37 @@ TEST(Clusters, OneSpikeOverTheSmallestChangeDoesNotMakeARegionOfInterest) {
   spike.comparison[5].distance = spike.comparison[6].distance = 0.05;
   EXPECT_EQ(clusters(spike, 0.05, 0.0).size(), 1u);
   EXPECT_TRUE(clusters(spike, 0.05, 0.1).empty());
+}
+
+TEST(Clusters, TheVolumeTakesTheBlurredRimAndNotTheNoiseAroundIt) {
+  // A 1 m² block of +0.3 m whose change M3C2 spread, below the level of detection, over a rim
+  // one core spacing wide (+0.1 m), amid unchanged ground whose noise is ±2 cm.
+  Patch site;
+  site.add(-1.0, 15, 0.0, false, -1.0);  // 3 x 3 m of measured ground, none significant
+  for (size_t i = 0; i < site.cores.size(); ++i) {
+    const Eigen::Vector3d& c = site.cores[i];
+    const bool in_rim = c.x() > -0.25 && c.x() < 1.05 && c.y() > -0.25 && c.y() < 1.05;
+    site.comparison[i].distance = in_rim ? 0.1 : ((i % 2) ? 0.02 : -0.02);
+  }
+  for (size_t i = 0; i < site.cores.size(); ++i) {
+    const Eigen::Vector3d& c = site.cores[i];
+    if (c.x() > -0.05 && c.x() < 0.85 && c.y() > -0.05 && c.y() < 0.85) {
+      site.comparison[i].distance = 0.3;  // the block: 5 x 5 points
+      site.comparison[i].significant = true;
+    }
+  }
+  const auto without = clusterChanges(site.cores, site.comparison, 0.2, 0.3, 0.05, 0.1);
+  ASSERT_EQ(without.size(), 1u);
+  EXPECT_NEAR(without[0].volume_gained_m3, 25 * 0.3 * 0.04, 1e-9);
+  const auto with = clusterChanges(site.cores, site.comparison, 0.2, 0.3, 0.05, 0.1, 0.3);
+  ASSERT_EQ(with.size(), 1u);
+  // + the rim: 7 x 7 - 5 x 5 = 24 points of 0.1 m; the noise beyond 0.3 m is not taken.
+  EXPECT_NEAR(with[0].volume_gained_m3, (25 * 0.3 + 24 * 0.1) * 0.04, 1e-9);
+  EXPECT_EQ(with[0].volume_lost_m3, 0.0);
+  EXPECT_EQ(with[0].core_points.size(), 25u) << "the rim adds volume, not area";
+  // A wider margin takes noise that cancels: 9 x 9 - 7 x 7 = 32 points of ±2 cm.
+  const auto wide = clusterChanges(site.cores, site.comparison, 0.2, 0.3, 0.05, 0.1, 0.45);
+  EXPECT_NEAR(wide[0].volume_gained_m3, with[0].volume_gained_m3, 0.02 * 0.04 * 5);
 }
 
 }  // namespace

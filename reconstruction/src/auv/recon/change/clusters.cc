@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "auv/recon/change/indexed_cloud.h"
 
@@ -51,10 +52,49 @@ std::vector<std::vector<size_t>> linkFlagged(const std::vector<Eigen::Vector3d>&
   return groups;
 }
 
+namespace {
+
+/// The clusters' volumes with the net change of their rim (clusterChanges' comment).
+void addRimVolume(std::vector<ChangeCluster>& clusters,
+                  const std::vector<Eigen::Vector3d>& core_points,
+                  const std::vector<M3C2Point>& comparison, double cell_m2, double margin_m) {
+  std::vector<int> claim(core_points.size(), -1);  // cluster of a point, or of its rim
+  std::vector<double> nearest(core_points.size(), std::numeric_limits<double>::infinity());
+  for (size_t c = 0; c < clusters.size(); ++c) {
+    for (size_t index : clusters[c].core_points) nearest[index] = -1.0;  // its own
+  }
+  const IndexedCloud cloud(core_points);
+  for (size_t c = 0; c < clusters.size(); ++c) {
+    for (size_t index : clusters[c].core_points) {
+      for (int j : cloud.within(core_points[index], margin_m)) {
+        const size_t k = static_cast<size_t>(j);
+        const double gap = (core_points[k] - core_points[index]).norm();
+        if (!comparison[k].valid() || gap >= nearest[k]) continue;
+        nearest[k] = gap;
+        claim[k] = static_cast<int>(c);
+      }
+    }
+  }
+  std::vector<double> rim(clusters.size(), 0.0);
+  for (size_t k = 0; k < claim.size(); ++k) {
+    if (claim[k] >= 0) rim[static_cast<size_t>(claim[k])] += comparison[k].distance * cell_m2;
+  }
+  for (size_t c = 0; c < clusters.size(); ++c) {
+    ChangeCluster& cluster = clusters[c];
+    if (cluster.mean_distance_m > 0) {
+      cluster.volume_gained_m3 = std::max(0.0, cluster.volume_gained_m3 + rim[c]);
+    } else {
+      cluster.volume_lost_m3 = std::max(0.0, cluster.volume_lost_m3 - rim[c]);
+    }
+  }
+}
+
+}  // namespace
+
 std::vector<ChangeCluster> clusterChanges(const std::vector<Eigen::Vector3d>& core_points,
                                           const std::vector<M3C2Point>& comparison,
                                           double spacing_m, double link_m, double min_area_m2,
-                                          double min_change_m) {
+                                          double min_change_m, double volume_margin_m) {
   std::vector<char> significant(comparison.size());
   for (size_t i = 0; i < comparison.size(); ++i) significant[i] = comparison[i].significant;
   const double cell = spacing_m * spacing_m;
@@ -80,6 +120,9 @@ std::vector<ChangeCluster> clusterChanges(const std::vector<Eigen::Vector3d>& co
     cluster.centroid /= n;
     cluster.core_points = std::move(group);
     clusters.push_back(std::move(cluster));
+  }
+  if (volume_margin_m > 0 && !clusters.empty()) {
+    addRimVolume(clusters, core_points, comparison, cell, volume_margin_m);
   }
   std::sort(clusters.begin(), clusters.end(),
             [](const ChangeCluster& a, const ChangeCluster& b) { return a.area_m2 > b.area_m2; });

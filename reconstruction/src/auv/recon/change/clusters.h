@@ -15,8 +15,9 @@ struct ChangeCluster {
   double area_m2 = 0.0;             ///< core points × spacing²
   double mean_distance_m = 0.0;
   double max_abs_distance_m = 0.0;  ///< the largest |distance|, signed as measured
-  double volume_gained_m3 = 0.0;    ///< sum of the positive distances × spacing²
-  double volume_lost_m3 = 0.0;      ///< sum of the negative distances × spacing² (as > 0)
+  /// Sum of the positive distances × spacing² (with the margin's net change, see below).
+  double volume_gained_m3 = 0.0;
+  double volume_lost_m3 = 0.0;  ///< the same of the negative distances (as > 0)
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
 };
 
@@ -33,9 +34,16 @@ std::vector<std::vector<size_t>> linkFlagged(const std::vector<Eigen::Vector3d>&
 /// at the level of detection), and those whose points changed by at least `min_change_m` (the
 /// smallest change of interest) cover less than `min_area_m2`: significant, but not a change
 /// anyone asked about. Sorted by area, largest first.
+///
+/// M3C2 averages over its cylinder, so a change shows, weakened, up to the cylinder's radius
+/// beyond the points that pass the level of detection, and a volume summed over those alone
+/// misses that rim. With `volume_margin_m` > 0, each cluster's volume on its side (gained when
+/// its mean distance is positive, else lost) also takes the net distance of the measured core
+/// points within that margin that belong to no cluster (each to the nearest cluster): on
+/// unchanged ground their noise cancels.
 std::vector<ChangeCluster> clusterChanges(const std::vector<Eigen::Vector3d>& core_points,
                                           const std::vector<M3C2Point>& comparison,
                                           double spacing_m, double link_m, double min_area_m2,
-                                          double min_change_m = 0.0);
+                                          double min_change_m = 0.0, double volume_margin_m = 0.0);
 
 }  // namespace auv::recon::change

@@ -34,6 +34,9 @@ double since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+/// A region's volume takes the net change within the cylinder's radius of it (clusters.h).
+double volumeMargin(const CompareOptions& options) { return 0.5 * options.m3c2.projection_scale_m; }
+
 /// The images fused into each point of a survey's dense cloud (dense/fused_views.bin), which
 /// make M3C2's n the independent measurements; none when the dense stage did not write them
 /// (a cloud made elsewhere). Throws StageError naming the file when it does not fit the cloud.
@@ -256,7 +259,7 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
   }
   const std::vector<ChangeCluster> clusters =
       clusterChanges(cores, comparison, options.core_spacing_m, 1.5 * options.core_spacing_m,
-                     options.min_cluster_area_m2, options.min_change_m);
+                     options.min_cluster_area_m2, options.min_change_m, volumeMargin(options));
   const double m3c2_s = since(phase);
 
   phase = std::chrono::steady_clock::now();
@@ -284,7 +287,8 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
        {{"core_spacing_m", options.core_spacing_m},
         {"min_cluster_area_m2", options.min_cluster_area_m2},
         {"min_change_m", options.min_change_m},
-        {"bias_radius_m", options.bias_radius_m}}},
+        {"bias_radius_m", options.bias_radius_m},
+        {"volume_margin_m", volumeMargin(options)}}},
       {"registration",
        {{"rms_m", aligned.rms_m},
         {"overlap", aligned.overlap},

@@ -262,6 +262,7 @@ json evaluateChange(const Survey& survey, const fs::path& ground_truth_run,
       sim.scale * sim.scale *
       compare_options.value("min_cluster_area_m2", kCompareMinClusterAreaM2);
   change.min_change_m = sim.scale * compare_options.value("min_change_m", 0.0);
+  change.volume_margin_m = sim.scale * compare_options.value("volume_margin_m", 0.0);
   for (size_t i = 0; i < change.points.size(); ++i) {
     change.points[i] = sim.apply(change.points[i]);
     change.normals[i] = sim.rotation * change.normals[i];

@@ -32,9 +32,9 @@ std::vector<ClusterScore> scoreClusters(const ChangeTruth& truth, const WorldCha
   const double min_area =
       options.min_cluster_area_m2 > 0 ? options.min_cluster_area_m2 : change.min_cluster_area_m2;
   // Joined as compare joins them (clusters.h): within 1.5 core spacings.
-  const std::vector<change::ChangeCluster> clusters =
-      change::clusterChanges(change.points, comparison, change.core_spacing_m,
-                             1.5 * change.core_spacing_m, min_area, change.min_change_m);
+  const std::vector<change::ChangeCluster> clusters = change::clusterChanges(
+      change.points, comparison, change.core_spacing_m, 1.5 * change.core_spacing_m, min_area,
+      change.min_change_m, change.volume_margin_m);
   std::vector<ClusterScore> scores;
   for (const change::ChangeCluster& cluster : clusters) {
     ClusterScore score;

@@ -55,6 +55,7 @@ struct WorldChange {
   double core_spacing_m = 0.2;        ///< m, each core point stands for its square
   double min_cluster_area_m2 = 0.05;  ///< m², compare's minimum
   double min_change_m = 0.0;          ///< m, compare's smallest change of interest
+  double volume_margin_m = 0.0;       ///< m, compare's rim of a region's volume (clusters.h)
 
   bool inRegion(size_t i) const { return in_region.empty() || in_region[i]; }
   bool measured(size_t i) const { return distances[i] == distances[i]; }
