@@ -168,7 +168,6 @@ json appearanceScoresJson(const AppearanceScores& scores, const ChangeTruth& tru
     j["geometric_fraction"] = finiteOrNull(ratio(c.geometric_points, n));
     clusters.push_back(j);
   }
-  const StableScore& s = scores.stable;
   return {{"status", "evaluated"},
           {"core_points_colour_measured", scores.colour_measured},
           {"regions_scored",
@@ -183,13 +182,7 @@ json appearanceScoresJson(const AppearanceScores& scores, const ChangeTruth& tru
             {"explained_by_geometry", scores.explained_by_geometry},
             {"outside_region", scores.outside_region},
             {"precision", finiteOrNull(scores.precision)}}},
-          {"stable",
-           {{"core_points_measured", s.measured},
-            {"core_points_significant", s.significant},
-            {"core_points_significant_in_clusters", s.significant_in_clusters},
-            {"false_fraction", finiteOrNull(s.fraction)},
-            {"false_area_m2", s.area_m2},
-            {"false_cluster_area_m2", s.cluster_area_m2}}},
+          {"stable", stableJson(scores.stable)},
           {"regions", regions},
           {"clusters", clusters}};
 }

@@ -182,6 +182,15 @@ ChangeScores scoreChanges(const ChangeTruth& truth, const WorldChange& change,
   return scores;
 }
 
+json stableJson(const StableScore& s) {
+  return {{"core_points_measured", s.measured},
+          {"core_points_significant", s.significant},
+          {"core_points_significant_in_clusters", s.significant_in_clusters},
+          {"false_fraction", finiteOrNull(s.fraction)},
+          {"false_area_m2", s.area_m2},
+          {"false_cluster_area_m2", s.cluster_area_m2}};
+}
+
 json changeScoresJson(const ChangeScores& scores, const ChangeTruth& truth,
                       const ChangeScoreOptions& options) {
   json regions = json::array();
@@ -197,7 +206,6 @@ json changeScoresJson(const ChangeScores& scores, const ChangeTruth& truth,
     j["hit_fraction"] = finiteOrNull(ratio(c.hit_points, c.cluster.core_points.size()));
     clusters.push_back(j);
   }
-  const StableScore& s = scores.stable;
   return {{"regions_scored",
            {{"detected", scores.detected},
             {"missed", scores.missed},
@@ -208,13 +216,7 @@ json changeScoresJson(const ChangeScores& scores, const ChangeTruth& truth,
            {{"true", scores.true_clusters},
             {"false", scores.false_clusters},
             {"precision", finiteOrNull(scores.precision)}}},
-          {"stable",
-           {{"core_points_measured", s.measured},
-            {"core_points_significant", s.significant},
-            {"core_points_significant_in_clusters", s.significant_in_clusters},
-            {"false_fraction", finiteOrNull(s.fraction)},
-            {"false_area_m2", s.area_m2},
-            {"false_cluster_area_m2", s.cluster_area_m2}}},
+          {"stable", stableJson(scores.stable)},
           {"regions", regions},
           {"clusters", clusters},
           {"options",

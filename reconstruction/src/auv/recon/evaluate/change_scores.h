@@ -95,6 +95,9 @@ struct StableScore {
   double area_m2 = 0, cluster_area_m2 = 0;  ///< counts x core spacing²
 };
 
+/// The `stable` section of evaluation.json (the shape's and the colour's alike).
+nlohmann::json stableJson(const StableScore& stable);
+
 struct ChangeScores {
   std::vector<RegionScore> regions;  ///< per truth region
   std::vector<ClusterScore> clusters;
