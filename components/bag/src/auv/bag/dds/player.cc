@@ -1,0 +1,191 @@
+#include "auv/bag/dds/player.h"
+
+#include <chrono>
+#include <cstring>
+#include <set>
+#include <stdexcept>
+#include <thread>
+
+#include "auv/bag/dds/qos_metadata.h"
+#include "auv/interfaces/serialized.h"
+
+namespace auv::bag {
+
+const config::OptionTable<PlayerOptions>& PlayerOptions::table() {
+  using O = PlayerOptions;
+  static const config::OptionTable<O> kTable = {
+      {"input", &O::input, "the .mcap file to play"},
+      {"topics", &O::topics, "topics to play; empty: every channel of the bag"},
+      {"rate", &O::rate, "playback speed (2: twice as fast as recorded)", "",
+       config::Range::closed(0.01, 1000)},
+      {"loop", &O::loop, "start again at the end until stopped"},
+      {"delay_s", &O::delay_s, "wait after creating the writers, for readers to match", "s",
+       config::Range::closed(0, 3600)},
+      {"start_offset_s", &O::start_offset_s, "skip this much of the bag's beginning", "s",
+       config::Range::atLeast(0)},
+      {"vendor",
+       &O::vendor,
+       "DDS vendor of the player; empty: AUV_DDS",
+       "",
+       {},
+       {"", "cyclonedds", "fastdds"}},
+      {"domain_id", &O::domain_id, "DDS domain; -1: AUV_DOMAIN_ID", "",
+       config::Range::closed(-1, 232)}};
+  return kTable;
+}
+
+void PlayerOptions::check() const {
+  config::checkOptions(*this, table());
+  if (input.empty()) throw std::invalid_argument("input: no file given");
+  for (const auto& topic : topics) interfaces::toDdsTopicName(topic);
+}
+
+struct Player::Output {
+  std::string topic;
+  const msg::TypeSupport* type = nullptr;
+  interfaces::QosProfile qos;
+  std::unique_ptr<interfaces::SerializedWriter> writer;
+};
+
+namespace {
+
+/// Why `channel` cannot be played by this build, or "" when it can.
+std::string unplayable(const Channel& channel, const Schema* schema,
+                       const msg::TypeSupport** type) {
+  if (channel.message_encoding != "cdr")
+    return "message encoding '" + channel.message_encoding + "', not cdr";
+  if (!schema) return "no schema";
+  try {
+    *type = &interfaces::typeSupportByName(schema->name);
+  } catch (const std::invalid_argument&) {
+    return "type '" + schema->name + "' is not one of this build's messages";
+  }
+  if (schema->encoding == "omgidl" &&
+      std::string(schema->data.begin(), schema->data.end()) != (*type)->omg_idl)
+    return "its schema of " + schema->name +
+           " differs from this build's (recorded by another version)";
+  return "";
+}
+
+}  // namespace
+
+Player::Player(PlayerOptions options) : options_(std::move(options)) {
+  options_.check();
+  reader_.open(options_.input);
+  std::set<std::string> wanted;
+  for (const auto& topic : options_.topics) wanted.insert("/" + interfaces::toDdsTopicName(topic));
+  std::set<std::string> found;
+  for (const auto& [id, channel] : reader_.channels()) {
+    const std::string topic = "/" + interfaces::toDdsTopicName(channel.topic);
+    if (!wanted.empty() && !wanted.count(topic)) continue;
+    found.insert(topic);
+    const auto schema = reader_.schemas().find(channel.schema_id);
+    const msg::TypeSupport* type = nullptr;
+    const std::string why =
+        unplayable(channel, schema == reader_.schemas().end() ? nullptr : &schema->second, &type);
+    if (!why.empty()) {
+      if (!wanted.empty())
+        throw std::invalid_argument(options_.input + ": topic " + topic +
+                                    " cannot be played: " + why);
+      skipped_.push_back(topic + ": " + why);
+      continue;
+    }
+    auto output = std::make_unique<Output>();
+    output->topic = topic;
+    output->type = type;
+    interfaces::QosProfile fallback = interfaces::commandQos();
+    fallback.name = "recorded";
+    try {
+      output->qos = qosFromMetadata(channel.metadata, fallback);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(options_.input + ": topic " + topic + ": " + e.what());
+    }
+    outputs_[id] = std::move(output);
+  }
+  for (const auto& topic : wanted) {
+    if (!found.count(topic))
+      throw std::invalid_argument(options_.input + ": no channel '" + topic +
+                                  "' in the bag (auv bag info lists them)");
+  }
+}
+
+Player::~Player() = default;
+
+std::vector<std::string> Player::playing() const {
+  std::vector<std::string> lines;
+  for (const auto& [id, output] : outputs_)
+    lines.push_back(output->topic + " [" + output->type->name + "] " + output->qos.summary());
+  return lines;
+}
+
+PlayStats Player::play(const std::atomic<bool>& stop) {
+  using Clock = std::chrono::steady_clock;
+  const auto wall_start = Clock::now();
+  PlayStats stats;
+  const interfaces::Vendor vendor = options_.vendor.empty()
+                                        ? interfaces::vendorFromEnvironment()
+                                        : interfaces::vendorFromString(options_.vendor);
+  const int domain =
+      options_.domain_id >= 0 ? options_.domain_id : interfaces::domainFromEnvironment();
+  auto participant = interfaces::createParticipant(vendor, {domain, "auv_bag_play"});
+  for (auto& [id, output] : outputs_)
+    output->writer = participant->createSerializedWriter(output->topic, *output->type, output->qos);
+
+  const auto sleep_until = [&](Clock::time_point when) {
+    while (!stop && Clock::now() < when)
+      std::this_thread::sleep_for(
+          std::min<Clock::duration>(when - Clock::now(), std::chrono::milliseconds(50)));
+  };
+  sleep_until(Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                 std::chrono::duration<double>(options_.delay_s)));
+
+  ReadFilter filter;
+  for (const auto& [id, output] : outputs_)
+    filter.topics.push_back(reader_.channels().at(id).topic);
+  const uint64_t bag_start = reader_.statistics().message_start_time;
+  filter.start_ns = bag_start + static_cast<uint64_t>(options_.start_offset_s * 1e9);
+  while (!stop && !outputs_.empty()) {
+    auto messages = reader_.messages(filter);
+    std::optional<uint64_t> first_log;
+    Clock::time_point pass_start;
+    while (!stop) {
+      auto message = messages.next();
+      if (!message) break;
+      const auto output = outputs_.find(message->message.channel_id);
+      if (output == outputs_.end()) continue;
+      if (!first_log) {
+        first_log = message->message.log_time;
+        pass_start = Clock::now();
+      }
+      // Log times of one recording are in order; a message logged before the first (clocks
+      // of several publishers) goes out at once.
+      const double offset_s =
+          message->message.log_time > *first_log
+              ? static_cast<double>(message->message.log_time - *first_log) * 1e-9 / options_.rate
+              : 0.0;
+      sleep_until(pass_start + std::chrono::duration_cast<Clock::duration>(
+                                   std::chrono::duration<double>(offset_s)));
+      if (stop) break;
+      try {
+        output->second->writer->write(message->message.data);
+      } catch (const std::invalid_argument&) {
+        ++stats.refused;
+        continue;
+      }
+      ++stats.messages;
+      ++stats.per_topic[output->second->topic];
+    }
+    if (stop) break;
+    ++stats.loops;
+    if (!options_.loop) break;
+  }
+  stats.stopped = stop;
+  for (auto& [id, output] : outputs_) {
+    if (output->qos.reliability == interfaces::Reliability::RELIABLE)
+      output->writer->waitForAcknowledgments(5.0);
+  }
+  stats.wall_s = std::chrono::duration<double>(Clock::now() - wall_start).count();
+  return stats;
+}
+
+}  // namespace auv::bag
