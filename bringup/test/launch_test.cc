@@ -1109,6 +1109,26 @@ TEST(ShippedLaunchTest, VehicleGivesThePlannerItsReplanningMode) {
   }
 }
 
+// record:=true records every topic into the run's bag folder with `auv bag record`, in a
+// process of its own that restarts (into a new bag) without touching the autonomy.
+TEST(ShippedLaunchTest, VehicleRecordsABagOnlyWhenAsked) {
+  const std::string file = std::string(AUV_SHIPPED_LAUNCH_DIR) + "/vehicle.yaml";
+  const auto bagProcess = [](const LaunchDescription& launch) -> const ProcessDescription* {
+    for (const ProcessDescription& process : launch.processes)
+      if (process.name == "bag") return &process;
+    return nullptr;
+  };
+  EXPECT_EQ(bagProcess(parseLaunchFile(file, {})), nullptr);
+  const LaunchDescription launch =
+      parseLaunchFile(file, {{"record", "true"}, {"run_dir", "runs/r1"}, {"vendor", "fastdds"}});
+  const ProcessDescription* bag = bagProcess(launch);
+  ASSERT_NE(bag, nullptr);
+  EXPECT_EQ(bag->command, (std::vector<std::string>{"auv", "bag", "record", "-a", "-o",
+                                                    "runs/r1/bags/", "--vendor", "fastdds"}));
+  EXPECT_EQ(bag->restart, RestartPolicy::ON_FAILURE);
+  EXPECT_FALSE(bag->required);
+}
+
 // Like ROS_DOMAIN_ID for ros2 launch: an exported AUV_DOMAIN_ID / AUV_DDS is every shipped
 // launch file's default domain and vendor, and domain:= / vendor:= still win.
 TEST(ShippedLaunchTest, ExportedDomainAndVendorAreTheDefaults) {

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <ctime>
 #include <exception>
+#include <filesystem>
 #include <string>
 #include <thread>
 
@@ -20,9 +21,10 @@ namespace {
 constexpr const char* kUsage =
     "usage: auv bag record (-a | TOPIC...) [-o FILE.mcap] [options]\n"
     "  -a, --all              every topic on the domain, including those that appear later\n"
-    "  -o, --output FILE      the bag (default auv_bag_<date>_<time>.mcap); written as\n"
-    "                         FILE.part and renamed when recording stops; never overwritten\n"
-    "                         unless --overwrite\n"
+    "  -o, --output FILE      the bag (default auv_bag_<date>_<time>.mcap; a folder, or a\n"
+    "                         name ending in '/', gets that name inside, created if needed);\n"
+    "                         written as FILE.part and renamed when recording stops; never\n"
+    "                         overwritten unless --overwrite\n"
     "  -x, --exclude TOPIC    leave TOPIC out (repeatable)\n"
     "  --compression C        zstd (default), lz4 or none\n"
     "  --chunk-size BYTES     messages per compressed chunk (default 1048576)\n"
@@ -102,7 +104,12 @@ int main(int argc, char** argv) {
     if (all == !options.topics.empty())
       throw std::invalid_argument(all ? "give -a or topics, not both"
                                       : "no topics given (-a records every topic)");
-    if (options.output.empty()) options.output = defaultName();
+    if (options.output.empty()) {
+      options.output = defaultName();
+    } else if (options.output.back() == '/' || std::filesystem::is_directory(options.output)) {
+      std::filesystem::create_directories(options.output);
+      options.output = (std::filesystem::path(options.output) / defaultName()).string();
+    }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "auv bag record: %s\n%s", e.what(), kUsage);
     return 2;
