@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
@@ -312,6 +313,50 @@ TEST(RecordPlay, PlayKeepsOrderAndSpacingScaledByRate) {
   const double fast = span_at(4.0);
   EXPECT_GT(normal, 0.6);
   EXPECT_LT(fast, normal / 2);
+}
+
+// Vehicle state is offered with a 0.5 s deadline and its readers request it: a player that
+// offered none would match no such reader (the first mission bag replayed fed no odometry).
+TEST(RecordPlay, ReadersThatRequestADeadlineGetThePlayedState) {
+  const int domain = 18;
+  TempDir dir("deadline");
+  const fs::path bag = dir.path() / "state.mcap";
+  const auto& type = interfaces::typeSupportByName("Odometry");
+  {
+    auto sender = interfaces::createParticipant(Vendor::CYCLONEDDS, {domain, "sender"});
+    auto writer = sender->createWriter("/bag/state", type, interfaces::stateQos());
+    Recorder recorder(recorderOptions(bag, domain));
+    recorder.start();
+    ASSERT_TRUE(waitUntil([&] { return writer->matchedReaders() > 0; }, 10s));
+    msg::Odometry odometry;
+    for (int i = 0; i < 10; ++i) {
+      odometry.altitude(i);
+      writer->write(&odometry);
+      std::this_thread::sleep_for(20ms);
+    }
+    ASSERT_TRUE(writer->waitForAcknowledgments(5.0));
+    recorder.stop();
+  }
+  McapReader reader;
+  reader.open(bag);
+  ASSERT_EQ(reader.channels().size(), 1u);
+  const auto qos = qosFromMetadata(reader.channels().begin()->second.metadata, {});
+  EXPECT_DOUBLE_EQ(qos.deadline_s, interfaces::stateQos().deadline_s);
+
+  auto listener = interfaces::createParticipant(Vendor::FASTDDS, {domain, "listener"});
+  std::atomic<int> received{0};
+  auto subscription = listener->createReader("/bag/state", type, interfaces::stateQos(),
+                                             [&](interfaces::DataReader& r) {
+                                               msg::Odometry sample;
+                                               while (r.take(&sample, nullptr)) ++received;
+                                             });
+  PlayerOptions options;
+  options.input = bag.string();
+  options.domain_id = domain;
+  options.delay_s = 1.0;
+  std::atomic<bool> stop{false};
+  Player(options).play(stop);
+  EXPECT_TRUE(waitUntil([&] { return received > 0; }, 5s));
 }
 
 TEST(RecordPlay, TopicFiltersRecordAndPlayOnlyWhatWasAsked) {

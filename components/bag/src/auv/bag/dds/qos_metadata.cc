@@ -1,7 +1,11 @@
 #include "auv/bag/dds/qos_metadata.h"
 
+#include "auv/config/yaml_scalars.h"
+
 #include <algorithm>
+#include <cmath>
 #include <set>
+#include <sstream>
 #include <stdexcept>
 
 namespace auv::bag {
@@ -10,6 +14,17 @@ using interfaces::Durability;
 using interfaces::History;
 using interfaces::QosProfile;
 using interfaces::Reliability;
+
+namespace {
+
+std::string number(double value) {
+  std::ostringstream out;
+  out.precision(17);
+  out << value;
+  return out.str();
+}
+
+}  // namespace
 
 StringMap channelMetadata(const std::string& dds_type,
                           const std::vector<interfaces::EndpointInfo>& writers,
@@ -20,6 +35,11 @@ StringMap channelMetadata(const std::string& dds_type,
   QosProfile offered = recorded_with;
   int depth = 0;
   bool keep_all = false;
+  // Readers may request a deadline or a liveliness lease (vehicle state asks for 0.5 s): an
+  // offer matches them only if it is at least as strict, so a player offers the strictest
+  // any writer did.
+  double deadline_s = 0, lease_s = 0;
+  bool manual_liveliness = false;
   std::string profiles;
   std::set<std::string> vendors;
   for (const auto& writer : writers) {
@@ -27,6 +47,13 @@ StringMap channelMetadata(const std::string& dds_type,
       keep_all = keep_all || writer.qos.history == History::KEEP_ALL;
       depth = std::max(depth, writer.qos.depth);
     }
+    const auto strictest = [](double current, double offered) {
+      return offered > 0 && (current == 0 || offered < current) ? offered : current;
+    };
+    deadline_s = strictest(deadline_s, writer.qos.deadline_s);
+    lease_s = strictest(lease_s, writer.qos.liveliness_lease_s);
+    manual_liveliness =
+        manual_liveliness || writer.qos.liveliness == interfaces::Liveliness::MANUAL_BY_TOPIC;
     // A Fast DDS writer announces no history: its summary would show the default.
     std::string summary = writer.qos.summary();
     const size_t history = summary.find("keep_");
@@ -46,6 +73,9 @@ StringMap channelMetadata(const std::string& dds_type,
       {"offered_qos_profiles", profiles},
       {"writers", vendor_list},
   };
+  if (deadline_s > 0) metadata["qos.deadline_s"] = number(deadline_s);
+  if (lease_s > 0) metadata["qos.liveliness_lease_s"] = number(lease_s);
+  if (manual_liveliness) metadata["qos.liveliness"] = "manual_by_topic";
   if (keep_all) {
     metadata["qos.history"] = "keep_all";
   } else if (depth > 0) {
@@ -98,6 +128,21 @@ QosProfile qosFromMetadata(const StringMap& metadata, const QosProfile& fallback
     }
     if (used != value->size() || depth < 1) refuse("qos.depth", *value, "an integer >= 1");
     qos.depth = depth;
+  }
+  const auto seconds = [&](const char* key, double& into) {
+    const auto* value = find(metadata, key);
+    if (!value) return;
+    const auto parsed = config::parseNumber(*value);
+    if (!parsed || !(*parsed > 0) || !std::isfinite(*parsed)) refuse(key, *value, "seconds > 0");
+    into = *parsed;
+  };
+  seconds("qos.deadline_s", qos.deadline_s);
+  seconds("qos.liveliness_lease_s", qos.liveliness_lease_s);
+  if (const auto* value = find(metadata, "qos.liveliness")) {
+    if (*value != "automatic" && *value != "manual_by_topic")
+      refuse("qos.liveliness", *value, "automatic or manual_by_topic");
+    qos.liveliness = *value == "manual_by_topic" ? interfaces::Liveliness::MANUAL_BY_TOPIC
+                                                 : interfaces::Liveliness::AUTOMATIC;
   }
   // A best-effort transient-local offer is refused by check(); such a bag was not ours.
   if (qos.reliability == Reliability::BEST_EFFORT) qos.durability = Durability::VOLATILE;

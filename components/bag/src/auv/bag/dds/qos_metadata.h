@@ -7,6 +7,8 @@
 //   qos.durability   volatile | transient_local
 //   qos.history      keep_last | keep_all
 //   qos.depth        the writers' largest announced depth (keep_last)
+//   qos.deadline_s, qos.liveliness, qos.liveliness_lease_s   the strictest any writer offered
+//                    (readers that request a deadline match only offers at least as strict)
 //   offered_qos_profiles  one line per writer, for people (QosProfile::summary())
 //   dds_type         the DDS type name as announced ("auv::msg::Odometry")
 //   writers          the writers' vendors ("cyclonedds", "fastdds")
