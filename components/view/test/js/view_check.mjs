@@ -1,0 +1,84 @@
+// Loads an `auv view` page in headless Chromium (Debian's) with puppeteer-core and prints one
+// JSON line: what window.__auvView reports, the share of canvas pixels that are not the
+// background, console errors, and in live mode the vehicle's positions some time apart.
+//   node view_check.mjs <url> <chromium> [--live-seconds S] [--benchmark S] [--size WxH]
+import { createRequire } from 'node:module';
+import path from 'node:path';
+import { fileURLToPath } from 'node:url';
+
+// Modules come from the repository's js/node_modules (AUV_VIEW_JS_DIR overrides).
+const here = path.dirname(fileURLToPath(import.meta.url));
+const jsDir = process.env.AUV_VIEW_JS_DIR ?? path.resolve(here, '../../../../js');
+const require = createRequire(path.join(jsDir, 'package.json'));
+const puppeteer = require('puppeteer-core');
+
+const [url, chromium, ...rest] = process.argv.slice(2);
+const option = (name, fallback) => {
+  const i = rest.indexOf(name);
+  return i >= 0 ? rest[i + 1] : fallback;
+};
+const liveSeconds = Number(option('--live-seconds', 0));
+const benchmarkSeconds = Number(option('--benchmark', 0));
+const [width, height] = option('--size', '1024x768').split('x').map(Number);
+
+const browser = await puppeteer.launch({
+  executablePath: chromium,
+  headless: true,
+  // Software GL: no GPU in CI or here (SwiftShader through ANGLE).
+  args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
+    '--ignore-gpu-blocklist', `--window-size=${width},${height}`],
+});
+const result = { errors: [], requestsFailed: [] };
+try {
+  const page = await browser.newPage();
+  await page.setViewport({ width, height });
+  page.on('console', (m) => { if (m.type() === 'error') result.errors.push(m.text()); });
+  page.on('pageerror', (e) => result.errors.push(String(e.message || e)));
+  page.on('requestfailed', (r) => result.requestsFailed.push(r.url()));
+  page.on('response', (r) => { if (r.status() >= 400) result.errors.push(`${r.url()}: HTTP ${r.status()}`); });
+  const t0 = Date.now();
+  await page.goto(url, { waitUntil: 'load' });
+  await page.waitForFunction(
+    () => window.__auvView?.ready && window.__auvView.firstFrameMs !== null, { timeout: 120000 });
+  result.readyMs = Date.now() - t0;
+  if (liveSeconds > 0) {
+    await page.waitForFunction(() => window.__auvView.vehicle !== null, { timeout: 30000 });
+    result.vehicleFirst = await page.evaluate(() => ({ ...window.__auvView.vehicle,
+      updates: window.__auvView.live.vehicleUpdates }));
+    await new Promise((r) => setTimeout(r, liveSeconds * 1000));
+    result.vehicleLast = await page.evaluate(() => ({ ...window.__auvView.vehicle,
+      updates: window.__auvView.live.vehicleUpdates }));
+  }
+  if (benchmarkSeconds > 0) {
+    result.fps = await page.evaluate((s) => window.__auvView.benchmark(s), benchmarkSeconds);
+  }
+  // Wait for two more frames so the canvas holds what was loaded last.
+  const frames = await page.evaluate(() => window.__auvView.frames);
+  await page.evaluate(() => window.__auvView.fit());
+  await page.waitForFunction((f) => window.__auvView.frames > f, { timeout: 30000 }, frames);
+  result.view = await page.evaluate(() => {
+    const v = window.__auvView;
+    return { kind: v.kind, counts: v.counts, frames: v.frames, firstFrameMs: v.firstFrameMs,
+      modelLevel: v.modelLevel, errors: v.errors, live: v.live };
+  });
+  // Pixels that differ from the background (#0b1e2d), read back from the WebGL canvas.
+  result.nonBackground = await page.evaluate(() => {
+    const canvas = document.querySelector('#view canvas');
+    const copy = document.createElement('canvas');
+    copy.width = canvas.width;
+    copy.height = canvas.height;
+    const ctx = copy.getContext('2d');
+    ctx.drawImage(canvas, 0, 0);
+    const data = ctx.getImageData(0, 0, copy.width, copy.height).data;
+    let differ = 0;
+    for (let i = 0; i < data.length; i += 4) {
+      if (Math.abs(data[i] - 11) + Math.abs(data[i + 1] - 30) + Math.abs(data[i + 2] - 45) > 24) differ++;
+    }
+    return differ / (data.length / 4);
+  });
+} catch (e) {
+  result.errors.push(`view_check: ${e.message}`);
+} finally {
+  await browser.close();
+}
+console.log(JSON.stringify(result));

@@ -1,0 +1,199 @@
+// auv view: loads the scene the server prepared (/api/scene) and draws it with three.js.
+// window.__auvView reports what is drawn, for the tests and the benchmark (README.md, "Tests").
+import * as THREE from 'three';
+import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+import { BUILDERS, drawnCount, fetchLayer } from './layers.js';
+import { LiveView } from './live.js';
+
+const started = performance.now();
+const state = window.__auvView = {
+  ready: false, kind: null, counts: {}, frames: 0, errors: [], firstFrameMs: null,
+  modelLevel: null, live: null, vehicle: null,
+};
+window.addEventListener('error', (e) => state.errors.push(String(e.message)));
+window.addEventListener('unhandledrejection', (e) => state.errors.push(String(e.reason)));
+
+const container = document.getElementById('view');
+const renderer = new THREE.WebGLRenderer({ antialias: false, preserveDrawingBuffer: true });
+renderer.setPixelRatio(1);  // software GL: every pixel counts
+renderer.setSize(container.clientWidth, container.clientHeight);
+container.appendChild(renderer.domElement);
+const scene = new THREE.Scene();
+scene.background = new THREE.Color('#0b1e2d');
+scene.add(new THREE.AmbientLight(0xffffff, 1.2));
+const sun = new THREE.DirectionalLight(0xffffff, 1.5);
+sun.position.set(0.3, 1, 0.5);
+scene.add(sun);
+const camera = new THREE.PerspectiveCamera(50, container.clientWidth / container.clientHeight,
+  0.05, 5000);
+camera.position.set(10, 10, 10);
+const controls = new OrbitControls(camera, renderer.domElement);
+
+// The data is NED (x north, y east, z down); three.js is y up: x -> -z, y -> x, z -> -y.
+const root = new THREE.Group();
+root.matrixAutoUpdate = false;
+root.matrix.set(0, 1, 0, 0, 0, 0, -1, 0, -1, 0, 0, 0, 0, 0, 0, 1);
+scene.add(root);
+
+let dirty = true;
+const requestRender = () => { dirty = true; };
+controls.addEventListener('change', requestRender);
+window.addEventListener('resize', () => {
+  camera.aspect = container.clientWidth / container.clientHeight;
+  camera.updateProjectionMatrix();
+  renderer.setSize(container.clientWidth, container.clientHeight);
+  requestRender();
+});
+
+let spin = null;  // the benchmark's orbit: {until, frames, start}
+function frame(now) {
+  requestAnimationFrame(frame);
+  if (spin) {
+    const angle = 0.01;
+    const offset = camera.position.clone().sub(controls.target);
+    offset.applyAxisAngle(new THREE.Vector3(0, 1, 0), angle);
+    camera.position.copy(controls.target).add(offset);
+    camera.lookAt(controls.target);
+    dirty = true;
+  }
+  if (!dirty) return;
+  dirty = false;
+  renderer.render(scene, camera);
+  state.frames++;
+  if (spin) {
+    spin.frames++;
+    if (now >= spin.until) { spin.resolve(spin.frames / ((now - spin.start) / 1000)); spin = null; }
+  }
+  if (state.firstFrameMs === null && root.children.length) state.firstFrameMs = now - started;
+}
+requestAnimationFrame(frame);
+
+/** Frames per second while the camera orbits for `seconds` (the benchmark). */
+state.benchmark = (seconds) => new Promise((resolve) => {
+  spin = { start: performance.now(), until: performance.now() + seconds * 1000, frames: 0, resolve };
+});
+state.fit = fitView;
+
+function fitView() {
+  const box = new THREE.Box3().setFromObject(root);
+  if (box.isEmpty()) return;
+  const centre = box.getCenter(new THREE.Vector3());
+  const radius = Math.max(box.getSize(new THREE.Vector3()).length() / 2, 1);
+  controls.target.copy(centre);
+  const distance = radius / Math.sin((camera.fov * Math.PI) / 360);
+  camera.position.copy(centre).add(new THREE.Vector3(0.6, 0.7, 0.9).normalize().multiplyScalar(distance));
+  camera.near = distance / 1000;
+  camera.far = distance * 10;
+  camera.updateProjectionMatrix();
+  controls.update();
+  requestRender();
+}
+
+const objects = new Map();  // layer id -> Object3D
+function addLayerControl(layer, object) {
+  const label = document.createElement('label');
+  const box = document.createElement('input');
+  box.type = 'checkbox';
+  box.checked = object.visible;
+  box.dataset.layer = layer.id;
+  box.onchange = () => { object.visible = box.checked; requestRender(); };
+  const swatch = document.createElement('span');
+  swatch.className = 'swatch';
+  swatch.style.background = layer.color || '#aaa';
+  label.append(box, swatch, `${layer.label} (${layer.count})`);
+  document.getElementById('layers').append(label);
+}
+
+async function loadLayer(layer) {
+  const arrays = await fetchLayer(layer);
+  const object = BUILDERS[layer.type](layer, arrays);
+  object.name = layer.id;
+  object.visible = layer.visible !== false;
+  objects.set(layer.id, object);
+  state.counts[layer.id] = drawnCount(layer, arrays);
+  return object;
+}
+
+/** The model: the coarsest level first (a first frame at once), then the default level. */
+async function loadModel(manifest) {
+  const model = manifest.model;
+  const layerOf = (k) => manifest.layers.find((l) => l.id === model.levels[k].layer);
+  let shown = null;
+  const show = async (k) => {
+    const object = objects.get(layerOf(k).id) || await loadLayer(layerOf(k));
+    if (shown) root.remove(shown);
+    root.add(object);
+    shown = object;
+    state.modelLevel = k;
+    state.counts.model = state.counts[layerOf(k).id];
+    requestRender();
+  };
+  if (model.coarsest !== model.default) {
+    await show(model.coarsest);
+    if (!state.fitted) { fitView(); state.fitted = true; }
+  }
+  await show(model.default);
+  const select = document.createElement('select');
+  select.id = 'lod-select';
+  model.levels.forEach((level, k) => {
+    const option = document.createElement('option');
+    option.value = k;
+    option.text = `level ${k}: ${level.triangles.toLocaleString()} triangles`;
+    select.append(option);
+  });
+  select.value = model.default;
+  select.onchange = () => show(Number(select.value)).catch(report);
+  document.getElementById('lod').append('model detail ', select);
+  addLayerControl({ id: 'model', label: 'textured model', count: model.triangles }, { get visible() { return shown?.visible ?? true; }, set visible(v) { if (shown) shown.visible = v; } });
+}
+
+function report(error) {
+  state.errors.push(String(error?.message || error));
+  console.error(error);
+}
+
+async function main() {
+  const response = await fetch('/api/scene');
+  const manifest = await response.json();
+  state.kind = manifest.kind;
+  document.getElementById('title').textContent = `auv view: ${manifest.name} (${manifest.kind})`;
+  document.title = `auv view: ${manifest.name}`;
+  const notes = document.getElementById('notes');
+  for (const note of manifest.notes || []) {
+    const div = document.createElement('div');
+    div.textContent = note;
+    notes.append(div);
+  }
+  const pending = [];
+  if (manifest.model) pending.push(loadModel(manifest));
+  for (const layer of manifest.layers) {
+    if (layer.type === 'mesh') continue;  // the model's levels: loadModel
+    pending.push(loadLayer(layer).then((object) => {
+      root.add(object);
+      addLayerControl(layer, object);
+      requestRender();
+    }));
+  }
+  const results = await Promise.allSettled(pending);
+  results.filter((r) => r.status === 'rejected').forEach((r) => report(r.reason));
+  if (!state.fitted) fitView();
+  if (manifest.live) startLive(manifest.live);
+  state.ready = true;
+  requestRender();
+}
+
+function startLive(url) {
+  const status = document.getElementById('status');
+  let fitted = false;
+  const live = new LiveView(root, url, () => {
+    state.live = live.state;
+    state.vehicle = live.state.vehicle;
+    status.textContent = `live ${url}: ${live.state.connected ? 'connected' : 'not connected'}` +
+      `, ${live.state.messages} messages ${live.state.status}`;
+    if (!fitted && live.state.entities.map) { fitted = true; fitView(); }
+    requestRender();
+  });
+  state.live = live.state;
+}
+
+main().catch(report);
