@@ -50,8 +50,9 @@ size_t writeGridObj(const fs::path& folder, int n, double extent) {
   for (int j = 0; j < n; ++j) {
     for (int i = 0; i < n; ++i) {
       const int a = j * (n + 1) + i + 1, b = a + 1, c = a + n + 1, d = c + 1;
-      obj << "f " << a << "/" << a << " " << b << "/" << b << " " << d << "/" << d << "\n";
-      obj << "f " << a << "/" << a << " " << d << "/" << d << " " << c << "/" << c << "\n";
+      // Counter-clockwise seen from above (-z in NED): the faces point up, to the cameras.
+      obj << "f " << a << "/" << a << " " << d << "/" << d << " " << b << "/" << b << "\n";
+      obj << "f " << a << "/" << a << " " << c << "/" << c << " " << d << "/" << d << "\n";
     }
   }
   return static_cast<size_t>(2 * n * n);

@@ -51,6 +51,10 @@ try {
   }
   if (benchmarkSeconds > 0) {
     result.fps = await page.evaluate((s) => window.__auvView.benchmark(s), benchmarkSeconds);
+    // The anchor: the same page, renderer and canvas with nothing drawn but the background.
+    await page.evaluate(() => window.__auvView.showAll(false));
+    result.fpsEmpty = await page.evaluate((s) => window.__auvView.benchmark(s), benchmarkSeconds);
+    await page.evaluate(() => window.__auvView.showAll(true));
   }
   // Wait for two more frames so the canvas holds what was loaded last.
   const frames = await page.evaluate(() => window.__auvView.frames);

@@ -31,6 +31,14 @@ function texture(url) {
   return textures.get(url);
 }
 
+// A reconstruction's faces point to the cameras that saw them: back faces are culled unless
+// asked for (software GL draws twice the triangles otherwise, README.md "Levels of detail").
+let modelSide = THREE.FrontSide;
+export function setModelBackFaces(object, show) {
+  modelSide = show ? THREE.DoubleSide : THREE.FrontSide;
+  for (const m of [object?.material ?? []].flat()) { m.side = modelSide; m.needsUpdate = true; }
+}
+
 /** A textured model level: one geometry, one group and unlit material per atlas page. */
 export function meshObject(layer, a) {
   const g = new THREE.BufferGeometry();
@@ -42,8 +50,8 @@ export function meshObject(layer, a) {
     g.addGroup(group.start, group.count, i);
     // The texture carries the light of the photos: drawn unlit. Without one, shaded.
     materials.push(group.texture
-      ? new THREE.MeshBasicMaterial({ map: texture(group.texture), side: THREE.DoubleSide })
-      : new THREE.MeshLambertMaterial({ color: 0xb0a890, side: THREE.DoubleSide }));
+      ? new THREE.MeshBasicMaterial({ map: texture(group.texture), side: modelSide })
+      : new THREE.MeshLambertMaterial({ color: 0xb0a890, side: modelSide }));
   });
   if (layer.groups.some((group) => !group.texture)) g.computeVertexNormals();
   g.computeBoundingSphere();

@@ -2,7 +2,7 @@
 // window.__auvView reports what is drawn, for the tests and the benchmark (README.md, "Tests").
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
-import { BUILDERS, drawnCount, fetchLayer } from './layers.js';
+import { BUILDERS, drawnCount, fetchLayer, setModelBackFaces } from './layers.js';
 import { LiveView } from './live.js';
 
 const started = performance.now();
@@ -64,7 +64,9 @@ function frame(now) {
     spin.frames++;
     if (now >= spin.until) { spin.resolve(spin.frames / ((now - spin.start) / 1000)); spin = null; }
   }
-  if (state.firstFrameMs === null && root.children.length) state.firstFrameMs = now - started;
+  if (state.firstFrameMs === null && (root.children.length || state.ready)) {
+    state.firstFrameMs = now - started;
+  }
 }
 requestAnimationFrame(frame);
 
@@ -73,6 +75,9 @@ state.benchmark = (seconds) => new Promise((resolve) => {
   spin = { start: performance.now(), until: performance.now() + seconds * 1000, frames: 0, resolve };
 });
 state.fit = fitView;
+state.three = { scene, root, renderer, camera };
+/** Hides (or shows again) everything: the benchmark's anchor, an empty scene in the same page. */
+state.showAll = (visible) => { root.visible = visible; requestRender(); };
 
 function fitView() {
   const box = new THREE.Box3().setFromObject(root);
@@ -114,37 +119,87 @@ async function loadLayer(layer) {
   return object;
 }
 
-/** The model: the coarsest level first (a first frame at once), then the default level. */
-async function loadModel(manifest) {
-  const model = manifest.model;
-  const layerOf = (k) => manifest.layers.find((l) => l.id === model.levels[k].layer);
-  let shown = null;
-  const show = async (k) => {
-    const object = objects.get(layerOf(k).id) || await loadLayer(layerOf(k));
-    if (shown) root.remove(shown);
-    root.add(object);
-    shown = object;
-    state.modelLevel = k;
-    state.counts.model = state.counts[layerOf(k).id];
-    requestRender();
-  };
-  if (model.coarsest !== model.default) {
-    await show(model.coarsest);
-    if (!state.fitted) { fitView(); state.fitted = true; }
+// Levels of detail (README.md): software GL pays per triangle, and a triangle smaller than a
+// few pixels shows nothing more. "auto" keeps about PIXELS_PER_TRIANGLE pixels of the model's
+// projected bounding sphere per triangle (zoomed out: coarse; zoomed in: finer), at most
+// the default level of the server (--max-triangles); a level is fetched when first chosen.
+const PIXELS_PER_TRIANGLE = 16;
+const model = { levels: [], shown: null, level: null, auto: true, loading: new Map(), sphere: null };
+
+function autoLevel() {
+  if (!model.sphere) return model.defaultLevel;
+  const distance = Math.max(camera.position.distanceTo(model.sphere.center), 1e-6);
+  const half = Math.tan((camera.fov * Math.PI) / 360) * distance;
+  const radiusPx = (model.sphere.radius / half) * (renderer.domElement.height / 2);
+  const budget = Math.min((Math.PI * radiusPx * radiusPx) / PIXELS_PER_TRIANGLE, model.maxTriangles);
+  // Levels run finest (0) to coarsest: the finest one within the budget, else the coarsest.
+  const k = model.levels.findIndex((level) => level.triangles <= budget);
+  return k < 0 ? model.levels.length - 1 : k;
+}
+
+async function showLevel(k) {
+  if (model.level === k) return;
+  const layer = model.levels[k].layerInfo;
+  if (!objects.has(layer.id)) {
+    if (!model.loading.has(k)) model.loading.set(k, loadLayer(layer));
+    await model.loading.get(k);
   }
-  await show(model.default);
+  const object = objects.get(layer.id);
+  if (model.shown) { object.visible = model.shown.visible; root.remove(model.shown); }
+  root.add(object);
+  model.shown = object;
+  model.level = k;
+  state.modelLevel = k;
+  state.counts.model = state.counts[layer.id];
+  const select = document.getElementById('lod-select');
+  if (select && !model.auto) select.value = k;
+  const label = document.getElementById('lod-shown');
+  if (label) label.textContent = ` showing level ${k}`;
+  requestRender();
+}
+
+function updateAutoLevel() {
+  if (model.auto && model.levels.length) showLevel(autoLevel()).catch(report);
+}
+
+/** The coarsest level first (a first frame at once), then the level "auto" picks. */
+async function loadModel(manifest) {
+  const info = manifest.model;
+  model.levels = info.levels.map((level) => ({ ...level,
+    layerInfo: manifest.layers.find((l) => l.id === level.layer) }));
+  model.defaultLevel = info.default;
+  model.maxTriangles = info.levels[info.default].triangles;
+  await showLevel(info.coarsest);
+  model.sphere = model.shown.geometry.boundingSphere.clone().applyMatrix4(root.matrix);
+  fitView();
+  state.fitted = true;
   const select = document.createElement('select');
   select.id = 'lod-select';
-  model.levels.forEach((level, k) => {
-    const option = document.createElement('option');
-    option.value = k;
-    option.text = `level ${k}: ${level.triangles.toLocaleString()} triangles`;
-    select.append(option);
-  });
-  select.value = model.default;
-  select.onchange = () => show(Number(select.value)).catch(report);
-  document.getElementById('lod').append('model detail ', select);
-  addLayerControl({ id: 'model', label: 'textured model', count: model.triangles }, { get visible() { return shown?.visible ?? true; }, set visible(v) { if (shown) shown.visible = v; } });
+  select.append(new Option('auto', 'auto'));
+  model.levels.forEach((level, k) => select.append(
+    new Option(`level ${k}: ${level.triangles.toLocaleString()} triangles`, String(k))));
+  select.onchange = () => {
+    model.auto = select.value === 'auto';
+    if (model.auto) updateAutoLevel();
+    else showLevel(Number(select.value)).catch(report);
+  };
+  const back = document.createElement('input');
+  back.type = 'checkbox';
+  back.id = 'back-faces';
+  back.onchange = () => {
+    for (const k of model.levels.keys()) setModelBackFaces(objects.get(model.levels[k].layer), back.checked);
+    requestRender();
+  };
+  const backLabel = document.createElement('label');
+  backLabel.append(back, 'back faces');
+  const shown = document.createElement('span');
+  shown.id = 'lod-shown';
+  document.getElementById('lod').append('model detail ', select, shown, backLabel);
+  await showLevel(autoLevel());
+  controls.addEventListener('end', updateAutoLevel);  // not mid-drag: a fetch would stutter
+  addLayerControl({ id: 'model', label: 'textured model', count: info.triangles },
+    { get visible() { return model.shown?.visible ?? true; },
+      set visible(v) { if (model.shown) model.shown.visible = v; } });
 }
 
 function report(error) {

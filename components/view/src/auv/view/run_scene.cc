@@ -19,17 +19,16 @@ namespace {
 
 /// Occupied leaves of the map (pruned leaves keep their size): centre and edge length.
 void addMap(Scene& scene, const fs::path& file) {
-  std::unique_ptr<octomap::AbstractOcTree> tree(octomap::AbstractOcTree::read(file.string()));
-  octomap::OcTree* map = nullptr;
-  if (!tree) {
-    // .bt files are written by writeBinary (no header AbstractOcTree::read understands).
+  // .bt (writeBinary, what the mission handler writes) has its own reader; .ot the generic one.
+  std::unique_ptr<octomap::AbstractOcTree> tree;
+  if (file.extension() == ".bt") {
     auto binary = std::make_unique<octomap::OcTree>(0.1);
-    if (!binary->readBinary(file.string())) {
-      throw config::ConfigError(file.string() + ": not an OctoMap file (.bt or .ot)");
-    }
-    tree.reset(binary.release());
+    if (binary->readBinary(file.string())) tree = std::move(binary);
+  } else {
+    tree.reset(octomap::AbstractOcTree::read(file.string()));
   }
-  map = dynamic_cast<octomap::OcTree*>(tree.get());
+  if (!tree) throw config::ConfigError(file.string() + ": not an OctoMap file (.bt or .ot)");
+  auto* map = dynamic_cast<octomap::OcTree*>(tree.get());
   if (!map) throw config::ConfigError(file.string() + ": an OctoMap of another tree type");
   std::vector<float> centre, size;
   for (auto it = map->begin_leafs(), end = map->end_leafs(); it != end; ++it) {
