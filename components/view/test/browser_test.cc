@@ -1,1 +1,169 @@
-// placeholder
+// The page in headless Chromium (Debian's /usr/bin/chromium, software GL) driven by
+// puppeteer-core (js/node_modules): a demo survey, a demo run and live mode fed by a Foxglove
+// WebSocket server — @foxglove/ws-protocol's own — load without console errors, draw pixels and
+// report the expected object counts (test/js/view_check.mjs prints what the page reports).
+// Skipped with the step that installs what is missing.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+
+#include <nlohmann/json.hpp>
+
+#include "child.h"
+#include "fixtures.h"
+
+namespace auv::view {
+namespace {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+const fs::path kJsDir = AUV_VIEW_JS_DIR;
+const fs::path kScripts = AUV_VIEW_TEST_JS;
+
+std::string chromium() {
+  const char* env = std::getenv("AUV_VIEW_CHROMIUM");
+  return env ? env : "/usr/bin/chromium";
+}
+
+/// Why the browser tests cannot run here, or "".
+std::string missing() {
+  if (std::system("command -v node >/dev/null 2>&1") != 0) {
+    return "node is not installed (scripts/install-deps.sh installs it)";
+  }
+  for (const char* module : {"puppeteer-core", "three", "@foxglove/ws-protocol", "ws"}) {
+    if (!fs::exists(kJsDir / "node_modules" / module)) {
+      return (kJsDir / "node_modules" / module).string() +
+             " is missing (scripts/install-deps.sh runs npm ci in js/)";
+    }
+  }
+  if (!fs::exists(chromium())) {
+    return chromium() + " is missing (apt-get install chromium; scripts/install-deps.sh)";
+  }
+  return "";
+}
+
+fs::path tempDir(const std::string& name) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("auv_view_browser_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+/// auv-view with `args` on a free port; its URL, or "" when it did not start.
+std::string startView(test::Child& view) {
+  const std::string line = view.waitFor("open http://", 120);
+  const size_t start = line.find("http://");
+  if (start == std::string::npos) return "";
+  return line.substr(start, line.find(' ', start) - start);
+}
+
+json check(const std::string& url, const std::vector<std::string>& extra = {}) {
+  std::vector<std::string> argv = {"node", (kScripts / "view_check.mjs").string(), url, chromium()};
+  argv.insert(argv.end(), extra.begin(), extra.end());
+  test::Child node(argv);
+  std::string line, last;
+  while (node.readLine(line, 240)) last = line;
+  node.wait();
+  try {
+    return json::parse(last);
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "view_check.mjs printed no JSON: '" << last << "'";
+    return json::object();
+  }
+}
+
+void expectCleanPage(const json& result) {
+  EXPECT_EQ(result.value("errors", json::array()), json::array()) << result.dump();
+  EXPECT_EQ(result.value("requestsFailed", json::array()), json::array()) << result.dump();
+  EXPECT_GT(result.value("nonBackground", 0.0), 0.01) << "blank canvas: " << result.dump();
+}
+
+TEST(Browser, ShowsASurvey) {
+  const std::string why = missing();
+  if (!why.empty()) GTEST_SKIP() << why;
+  const fs::path survey = tempDir("survey");
+  const auto counts = test::writeDemoSurvey(survey);
+  test::Child view({AUV_VIEW_EXE, survey.string(), "--port", "0"});
+  const std::string url = startView(view);
+  ASSERT_FALSE(url.empty());
+  const json result = check(url);
+  expectCleanPage(result);
+  const json& c = result["view"]["counts"];
+  EXPECT_EQ(result["view"]["kind"], "survey");
+  EXPECT_EQ(c.value("model", 0u), counts.triangles) << c.dump();
+  EXPECT_EQ(c.value("dense", 0u), counts.dense_points) << c.dump();
+  EXPECT_EQ(c.value("sparse", 0u), counts.sparse_points) << c.dump();
+  EXPECT_EQ(c.value("cameras", 0u), counts.cameras) << c.dump();
+  EXPECT_EQ(c.value("contribution", 0u), counts.dense_points) << c.dump();
+  EXPECT_EQ(c.value("trajectory_sfm", 0u), 2u) << c.dump();
+  EXPECT_EQ(c.value("trajectory_estimated", 0u), 1u) << c.dump();
+  EXPECT_EQ(c.value("trajectory_true", 0u), 1u) << c.dump();
+  fs::remove_all(survey);
+}
+
+TEST(Browser, ShowsAMissionRun) {
+  const std::string why = missing();
+  if (!why.empty()) GTEST_SKIP() << why;
+  const fs::path run = tempDir("run");
+  const auto counts = test::writeDemoRun(run);
+  test::Child view({AUV_VIEW_EXE, run.string(), "--port", "0"});
+  const std::string url = startView(view);
+  ASSERT_FALSE(url.empty());
+  const json result = check(url);
+  expectCleanPage(result);
+  const json& c = result["view"]["counts"];
+  EXPECT_EQ(result["view"]["kind"], "run");
+  EXPECT_EQ(c.value("map", 0u), counts.voxels) << c.dump();
+  EXPECT_EQ(c.value("trees", 0u), counts.tree_edges) << c.dump();
+  EXPECT_EQ(c.value("paths", 0u), counts.paths) << c.dump();
+  EXPECT_EQ(c.value("waypoints", 0u), counts.waypoints) << c.dump();
+  EXPECT_EQ(c.value("collisions", 0u), counts.collisions) << c.dump();
+  EXPECT_EQ(c.value("trajectory_true", 0u), 1u) << c.dump();
+  EXPECT_EQ(c.value("trajectory_estimated", 0u), 1u) << c.dump();
+  fs::remove_all(run);
+}
+
+/// What the live view saw from a bridge at `ws`, over `seconds` of watching: the vehicle moved,
+/// and map, tree, path, trajectories and vehicle entities arrived (`entities`: what was seen).
+void expectLiveVehicleMoves(const std::string& ws, double seconds, json& entities) {
+  test::Child view({AUV_VIEW_EXE, "--live", ws, "--port", "0"});
+  const std::string url = startView(view);
+  ASSERT_FALSE(url.empty());
+  const json result = check(url, {"--live-seconds", std::to_string(seconds)});
+  expectCleanPage(result);
+  ASSERT_TRUE(result.contains("view")) << result.dump();
+  const json& live = result["view"]["live"];
+  EXPECT_TRUE(live.value("connected", false)) << result.dump();
+  ASSERT_TRUE(result.contains("vehicleFirst") && result.contains("vehicleLast")) << result.dump();
+  const json &a = result["vehicleFirst"], &b = result["vehicleLast"];
+  const double moved = std::hypot(b["x"].get<double>() - a["x"].get<double>(),
+                                  b["y"].get<double>() - a["y"].get<double>());
+  EXPECT_GT(moved, 0.2) << result.dump();
+  EXPECT_GT(b["updates"].get<int>(), a["updates"].get<int>() + 5) << result.dump();
+  entities = live["entities"];
+  EXPECT_GT(entities["map"].value("cubes", 0), 0) << entities.dump();
+  for (const char* id : {"tree", "path", "trajectory_true", "trajectory_estimated"}) {
+    EXPECT_GT(entities[id].value("lines", 0), 0) << id << ": " << entities.dump();
+  }
+  EXPECT_GT(entities["vehicle"].value("cubes", 0), 0) << entities.dump();
+}
+
+TEST(Browser, LiveModeSeesTheVehicleMove) {
+  const std::string why = missing();
+  if (!why.empty()) GTEST_SKIP() << why;
+  test::Child bridge({"node", (kScripts / "fake_bridge.mjs").string()});
+  std::string line;
+  ASSERT_TRUE(bridge.readLine(line, 60)) << "fake_bridge.mjs did not start";
+  const int port = json::parse(line)["port"];
+  json entities;
+  expectLiveVehicleMoves("ws://127.0.0.1:" + std::to_string(port), 2.0, entities);
+  // What fake_bridge.mjs sends: a 12 x 5 wall of cubes, a two-edge tree (LINE_LIST).
+  EXPECT_EQ(entities["map"].value("cubes", 0), 60) << entities.dump();
+  EXPECT_EQ(entities["tree"].value("segments", 0), 2) << entities.dump();
+}
+
+}  // namespace
+}  // namespace auv::view
