@@ -34,6 +34,9 @@ PACKAGES=(
   cloudcompare
   # bags (MCAP chunk compression) and the Foxglove bridge (WebSocket server, header-only)
   libzstd-dev liblz4-dev zlib1g-dev libwebsocketpp-dev
+  # auv view: levels of detail that keep texture coordinates (meshoptimizer); headless Chromium
+  # for the page's tests and benchmark (puppeteer-core drives it, js/README.md)
+  libmeshoptimizer-dev chromium
 )
 
 echo "install-deps: apt-get update"
