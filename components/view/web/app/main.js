@@ -76,6 +76,13 @@ state.benchmark = (seconds) => new Promise((resolve) => {
 });
 state.fit = fitView;
 state.three = { scene, root, renderer, camera };
+/** Shows level k (a number) or 'auto' and resolves once it is on screen (the benchmark). */
+state.setLevel = async (k) => {
+  model.auto = k === 'auto';
+  await showLevel(model.auto ? autoLevel() : k);
+  await new Promise((resolve) => requestAnimationFrame(() => requestAnimationFrame(resolve)));
+  return model.level;
+};
 /** Hides (or shows again) everything: the benchmark's anchor, an empty scene in the same page. */
 state.showAll = (visible) => { root.visible = visible; requestRender(); };
 
@@ -168,6 +175,7 @@ async function loadModel(manifest) {
   model.levels = info.levels.map((level) => ({ ...level,
     layerInfo: manifest.layers.find((l) => l.id === level.layer) }));
   model.defaultLevel = info.default;
+  state.modelLevels = info.levels;
   model.maxTriangles = info.levels[info.default].triangles;
   await showLevel(info.coarsest);
   model.sphere = model.shown.geometry.boundingSphere.clone().applyMatrix4(root.matrix);
@@ -196,6 +204,8 @@ async function loadModel(manifest) {
   shown.id = 'lod-shown';
   document.getElementById('lod').append('model detail ', select, shown, backLabel);
   await showLevel(autoLevel());
+  state.defaultLevelMs = performance.now() - started;  // the level "auto" picks, on screen
+  state.autoLevel = model.level;
   controls.addEventListener('end', updateAutoLevel);  // not mid-drag: a fetch would stutter
   addLayerControl({ id: 'model', label: 'textured model', count: info.triangles },
     { get visible() { return model.shown?.visible ?? true; },
