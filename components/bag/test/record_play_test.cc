@@ -385,6 +385,14 @@ TEST(RecordPlay, TopicFiltersRecordAndPlayOnlyWhatWasAsked) {
 
   PlayerOptions play;
   play.input = options.output;
+  play.qos_overrides = {"/bag/a=bulk_transfer"};
+  EXPECT_EQ(Player(play).playing().size(), 1u);
+  EXPECT_THAT(Player(play).playing()[0], HasSubstr("keep_all"));
+  play.qos_overrides = {"/bag/a=fastest"};
+  EXPECT_THROW(Player{play}, std::invalid_argument);
+  play.qos_overrides = {"/bag/b=bulk_transfer"};  // not in the bag
+  EXPECT_THROW(Player{play}, std::invalid_argument);
+  play.qos_overrides.clear();
   play.topics = {"/bag/c"};
   try {
     Player player(play);

@@ -23,6 +23,9 @@ constexpr const char* kUsage =
     "  --start-offset S       skip the first S seconds of the bag\n"
     "  --delay S              wait S seconds after creating the writers, for readers to\n"
     "                         match, before the first message (default 1)\n"
+    "  --qos TOPIC=PROFILE    offer a named profile (sensor_data, state, map, command,\n"
+    "                         bulk_transfer, viewing, latched_state, clock) instead of the\n"
+    "                         recorded QoS (repeatable)\n"
     "  --vendor V             cyclonedds or fastdds (default AUV_DDS); readers of both\n"
     "                         vendors receive it\n"
     "  --domain N             DDS domain (default AUV_DOMAIN_ID, else 0)\n";
@@ -67,6 +70,8 @@ int main(int argc, char** argv) {
         options.start_offset_s = number();
       } else if (arg == "--delay") {
         options.delay_s = number();
+      } else if (arg == "--qos") {
+        options.qos_overrides.push_back(value());
       } else if (arg == "--vendor") {
         options.vendor = value();
       } else if (arg == "--domain") {

@@ -1,5 +1,6 @@
 #include "auv/bag/dds/player.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cstring>
 #include <set>
@@ -30,7 +31,9 @@ const config::OptionTable<PlayerOptions>& PlayerOptions::table() {
        {},
        {"", "cyclonedds", "fastdds"}},
       {"domain_id", &O::domain_id, "DDS domain; -1: AUV_DOMAIN_ID", "",
-       config::Range::closed(-1, 232)}};
+       config::Range::closed(-1, 232)},
+      {"qos_overrides", &O::qos_overrides,
+       "topic=profile: offer a named QoS profile instead of the recorded QoS"}};
   return kTable;
 }
 
@@ -38,6 +41,13 @@ void PlayerOptions::check() const {
   config::checkOptions(*this, table());
   if (input.empty()) throw std::invalid_argument("input: no file given");
   for (const auto& topic : topics) interfaces::toDdsTopicName(topic);
+  for (const auto& entry : qos_overrides) {
+    const size_t at = entry.find('=');
+    if (at == std::string::npos)
+      throw std::invalid_argument("qos_overrides: expected topic=profile, got '" + entry + "'");
+    interfaces::toDdsTopicName(entry.substr(0, at));
+    interfaces::qosProfileByName(entry.substr(at + 1));  // names the known profiles
+  }
 }
 
 struct Player::Output {
@@ -74,6 +84,11 @@ Player::Player(PlayerOptions options) : options_(std::move(options)) {
   reader_.open(options_.input);
   std::set<std::string> wanted;
   for (const auto& topic : options_.topics) wanted.insert("/" + interfaces::toDdsTopicName(topic));
+  std::map<std::string, std::string> overrides;  // topic -> profile
+  for (const auto& entry : options_.qos_overrides) {
+    const size_t at = entry.find('=');
+    overrides["/" + interfaces::toDdsTopicName(entry.substr(0, at))] = entry.substr(at + 1);
+  }
   std::set<std::string> found;
   for (const auto& [id, channel] : reader_.channels()) {
     const std::string topic = "/" + interfaces::toDdsTopicName(channel.topic);
@@ -100,7 +115,14 @@ Player::Player(PlayerOptions options) : options_(std::move(options)) {
     } catch (const std::invalid_argument& e) {
       throw std::invalid_argument(options_.input + ": topic " + topic + ": " + e.what());
     }
+    if (overrides.count(topic)) output->qos = interfaces::qosProfileByName(overrides[topic]);
     outputs_[id] = std::move(output);
+  }
+  for (const auto& [topic, profile] : overrides) {
+    if (!outputs_.empty() && std::none_of(outputs_.begin(), outputs_.end(),
+                                          [&](const auto& o) { return o.second->topic == topic; }))
+      throw std::invalid_argument("qos_overrides: no channel '" + topic + "' is played from " +
+                                  options_.input);
   }
   for (const auto& topic : wanted) {
     if (!found.count(topic))

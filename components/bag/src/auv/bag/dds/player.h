@@ -28,6 +28,9 @@ struct PlayerOptions {
   double start_offset_s = 0.0;      ///< skip this much of the bag's beginning
   std::string vendor;               ///< cyclonedds or fastdds; empty: AUV_DDS (cyclonedds)
   int domain_id = -1;               ///< -1: AUV_DOMAIN_ID (0)
+  /// "topic=profile": offer a named profile (qos.h) instead of the recorded QoS, e.g.
+  /// "/sonar/beam=bulk_transfer" to feed a reader set to the same profile without loss.
+  std::vector<std::string> qos_overrides;
 
   static const config::OptionTable<PlayerOptions>& table();
   /// Throws std::invalid_argument naming the field and the value.
