@@ -26,6 +26,7 @@ constexpr const char* kUsage =
     "  mission start|status|abort|report   run and inspect missions (`auv mission --help`)\n"
     "  recon pull                       shore: pull a vehicle's recordings (`auv recon --help`)\n"
     "  security init|add|list|check     DDS Security keystores (`auv security --help`)\n"
+    "  bag record|play|info             MCAP bags of any topics (`auv bag record --help`)\n"
     "Other commands run the program `auv-<command>` (next to `auv`, in a sibling install\n"
     "prefix, or on PATH), like git; `auv <command> <sub>` runs `auv-<command>-<sub>` first\n"
     "where that program exists.\n"
