@@ -130,7 +130,7 @@ async function loadLayer(layer) {
 // few pixels shows nothing more. "auto" keeps about PIXELS_PER_TRIANGLE pixels of the model's
 // projected bounding sphere per triangle (zoomed out: coarse; zoomed in: finer), at most
 // the default level of the server (--max-triangles); a level is fetched when first chosen.
-const PIXELS_PER_TRIANGLE = 16;
+const PIXELS_PER_TRIANGLE = 32;
 const model = { levels: [], shown: null, level: null, auto: true, loading: new Map(), sphere: null };
 
 function autoLevel() {

@@ -36,10 +36,10 @@ struct MeshLevel {
   float error = 0;    ///< meshoptimizer's relative error of this level (0 for the original)
 };
 
-/// The original, then levels of about a quarter of the previous triangles each (meshoptimizer's
+/// The original, then levels of about half the previous triangles each (meshoptimizer's
 /// edge collapse, per material so every triangle keeps its atlas page, group borders locked so
 /// pages do not crack apart, texture seams kept), down to about `min_triangles`. Stops early
-/// when a level would remove less than 10 % (locked borders, tiny meshes).
+/// when a level would remove less than 20 % (locked borders, tiny meshes).
 std::vector<MeshLevel> buildLevels(const TexturedMesh& mesh, size_t min_triangles);
 
 }  // namespace auv::view

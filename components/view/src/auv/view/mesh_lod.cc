@@ -37,7 +37,7 @@ std::vector<MeshLevel> buildLevels(const TexturedMesh& mesh, size_t min_triangle
     std::vector<TexturedMesh::Group> groups;
     float worst = 0;
     for (const auto& group : previous.groups) {
-      const size_t target = std::max<size_t>(group.index_count / 4 / 3 * 3, 3);
+      const size_t target = std::max<size_t>(group.index_count / 2 / 3 * 3, 3);
       std::vector<uint32_t> out(group.index_count);
       float error = 0;
       // Target error 5 % of the extent: the triangle count decides, not the error bound.
@@ -52,7 +52,7 @@ std::vector<MeshLevel> buildLevels(const TexturedMesh& mesh, size_t min_triangle
       index.insert(index.end(), out.begin(), out.begin() + count);
       if (count > 0) groups.push_back(g);
     }
-    if (index.size() > previous.index.size() * 9 / 10) break;  // no longer worth a level
+    if (index.size() > previous.index.size() * 8 / 10) break;  // no longer worth a level
     levels.push_back({compact(previous, index, groups), worst});
   }
   return levels;
