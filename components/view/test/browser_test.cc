@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <filesystem>
 
+#include <boost/asio/ip/tcp.hpp>
 #include <nlohmann/json.hpp>
 
 #include "child.h"
@@ -60,10 +61,15 @@ std::string startView(test::Child& view) {
   return line.substr(start, line.find(' ', start) - start);
 }
 
-json check(const std::string& url, const std::vector<std::string>& extra = {}) {
+std::vector<std::string> checkCommand(const std::string& url,
+                                      const std::vector<std::string>& extra) {
   std::vector<std::string> argv = {"node", (kScripts / "view_check.mjs").string(), url, chromium()};
   argv.insert(argv.end(), extra.begin(), extra.end());
-  test::Child node(argv);
+  return argv;
+}
+
+/// view_check.mjs's JSON line (it prints one at the end).
+json checkResult(test::Child& node) {
   std::string line, last;
   while (node.readLine(line, 240)) last = line;
   node.wait();
@@ -73,6 +79,11 @@ json check(const std::string& url, const std::vector<std::string>& extra = {}) {
     ADD_FAILURE() << "view_check.mjs printed no JSON: '" << last << "'";
     return json::object();
   }
+}
+
+json check(const std::string& url, const std::vector<std::string>& extra = {}) {
+  test::Child node(checkCommand(url, extra));
+  return checkResult(node);
 }
 
 void expectCleanPage(const json& result) {
@@ -163,6 +174,40 @@ TEST(Browser, LiveModeSeesTheVehicleMove) {
   // What fake_bridge.mjs sends: a 12 x 5 wall of cubes, a two-edge tree (LINE_LIST).
   EXPECT_EQ(entities["map"].value("cubes", 0), 60) << entities.dump();
   EXPECT_EQ(entities["tree"].value("segments", 0), 2) << entities.dump();
+}
+
+TEST(Browser, LiveModeWaitsForABridgeThatComesLater) {
+  const std::string why = missing();
+  if (!why.empty()) GTEST_SKIP() << why;
+  int port = 0;
+  {  // a free port for the bridge to come
+    boost::asio::io_context io;
+    boost::asio::ip::tcp::acceptor probe(
+        io, boost::asio::ip::tcp::endpoint(boost::asio::ip::make_address("127.0.0.1"), 0));
+    port = probe.local_endpoint().port();
+  }
+  const std::string ws = "ws://127.0.0.1:" + std::to_string(port);
+  test::Child view({AUV_VIEW_EXE, "--live", ws, "--port", "0"});
+  const std::string url = startView(view);
+  ASSERT_FALSE(url.empty());
+  test::Child page(checkCommand(url, {"--live-seconds", "2"}));
+  ::sleep(5);  // the page is up, tries and fails to connect, retries every 2 s
+  test::Child bridge({"node", (kScripts / "fake_bridge.mjs").string(), std::to_string(port)});
+  std::string line;
+  ASSERT_TRUE(bridge.readLine(line, 60)) << "fake_bridge.mjs did not start";
+  json result = checkResult(page);
+  // Chromium logs each refused connection; that is the expected part of this test.
+  json errors = json::array();
+  for (const auto& e : result.value("errors", json::array())) {
+    if (e.get<std::string>().find("WebSocket connection to '" + ws) == std::string::npos) {
+      errors.push_back(e);
+    }
+  }
+  result["errors"] = errors;
+  expectCleanPage(result);
+  ASSERT_TRUE(result.contains("vehicleLast")) << result.dump();
+  EXPECT_GT(result["vehicleLast"]["updates"].get<int>(), 5) << result.dump();
+  EXPECT_GE(result["view"]["live"].value("connections", 0), 1) << result.dump();
 }
 
 }  // namespace

@@ -29,11 +29,14 @@ void writeTexture(const fs::path& file, int size) {
   open3d::io::WriteImage(file.string(), image);
 }
 
-/// A height field n x n quads over [0, extent]² in x, y (NED: z down), textured once.
-size_t writeGridObj(const fs::path& folder, int n, double extent) {
+/// A height field n x n quads over [0, extent]² in x, y (NED: z down); its rows split over
+/// `pages` materials (atlas pages model_<k>.png), as the texture stage writes them.
+size_t writeGridObj(const fs::path& folder, int n, double extent, int pages) {
   fs::create_directories(folder);
   std::ofstream mtl(folder / "model.mtl");
-  mtl << "newmtl page_0\nKd 1 1 1\nmap_Kd model_0.png\n";
+  for (int k = 0; k < pages; ++k) {
+    mtl << "newmtl page_" << k << "\nKd 1 1 1\nmap_Kd model_" << k << ".png\n";
+  }
   std::ofstream obj(folder / "model.obj");
   obj << "mtllib model.mtl\n";
   for (int j = 0; j <= n; ++j) {
@@ -46,8 +49,8 @@ size_t writeGridObj(const fs::path& folder, int n, double extent) {
   for (int j = 0; j <= n; ++j) {
     for (int i = 0; i <= n; ++i) obj << "vt " << double(i) / n << " " << double(j) / n << "\n";
   }
-  obj << "usemtl page_0\n";
   for (int j = 0; j < n; ++j) {
+    if (j * pages % n == 0 || j == 0) obj << "usemtl page_" << j * pages / n << "\n";
     for (int i = 0; i < n; ++i) {
       const int a = j * (n + 1) + i + 1, b = a + 1, c = a + n + 1, d = c + 1;
       // Counter-clockwise seen from above (-z in NED): the faces point up, to the cameras.
@@ -62,8 +65,9 @@ size_t writeGridObj(const fs::path& folder, int n, double extent) {
 
 SurveyCounts writeDemoSurvey(const fs::path& survey) {
   SurveyCounts counts{};
-  counts.triangles = writeGridObj(survey / "textured", 4, 8.0);
+  counts.triangles = writeGridObj(survey / "textured", 4, 8.0, 2);
   writeTexture(survey / "textured" / "model_0.png", 64);
+  writeTexture(survey / "textured" / "model_1.png", 32);
   // Dense cloud over the model, coloured.
   open3d::geometry::PointCloud dense;
   for (int i = 0; i < 400; ++i) {
@@ -166,10 +170,12 @@ RunCounts writeDemoRun(const fs::path& run) {
   return counts;
 }
 
-void writeTerrainSurvey(const fs::path& survey, size_t triangles) {
+void writeTerrainSurvey(const fs::path& survey, size_t triangles, int pages) {
   const int n = static_cast<int>(std::lround(std::sqrt(triangles / 2.0)));
-  writeGridObj(survey / "textured", n, 60.0);
-  writeTexture(survey / "textured" / "model_0.png", 2048);
+  writeGridObj(survey / "textured", n, 60.0, pages);
+  for (int k = 0; k < pages; ++k) {
+    writeTexture(survey / "textured" / ("model_" + std::to_string(k) + ".png"), 2048);
+  }
 }
 
 }  // namespace auv::view::test

@@ -10,9 +10,9 @@ namespace auv::view::test {
 struct SurveyCounts {
   size_t triangles, dense_points, sparse_points, cameras;
 };
-/// textured/model.obj + .mtl + PNG, dense/fused.ply, sparse/ (COLMAP text), figures/cameras.ply,
-/// report.json, evaluation.json (an alignment), simulation.json -> a ground-truth run with
-/// navigation.tum and trajectory.tum, recordings/<camera>/*.frames.csv.
+/// textured/model.obj + .mtl + two PNG pages, dense/fused.ply, sparse/ (COLMAP text),
+/// figures/cameras.ply, report.json, evaluation.json (an alignment), simulation.json -> a
+/// ground-truth run with navigation.tum and trajectory.tum, recordings/<camera>/*.frames.csv.
 SurveyCounts writeDemoSurvey(const std::filesystem::path& survey);
 
 struct RunCounts {
@@ -22,8 +22,8 @@ struct RunCounts {
 /// ground_truth/trajectory.tum, navigation.tum, collisions.csv.
 RunCounts writeDemoRun(const std::filesystem::path& run);
 
-/// textured/model.obj of a rolling terrain of about `triangles` triangles with a 2048² texture
-/// (the benchmark's stand-in for the demo's model).
-void writeTerrainSurvey(const std::filesystem::path& survey, size_t triangles);
+/// textured/model.obj of a rolling terrain of about `triangles` triangles on `pages` 2048²
+/// atlas pages (the benchmark's stand-in for the demo's model).
+void writeTerrainSurvey(const std::filesystem::path& survey, size_t triangles, int pages = 1);
 
 }  // namespace auv::view::test

@@ -68,9 +68,15 @@ TEST(SurveyScene, HasEveryLayerInTheTruthsFrame) {
     ASSERT_NE(blob, scene.blobs.end()) << l["url"];
     EXPECT_EQ(blob->second.bytes.size(), l["bytes"].get<size_t>());
   }
-  const std::string texture = layer(scene, "model_0")["groups"][0]["texture"];
-  ASSERT_TRUE(scene.files.count(texture));
-  EXPECT_EQ(scene.files.at(texture).filename(), "model_0.png");
+  const json& groups = layer(scene, "model_0")["groups"];
+  ASSERT_EQ(groups.size(), 2u);  // two atlas pages
+  for (int k = 0; k < 2; ++k) {
+    const std::string texture = groups[k]["texture"];
+    ASSERT_TRUE(scene.files.count(texture));
+    EXPECT_EQ(scene.files.at(texture).filename(), "model_" + std::to_string(k) + ".png");
+  }
+  EXPECT_EQ(groups[0]["count"].get<size_t>() + groups[1]["count"].get<size_t>(),
+            3 * counts.triangles);
 }
 
 TEST(SurveyScene, WithoutEvaluationStaysInTheReconstructionsFrame) {
@@ -156,7 +162,7 @@ TEST(ObjReader, BadModelsAreNamed) {
 
 TEST(MeshLevels, HalfEachKeepingTextureCoordinatesAndPages) {
   const fs::path survey = tempDir("levels");
-  test::writeTerrainSurvey(survey, 80000);
+  test::writeTerrainSurvey(survey, 80000, 2);
   const TexturedMesh mesh = readObj(survey / "textured" / "model.obj");
   EXPECT_NEAR(static_cast<double>(mesh.triangles()), 80000, 1000);
   const auto levels = buildLevels(mesh, 5000);
@@ -167,8 +173,13 @@ TEST(MeshLevels, HalfEachKeepingTextureCoordinatesAndPages) {
     const TexturedMesh& m = levels[k].mesh;
     EXPECT_LE(m.triangles(), levels[k - 1].mesh.triangles() * 0.6) << "level " << k;
     EXPECT_GE(m.triangles(), levels[k - 1].mesh.triangles() * 0.4) << "level " << k;
-    ASSERT_EQ(m.groups.size(), 1u);
-    EXPECT_EQ(m.groups[0].texture, mesh.groups[0].texture);
+    ASSERT_EQ(m.groups.size(), 2u);  // both pages kept, each triangle on its own
+    for (int g = 0; g < 2; ++g) EXPECT_EQ(m.groups[g].texture, mesh.groups[g].texture);
+    // A page's triangles use only that page's texture coordinates (rows 0-1/2 or 1/2-1).
+    for (size_t i = m.groups[1].first_index; i < m.groups[1].first_index + m.groups[1].index_count;
+         ++i) {
+      ASSERT_GE(m.uv[2 * m.index[i] + 1], 0.5f - 1e-6f) << "level " << k;
+    }
     // Edge collapse keeps existing vertices: every (u, v) is one of the original's.
     for (size_t i = 0; i < m.uv.size(); i += 2) {
       ASSERT_TRUE(original.count({m.uv[i], m.uv[i + 1]})) << "level " << k;

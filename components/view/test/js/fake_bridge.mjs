@@ -2,7 +2,8 @@
 // FoxgloveServer (npm) publishing what the bridge publishes, JSON-encoded with Foxglove's
 // schemas — the map as cubes, the planner's tree and path as lines, the vehicle and its
 // trajectories, and /tf world -> vehicle — with the vehicle going round a circle.
-// Prints {"port": N} once listening; runs until killed.
+// Listens on the port given (default: a free one), prints {"port": N} once listening; runs
+// until killed.
 import { createRequire } from 'node:module';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
@@ -15,7 +16,7 @@ const { FoxgloveServer } = require('@foxglove/ws-protocol');
 const { WebSocketServer } = require('ws');
 
 const server = new FoxgloveServer({ name: 'fake-foxglove-bridge' });
-const ws = new WebSocketServer({ host: '127.0.0.1', port: 0,
+const ws = new WebSocketServer({ host: '127.0.0.1', port: Number(process.argv[2] || 0),
   handleProtocols: (protocols) => server.handleProtocols(protocols) });
 ws.on('listening', () => console.log(JSON.stringify({ port: ws.address().port })));
 ws.on('connection', (conn, req) => server.handleConnection(conn, `${req.socket.remotePort}`));

@@ -22,7 +22,8 @@ export class FoxgloveClient {
     this.ws.binaryType = 'arraybuffer';
     this.ws.onmessage = (event) => this.receive(event.data);
     this.ws.onclose = (event) => handlers.onClose?.(event.reason || `closed (${event.code})`);
-    this.ws.onerror = () => handlers.onStatus?.(`cannot connect to ${url}`);
+    // A failed connection is reported by onclose too; the error event says nothing more.
+    this.ws.onerror = () => {};
   }
 
   close() { this.ws.close(); }

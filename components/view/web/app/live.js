@@ -68,12 +68,28 @@ export class LiveView {
     this.frames = new Map();    // frame id -> Group following its FrameTransform
     this.entities = new Map();  // entity id -> Object3D
     this.state = { url, connected: false, messages: 0, status: '', entities: {},
-      vehicle: null, vehicleUpdates: 0 };
-    this.client = new FoxgloveClient(url, {
+      vehicle: null, vehicleUpdates: 0, connections: 0 };
+    this.connect();
+  }
+
+  /** Connects, and again every 2 s while the bridge is not there: the page may be opened
+   * before the mission starts, and a bridge restarted mid-mission is picked up. */
+  connect() {
+    this.client = new FoxgloveClient(this.state.url, {
       wants: (channel) => TOPICS.has(channel.topic) && channel.encoding === 'json',
-      onOpen: () => { this.state.connected = true; this.onChange(); },
+      onOpen: () => {
+        this.state.connected = true;
+        this.state.connections++;
+        this.state.status = '';
+        this.onChange();
+      },
       onStatus: (text) => { this.state.status = text; this.onChange(); },
-      onClose: (reason) => { this.state.connected = false; this.state.status = reason; this.onChange(); },
+      onClose: (reason) => {
+        this.state.connected = false;
+        this.state.status = `${reason}; retrying`;
+        this.onChange();
+        setTimeout(() => this.connect(), 2000);
+      },
       onMessage: (channel, payload) => this.message(channel, payload),
     });
   }
