@@ -6,11 +6,16 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
 #include <filesystem>
 #include <fstream>
 
 #include "../core/test_meshes.h"
 #include "auv/interfaces/executor.h"
+#include "auv/sim/camera/camera_model.h"
 
 namespace auv::sim {
 namespace {
@@ -247,6 +252,55 @@ TEST_F(SimulatorComponentTest, ABadMultibeamSectionIsRefusedNamingFileAndField) 
     EXPECT_NE(std::string(e.what()).find("wall.yaml: multibeam.horizontal_aperture_deg"),
               std::string::npos)
         << e.what();
+  }
+}
+
+// Live preview frames: the forward camera's view of the wall 6 m ahead, as JPEG at a quarter
+// of its size, across vendors; an unknown camera is refused naming it.
+TEST_F(SimulatorComponentTest, PublishesLiveCameraFramesAsJpeg) {
+  std::vector<std::string> overrides = params();
+  overrides.insert(overrides.end(), {"camera_live_rate:=2.0", "camera_live_scale:=0.25",
+                                     "camera_live_cameras:=[forward]"});
+  Node sim_node("simulator", nodeOptions(Vendor::CYCLONEDDS, 197, overrides));
+  Node probe("probe", nodeOptions(Vendor::FASTDDS, 197));
+  SimulatorComponent sim;
+  sim.configure(sim_node);
+  std::vector<msg::CompressedImage> frames;
+  auto subscription = probe.createSubscription<msg::CompressedImage>(
+      "camera/forward/compressed", interfaces::sensorDataQos(),
+      std::function<void(const msg::CompressedImage&)>(
+          [&](const msg::CompressedImage& m) { frames.push_back(m); }));
+  interfaces::Executor executor;
+  executor.add(sim_node);
+  executor.add(probe);
+  sim.activate();
+  EXPECT_TRUE(executor.spinUntil([&] { return frames.size() >= 2; }, 60s));
+  sim.deactivate();
+  ASSERT_FALSE(frames.empty());
+  const CameraModel forward(CameraOptions::defaults("forward"), 0.25);
+  for (const auto& frame : frames) {
+    EXPECT_EQ(frame.format(), "jpeg");
+    EXPECT_EQ(frame.header().frame_id(), "camera_forward");
+    const cv::Mat image = cv::imdecode(frame.data(), cv::IMREAD_COLOR);
+    ASSERT_FALSE(image.empty());
+    EXPECT_EQ(image.cols, forward.width());
+    EXPECT_EQ(image.rows, forward.height());
+    cv::Scalar mean, stddev;
+    cv::meanStdDev(image, mean, stddev);
+    EXPECT_GT(stddev[0] + stddev[1] + stddev[2], 1.0) << "a blank frame";
+  }
+  EXPECT_GT(
+      frames.back().header().stamp().sec() * 1e9 + frames.back().header().stamp().nanosec(),
+      frames.front().header().stamp().sec() * 1e9 + frames.front().header().stamp().nanosec());
+
+  overrides.back() = "camera_live_cameras:=[periscope]";
+  Node bad_node("simulator_bad", nodeOptions(Vendor::CYCLONEDDS, 197, overrides));
+  SimulatorComponent bad;
+  try {
+    bad.configure(bad_node);
+    ADD_FAILURE() << "an unknown camera was accepted";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("periscope"), std::string::npos) << e.what();
   }
 }
 

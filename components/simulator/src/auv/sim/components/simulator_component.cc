@@ -81,6 +81,17 @@ const config::OptionTable<SimulatorComponent::Options>& SimulatorComponent::Opti
        "",
        {},
        {"visibility", "path_length"}},
+      {"camera_live_rate", &O::camera_live_rate,
+       "live preview frames of the scenario's cameras, JPEG on camera/<id>/compressed, per "
+       "camera; 0 = none (the survey's frames are rendered afterwards by auv sim render)",
+       "Hz", Range::closed(0.0, 30.0)},
+      {"camera_live_scale", &O::camera_live_scale,
+       "resolution of the live frames as a factor of the cameras' own", "",
+       Range::aboveUpTo(0.0, 1.0)},
+      {"camera_live_jpeg_quality", &O::camera_live_jpeg_quality, "JPEG quality of the live frames",
+       "", Range::closed(1, 100)},
+      {"camera_live_cameras", &O::camera_live_cameras,
+       "cameras with live frames; empty = all of the scenario's"},
   };
   return kTable;
 }
@@ -159,6 +170,14 @@ void SimulatorComponent::configure(interfaces::Node& node) {
   }
   collision_pub_ =
       node.createPublisher<msg::CollisionEvent>("sim/collision", interfaces::commandQos());
+  if (options_.camera_live_rate > 0) {
+    LiveCameraOptions live;
+    live.rate = options_.camera_live_rate;
+    live.scale = options_.camera_live_scale;
+    live.jpeg_quality = options_.camera_live_jpeg_quality;
+    live.cameras = options_.camera_live_cameras;
+    live_cameras_ = std::make_unique<LiveCameras>(node, scenario_, *world_, live);
+  }
   thrusters_sub_ = node.createSubscription<msg::ThrusterSetpoints>(
       "control/thrusters", interfaces::sensorDataQos(),
       std::function<void(const msg::ThrusterSetpoints&)>([this](const msg::ThrusterSetpoints& m) {
@@ -194,6 +213,7 @@ void SimulatorComponent::deactivate() {
 }
 
 void SimulatorComponent::cleanup() {
+  live_cameras_.reset();  // its thread renders from world_ and publishes through the node
   thrusters_sub_.reset();
   clock_pub_.reset();
   odometry_pub_.reset();
@@ -322,6 +342,7 @@ void SimulatorComponent::step(double dt) {
     next_trajectory_ = t + 1.0 / options_.trajectory_rate;
     log_->trajectory(t, state.pose());
   }
+  if (live_cameras_) live_cameras_->offer(t, state.pose());
   if (t + 1e-9 >= next_clearance_) {
     next_clearance_ = t + 1.0 / kClearanceRate;
     log_->clearance(

@@ -16,6 +16,7 @@
 #include "auv/config/option_table.h"
 #include "auv/interfaces/component.h"
 #include "auv/sim/components/ground_truth_log.h"
+#include "auv/sim/components/live_cameras.h"
 #include "auv/sim/raycast/ray_caster.h"
 #include "auv/sim/sensors/dvl_beams.h"
 #include "auv/sim/sensors/multibeam.h"
@@ -45,6 +46,12 @@ class SimulatorComponent : public interfaces::Component {
     std::string run_dir = "auto";
     /// objective of the mission file written into the run folder
     std::string mission_objective = "visibility";
+    /// Live preview frames of the scenario's cameras (live_cameras.h): Hz of simulated time
+    /// per camera (0: none), resolution factor, JPEG quality, which cameras (empty: all).
+    double camera_live_rate = 0.0;
+    double camera_live_scale = 0.25;
+    int camera_live_jpeg_quality = 80;
+    std::vector<std::string> camera_live_cameras;
     /// The fields with meaning, unit and range: the component's parameters come from it.
     static const config::OptionTable<Options>& table();
   };
@@ -81,6 +88,7 @@ class SimulatorComponent : public interfaces::Component {
   std::unique_ptr<Multibeam> multibeam_;  ///< null: the scenario has none
   std::unique_ptr<DvlBeams> dvl_beams_;   ///< null: no dvl_beams section
   std::unique_ptr<GroundTruthLog> log_;
+  std::unique_ptr<LiveCameras> live_cameras_;  ///< null: camera_live_rate 0
   HullShape hull_;
 
   mutable std::mutex state_mutex_;  // state_ and time_ (read by other threads)
