@@ -88,7 +88,7 @@ state.showAll = (visible) => { root.visible = visible; requestRender(); };
 
 function fitView() {
   const box = new THREE.Box3().setFromObject(root);
-  if (box.isEmpty()) return;
+  if (box.isEmpty()) return false;
   const centre = box.getCenter(new THREE.Vector3());
   const radius = Math.max(box.getSize(new THREE.Vector3()).length() / 2, 1);
   controls.target.copy(centre);
@@ -99,6 +99,7 @@ function fitView() {
   camera.updateProjectionMatrix();
   controls.update();
   requestRender();
+  return true;
 }
 
 const objects = new Map();  // layer id -> Object3D
@@ -241,7 +242,7 @@ async function main() {
   }
   const results = await Promise.allSettled(pending);
   results.filter((r) => r.status === 'rejected').forEach((r) => report(r.reason));
-  if (!state.fitted) fitView();
+  if (!state.fitted) state.fitted = fitView();
   if (manifest.live) startLive(manifest.live);
   state.ready = true;
   requestRender();
@@ -249,13 +250,15 @@ async function main() {
 
 function startLive(url) {
   const status = document.getElementById('status');
-  let fitted = false;
   const live = new LiveView(root, url, () => {
     state.live = live.state;
     state.vehicle = live.state.vehicle;
     status.textContent = `live ${url}: ${live.state.connected ? 'connected' : 'not connected'}` +
       `, ${live.state.messages} messages ${live.state.status}`;
-    if (!fitted && live.state.entities.map) { fitted = true; fitView(); }
+    // Frame the view once there is something to frame: the map, else the vehicle.
+    if (!state.fitted && (live.state.entities.map || live.state.vehicle)) {
+      state.fitted = fitView();
+    }
     requestRender();
   });
   state.live = live.state;
