@@ -9,9 +9,9 @@
 #include <exception>
 #include <string>
 
+#include "arguments.h"
 #include "auv/bag/dds/player.h"
 #include "auv/config/errors.h"
-#include "auv/config/yaml_scalars.h"
 
 namespace {
 
@@ -38,44 +38,28 @@ void onSignal(int) { g_stop = true; }
 int main(int argc, char** argv) {
   auv::bag::PlayerOptions options;
   try {
-    for (int i = 1; i < argc; ++i) {
-      const std::string arg = argv[i];
-      const auto value = [&]() -> std::string {
-        if (i + 1 >= argc) throw std::invalid_argument(arg + ": needs a value");
-        return argv[++i];
-      };
-      const auto number = [&]() {
-        const std::string text = value();
-        const auto parsed = auv::config::parseNumber(text);
-        if (!parsed) throw std::invalid_argument(arg + ": expected a number, got '" + text + "'");
-        return *parsed;
-      };
-      const auto integer = [&]() {
-        const std::string text = value();
-        const auto parsed = auv::config::parseInteger(text);
-        if (!parsed) throw std::invalid_argument(arg + ": expected an integer, got '" + text + "'");
-        return *parsed;
-      };
+    auv::bag::Arguments args(argc, argv);
+    while (args.next()) {
+      const std::string arg = args.current();
       if (arg == "-h" || arg == "--help") {
         std::fputs(kUsage, stdout);
         return 0;
       } else if (arg == "-r" || arg == "--rate") {
-        options.rate = number();
+        options.rate = args.number();
       } else if (arg == "-l" || arg == "--loop") {
         options.loop = true;
       } else if (arg == "-t" || arg == "--topics") {
-        options.topics.push_back(value());
-        while (i + 1 < argc && argv[i + 1][0] != '-') options.topics.push_back(argv[++i]);
+        args.values(options.topics);
       } else if (arg == "--start-offset") {
-        options.start_offset_s = number();
+        options.start_offset_s = args.number();
       } else if (arg == "--delay") {
-        options.delay_s = number();
+        options.delay_s = args.number();
       } else if (arg == "--qos") {
-        options.qos_overrides.push_back(value());
+        options.qos_overrides.push_back(args.value());
       } else if (arg == "--vendor") {
-        options.vendor = value();
+        options.vendor = args.value();
       } else if (arg == "--domain") {
-        options.domain_id = static_cast<int>(integer());
+        options.domain_id = static_cast<int>(args.integer());
       } else if (!arg.empty() && arg[0] == '-') {
         throw std::invalid_argument("unknown option '" + arg + "'");
       } else if (options.input.empty()) {

@@ -12,9 +12,9 @@
 #include <string>
 #include <thread>
 
+#include "arguments.h"
 #include "auv/bag/dds/recorder.h"
 #include "auv/config/errors.h"
-#include "auv/config/yaml_scalars.h"
 
 namespace {
 
@@ -53,46 +53,31 @@ int main(int argc, char** argv) {
   bool all = false;
   double duration_s = 0;
   try {
-    for (int i = 1; i < argc; ++i) {
-      const std::string arg = argv[i];
-      const auto value = [&]() -> std::string {
-        if (i + 1 >= argc) throw std::invalid_argument(arg + ": needs a value");
-        return argv[++i];
-      };
-      const auto number = [&]() {
-        const std::string text = value();
-        const auto parsed = auv::config::parseNumber(text);
-        if (!parsed) throw std::invalid_argument(arg + ": expected a number, got '" + text + "'");
-        return *parsed;
-      };
-      const auto integer = [&]() {
-        const std::string text = value();
-        const auto parsed = auv::config::parseInteger(text);
-        if (!parsed) throw std::invalid_argument(arg + ": expected an integer, got '" + text + "'");
-        return *parsed;
-      };
+    auv::bag::Arguments args(argc, argv);
+    while (args.next()) {
+      const std::string arg = args.current();
       if (arg == "-h" || arg == "--help") {
         std::fputs(kUsage, stdout);
         return 0;
       } else if (arg == "-a" || arg == "--all") {
         all = true;
       } else if (arg == "-o" || arg == "--output") {
-        options.output = value();
+        options.output = args.value();
       } else if (arg == "-x" || arg == "--exclude") {
-        options.exclude.push_back(value());
+        options.exclude.push_back(args.value());
       } else if (arg == "--compression") {
-        options.compression = value();
+        options.compression = args.value();
       } else if (arg == "--chunk-size") {
-        options.chunk_size = static_cast<uint64_t>(integer());
+        options.chunk_size = static_cast<uint64_t>(args.integer());
       } else if (arg == "--flush-period") {
-        options.flush_period_s = number();
+        options.flush_period_s = args.number();
       } else if (arg == "--duration") {
-        duration_s = number();
+        duration_s = args.number();
         if (!(duration_s > 0)) throw std::invalid_argument("--duration: expected S > 0");
       } else if (arg == "--vendor") {
-        options.vendor = value();
+        options.vendor = args.value();
       } else if (arg == "--domain") {
-        options.domain_id = static_cast<int>(integer());
+        options.domain_id = static_cast<int>(args.integer());
       } else if (arg == "--overwrite") {
         options.overwrite = true;
       } else if (!arg.empty() && arg[0] == '-') {
