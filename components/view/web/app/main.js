@@ -2,7 +2,7 @@
 // window.__auvView reports what is drawn, for the tests and the benchmark (README.md, "Tests").
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
-import { BUILDERS, drawnCount, fetchLayer, setModelBackFaces } from './layers.js';
+import { BUILDERS, drawnCount, fetchLayer, renderHints, setModelBackFaces } from './layers.js';
 import { LiveView } from './live.js';
 
 const started = performance.now();
@@ -127,11 +127,17 @@ async function loadLayer(layer) {
   return object;
 }
 
-// Levels of detail (README.md): software GL pays per triangle, and a triangle smaller than a
-// few pixels shows nothing more. "auto" keeps about PIXELS_PER_TRIANGLE pixels of the model's
-// projected bounding sphere per triangle (zoomed out: coarse; zoomed in: finer), at most
-// the default level of the server (--max-triangles); a level is fetched when first chosen.
-const PIXELS_PER_TRIANGLE = 32;
+// Levels of detail (README.md): a triangle smaller than a few pixels shows nothing more, and
+// software GL (SwiftShader, llvmpipe: no GPU) pays for every triangle and texel on the CPU.
+// "auto" keeps about PIXELS_PER_TRIANGLE pixels of the model's projected bounding sphere per
+// triangle (zoomed out: coarse; zoomed in: finer), twice as many per triangle on software GL
+// as a GPU needs four times fewer, at most the server's default level (--max-triangles); a
+// level is fetched when first chosen.
+const debugInfo = renderer.getContext().getExtension('WEBGL_debug_renderer_info');
+state.renderer = debugInfo ? renderer.getContext().getParameter(debugInfo.UNMASKED_RENDERER_WEBGL) : '';
+state.softwareGl = /swiftshader|llvmpipe|softpipe|software/i.test(state.renderer);
+const PIXELS_PER_TRIANGLE = state.softwareGl ? 64 : 16;
+renderHints.softwareGl = state.softwareGl;
 const model = { levels: [], shown: null, level: null, auto: true, loading: new Map(), sphere: null };
 
 function autoLevel() {
