@@ -247,6 +247,11 @@ TEST(ParameterDocs, SimulatorReadmeMatchesHelp) {
   checkComponent("simulator", std::string(AUV_SOURCE_DIR) + "/components/simulator/README.md");
 }
 
+TEST(ParameterDocs, FoxgloveBridgeReadmeMatchesHelp) {
+  checkComponent("foxglove_bridge",
+                 std::string(AUV_SOURCE_DIR) + "/components/foxglove_bridge/README.md");
+}
+
 // The checker itself: a range or a parameter that differs is found.
 TEST(ParameterDocs, RangesAreComparedAsNumbers) {
   EXPECT_EQ(documentedRange("[2, 1e6]"), "[2, 1000000]");
