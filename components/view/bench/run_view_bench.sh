@@ -44,7 +44,7 @@ url="$(grep -o 'http://[^ ]*' "$work/view.out")"
 prepared_ms="$(grep -o 'prepared in [0-9]*' "$work/view.out" | grep -o '[0-9]*$')"
 load_before="$(cut -d' ' -f1-3 /proc/loadavg)"
 node "$here/../test/js/view_check.mjs" "$url" "${AUV_VIEW_CHROMIUM:-/usr/bin/chromium}" \
-  --benchmark "$seconds" --all-levels --size "$size" >"$work/check.json"
+  --benchmark "$seconds" --all-levels --zoom 8 --size "$size" >"$work/check.json"
 load_after="$(cut -d' ' -f1-3 /proc/loadavg)"
 mkdir -p "$(dirname "$results")"
 python3 - "$work/check.json" "$results" "$survey" "$prepared_ms" "$size" "$load_before" \
@@ -64,7 +64,10 @@ res = {
     "default_triangles": v.get("counts", {}).get("model"),
     "fps_default_level": r.get("fps"), "fps_empty_anchor": r.get("fpsEmpty"),
     "fps_default_level_rounds": r.get("fpsRounds"), "fps_empty_anchor_rounds": r.get("fpsEmptyRounds"),
-    "levels": r.get("levels"), "errors": r.get("errors"),
+    "levels": r.get("levels"),
+    "zoomed_8x": {"level": r.get("levelAfterZoom"), "level_triangles": r.get("trianglesAfterZoom"),
+                  "fps": r.get("fpsZoomed")},
+    "errors": r.get("errors"),
 }
 json.dump(res, open(out, "w"), indent=2)
 print(json.dumps(res, indent=2))

@@ -137,6 +137,28 @@ TEST(Browser, ShowsAMissionRun) {
   fs::remove_all(run);
 }
 
+TEST(Browser, ModelLevelFollowsTheView) {
+  const std::string why = missing();
+  if (!why.empty()) GTEST_SKIP() << why;
+  const fs::path survey = tempDir("levels");
+  test::writeTerrainSurvey(survey, 200000);
+  test::Child view({AUV_VIEW_EXE, survey.string(), "--port", "0"});
+  const std::string url = startView(view);
+  ASSERT_FALSE(url.empty());
+  const json result = check(url, {"--zoom", "8"});
+  expectCleanPage(result);
+  // Whole model in view: a coarse level; 8 times closer: a finer one (a lower index) with more
+  // triangles; back out: the coarse one again.
+  const int before = result.value("levelBeforeZoom", -1),
+            after = result.value("levelAfterZoom", -1);
+  EXPECT_GT(before, 0) << result.dump();
+  EXPECT_LT(after, before) << result.dump();
+  EXPECT_GT(result.value("trianglesAfterZoom", 0), result.value("trianglesBeforeZoom", 0))
+      << result.dump();
+  EXPECT_EQ(result.value("levelAfterZoomOut", -1), before) << result.dump();
+  fs::remove_all(survey);
+}
+
 /// What the live view saw from a bridge at `ws`, over `seconds` of watching: the vehicle moved,
 /// and map, tree, path, trajectories and vehicle entities arrived (`entities`: what was seen).
 void expectLiveVehicleMoves(const std::string& ws, double seconds, json& entities) {

@@ -2,6 +2,7 @@
 // levels of detail, and every bad input named (folder, file:line, column).
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <set>
@@ -187,6 +188,39 @@ TEST(MeshLevels, HalfEachKeepingTextureCoordinatesAndPages) {
     for (uint32_t v : m.index) ASSERT_LT(v, m.position.size() / 3);
   }
   EXPECT_LE(levels.back().mesh.triangles(), 5000u);
+}
+
+TEST(MeshTiles, PartitionEveryTriangleOnceWithBoundsThatHoldThem) {
+  const fs::path survey = tempDir("tiles");
+  test::writeTerrainSurvey(survey, 80000, 2);
+  TexturedMesh mesh = readObj(survey / "textured" / "model.obj");
+  std::multiset<std::array<uint32_t, 3>> before, after;
+  for (size_t i = 0; i < mesh.index.size(); i += 3) {
+    before.insert({mesh.index[i], mesh.index[i + 1], mesh.index[i + 2]});
+  }
+  const std::vector<Tile> tiles = tileMesh(mesh, 5000);
+  EXPECT_EQ(tiles.size(), 16u);  // sqrt(80000 / 5000) = 4 per side
+  size_t indices = 0;
+  for (const Tile& t : tiles) {
+    for (const auto& g : t.groups) {
+      indices += g.index_count;
+      for (size_t i = g.first_index; i < g.first_index + g.index_count; i += 3) {
+        after.insert({mesh.index[i], mesh.index[i + 1], mesh.index[i + 2]});
+        for (int c = 0; c < 3; ++c) {
+          const float* p = &mesh.position[3 * mesh.index[i + c]];
+          const float d = std::hypot(p[0] - t.center[0], p[1] - t.center[1], p[2] - t.center[2]);
+          ASSERT_LE(d, t.radius * 1.0001f + 1e-4f);
+        }
+        // A triangle keeps its page: rows of page 1 have v >= 0.5.
+        if (g.texture.filename() == "model_1.png") ASSERT_GE(mesh.uv[2 * mesh.index[i] + 1], 0.5f);
+      }
+    }
+  }
+  EXPECT_EQ(indices, mesh.index.size());
+  EXPECT_EQ(before, after);  // a partition: every triangle once, none new
+  const TexturedMesh small = readObj(survey / "textured" / "model.obj");
+  TexturedMesh copy = small;
+  EXPECT_EQ(tileMesh(copy, 1000000).size(), 1u);
 }
 
 TEST(Cli, BadFolderAndOptionsExit2NamingThem) {

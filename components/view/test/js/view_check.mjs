@@ -1,7 +1,8 @@
 // Loads an `auv view` page in headless Chromium (Debian's) with puppeteer-core and prints one
 // JSON line: what window.__auvView reports, the share of canvas pixels that are not the
 // background, console errors, and in live mode the vehicle's positions some time apart.
-//   node view_check.mjs <url> <chromium> [--live-seconds S] [--benchmark S] [--size WxH]
+//   node view_check.mjs <url> <chromium> [--live-seconds S] [--benchmark S [--all-levels]]
+//                       [--zoom FACTOR] [--size WxH]
 import { createRequire } from 'node:module';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
@@ -79,6 +80,18 @@ try {
       }
       await page.evaluate(() => window.__auvView.setLevel('auto'));
     }
+  }
+  const zoom = Number(option('--zoom', 0));
+  if (zoom > 0) {
+    result.levelBeforeZoom = await page.evaluate(() => window.__auvView.modelLevel);
+    result.trianglesBeforeZoom = await page.evaluate(() => window.__auvView.counts.model);
+    result.levelAfterZoom = await page.evaluate((z) => window.__auvView.zoom(z), zoom);
+    result.trianglesAfterZoom = await page.evaluate(() => window.__auvView.counts.model);
+    if (benchmarkSeconds > 0) {
+      // Zoomed in on a finer level: only its tiles in view are drawn.
+      result.fpsZoomed = await page.evaluate((s) => window.__auvView.benchmark(s), benchmarkSeconds);
+    }
+    result.levelAfterZoomOut = await page.evaluate((z) => window.__auvView.zoom(1 / z), zoom);
   }
   // Wait for two more frames so the canvas holds what was loaded last.
   const frames = await page.evaluate(() => window.__auvView.frames);

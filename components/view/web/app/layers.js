@@ -40,28 +40,48 @@ function texture(url) {
 // A reconstruction's faces point to the cameras that saw them: back faces are culled unless
 // asked for (software GL draws twice the triangles otherwise, README.md "Levels of detail").
 let modelSide = THREE.FrontSide;
-export function setModelBackFaces(object, show) {
+export function setModelBackFaces(level, show) {
   modelSide = show ? THREE.DoubleSide : THREE.FrontSide;
-  for (const m of [object?.material ?? []].flat()) { m.side = modelSide; m.needsUpdate = true; }
+  for (const m of level?.userData.materials ?? []) { m.side = modelSide; m.needsUpdate = true; }
 }
 
-/** A textured model level: one geometry, one group and unlit material per atlas page. */
+/** A textured model level: one vertex and index buffer shared by its tiles, one object per
+ * tile (so three.js skips the tiles out of view), one unlit material per atlas page. */
 export function meshObject(layer, a) {
-  const g = new THREE.BufferGeometry();
-  g.setAttribute('position', new THREE.BufferAttribute(a.position, 3));
-  g.setAttribute('uv', new THREE.BufferAttribute(a.uv, 2));
-  g.setIndex(new THREE.BufferAttribute(a.index, 1));
-  const materials = [];
-  layer.groups.forEach((group, i) => {
-    g.addGroup(group.start, group.count, i);
-    // The texture carries the light of the photos: drawn unlit. Without one, shaded.
-    materials.push(group.texture
-      ? new THREE.MeshBasicMaterial({ map: texture(group.texture), side: modelSide })
-      : new THREE.MeshLambertMaterial({ color: 0xb0a890, side: modelSide }));
-  });
-  if (layer.groups.some((group) => !group.texture)) g.computeVertexNormals();
-  g.computeBoundingSphere();
-  return new THREE.Mesh(g, materials);
+  const position = new THREE.BufferAttribute(a.position, 3);
+  const uv = new THREE.BufferAttribute(a.uv, 2);
+  const index = new THREE.BufferAttribute(a.index, 1);
+  const materials = []; const materialOf = new Map();
+  const materialFor = (url) => {
+    if (!materialOf.has(url)) {
+      materialOf.set(url, materials.length);
+      // The texture carries the light of the photos: drawn unlit. Without one, shaded.
+      materials.push(url
+        ? new THREE.MeshBasicMaterial({ map: texture(url), side: modelSide })
+        : new THREE.MeshLambertMaterial({ color: 0xb0a890, side: modelSide }));
+    }
+    return materialOf.get(url);
+  };
+  const tiles = layer.tiles?.length ? layer.tiles : [{ groups: layer.groups }];
+  for (const tile of tiles) tile.groups.forEach((g) => materialFor(g.texture));
+  const level = new THREE.Group();
+  for (const tile of tiles) {
+    const g = new THREE.BufferGeometry();
+    g.setAttribute('position', position);
+    g.setAttribute('uv', uv);
+    g.setIndex(index);
+    for (const group of tile.groups) g.addGroup(group.start, group.count, materialFor(group.texture));
+    if (tile.groups.some((group) => !group.texture)) g.computeVertexNormals();
+    if (tile.center) {
+      // The tile's own bounds (the shared buffer spans the whole level): what culling tests.
+      g.boundingSphere = new THREE.Sphere(new THREE.Vector3(...tile.center), tile.radius);
+    } else {
+      g.computeBoundingSphere();
+    }
+    level.add(new THREE.Mesh(g, materials));
+  }
+  level.userData.materials = materials;
+  return level;
 }
 
 export function pointsObject(layer, a) {

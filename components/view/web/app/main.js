@@ -76,6 +76,14 @@ state.benchmark = (seconds) => new Promise((resolve) => {
 });
 state.fit = fitView;
 state.three = { scene, root, renderer, camera };
+/** Moves the camera `factor` times closer to what it looks at, as a wheel zoom does, and
+ * resolves with the model level then on screen (the tests). */
+state.zoom = async (factor) => {
+  camera.position.sub(controls.target).divideScalar(factor).add(controls.target);
+  controls.update();
+  if (model.auto && model.levels.length) await showLevel(autoLevel());
+  return model.level;
+};
 /** Shows level k (a number) or 'auto' and resolves once it is on screen (the benchmark). */
 state.setLevel = async (k) => {
   model.auto = k === 'auto';
@@ -185,7 +193,7 @@ async function loadModel(manifest) {
   state.modelLevels = info.levels;
   model.maxTriangles = info.levels[info.default].triangles;
   await showLevel(info.coarsest);
-  model.sphere = model.shown.geometry.boundingSphere.clone().applyMatrix4(root.matrix);
+  model.sphere = new THREE.Box3().setFromObject(model.shown).getBoundingSphere(new THREE.Sphere());
   fitView();
   state.fitted = true;
   const select = document.createElement('select');

@@ -42,4 +42,19 @@ struct MeshLevel {
 /// when a level would remove less than 20 % (locked borders, tiny meshes).
 std::vector<MeshLevel> buildLevels(const TexturedMesh& mesh, size_t min_triangles);
 
+/// A part of a level the page draws as its own object, so the parts off screen are skipped
+/// (frustum culling is per object): its triangles as ranges of the level's index, per page.
+struct Tile {
+  std::vector<TexturedMesh::Group> groups;
+  float center[3] = {0, 0, 0};
+  float radius = 0;
+};
+
+/// Reorders `mesh.index` so the triangles of each tile are contiguous, tile by tile and page by
+/// page within a tile, on a grid of up to 8 x 8 tiles over the mesh's two longest extents
+/// (by triangle centroid), about `triangles_per_tile` each (one tile for a small mesh).
+/// `mesh.groups` becomes the tiles' groups in that order. Partitions only: no new vertices, no
+/// cracks.
+std::vector<Tile> tileMesh(TexturedMesh& mesh, size_t triangles_per_tile);
+
 }  // namespace auv::view

@@ -66,6 +66,10 @@ void push(std::vector<float>& out, const Eigen::Vector3d& p) {
              {static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z())});
 }
 
+/// Zoomed in, the page draws only the tiles in view of a finer level; a tile this large keeps
+/// the number of objects (draw calls) per level at 64 at most.
+constexpr size_t kTrianglesPerTile = 20000;
+
 void addModel(Scene& scene, const fs::path& obj, const Alignment& align,
               const SceneOptions& options) {
   TexturedMesh mesh = readObj(obj);
@@ -74,7 +78,7 @@ void addModel(Scene& scene, const fs::path& obj, const Alignment& align,
         align.apply(Eigen::Vector3d(mesh.position[i], mesh.position[i + 1], mesh.position[i + 2]));
     for (int k = 0; k < 3; ++k) mesh.position[i + k] = static_cast<float>(p[k]);
   }
-  const std::vector<MeshLevel> levels = buildLevels(mesh, options.min_triangles);
+  std::vector<MeshLevel> levels = buildLevels(mesh, options.min_triangles);
   std::map<fs::path, std::string> route_of;
   size_t default_level = levels.size() - 1;
   for (size_t k = 0; k < levels.size(); ++k) {
@@ -84,10 +88,9 @@ void addModel(Scene& scene, const fs::path& obj, const Alignment& align,
     }
   }
   json lod = json::array();
-  for (size_t k = 0; k < levels.size(); ++k) {
-    const TexturedMesh& m = levels[k].mesh;
+  auto groupsJson = [&](const std::vector<TexturedMesh::Group>& list) {
     json groups = json::array();
-    for (const auto& g : m.groups) {
+    for (const auto& g : list) {
       std::string texture;
       if (!g.texture.empty()) {
         auto it = route_of.find(g.texture);
@@ -96,6 +99,17 @@ void addModel(Scene& scene, const fs::path& obj, const Alignment& align,
       }
       groups.push_back({{"start", g.first_index}, {"count", g.index_count}, {"texture", texture}});
     }
+    return groups;
+  };
+  for (size_t k = 0; k < levels.size(); ++k) {
+    TexturedMesh& m = levels[k].mesh;
+    json tiles = json::array();
+    for (const Tile& t : tileMesh(m, kTrianglesPerTile)) {
+      tiles.push_back({{"groups", groupsJson(t.groups)},
+                       {"center", {t.center[0], t.center[1], t.center[2]}},
+                       {"radius", t.radius}});
+    }
+    const json groups = groupsJson(m.groups);
     BufferBuilder buffer;
     buffer.addFloat32("position", m.position, 3);
     buffer.addFloat32("uv", m.uv, 2);
@@ -108,6 +122,7 @@ void addModel(Scene& scene, const fs::path& obj, const Alignment& align,
                     {"level", k},
                     {"count", m.triangles()},
                     {"groups", groups},
+                    {"tiles", tiles},
                     {"lazy", k != default_level && k != levels.size() - 1}},
                    std::move(buffer));
   }
