@@ -66,7 +66,7 @@ res = {
     "fps_default_level_rounds": r.get("fpsRounds"), "fps_empty_anchor_rounds": r.get("fpsEmptyRounds"),
     "levels": r.get("levels"),
     "zoomed_8x": {"level": r.get("levelAfterZoom"), "level_triangles": r.get("trianglesAfterZoom"),
-                  "fps": r.get("fpsZoomed")},
+                  "fps": r.get("fpsZoomed"), "fps_moving_half_resolution": r.get("fpsZoomedMoving")},
     "errors": r.get("errors"),
 }
 json.dump(res, open(out, "w"), indent=2)

@@ -90,6 +90,8 @@ try {
     if (benchmarkSeconds > 0) {
       // Zoomed in on a finer level: only its tiles in view are drawn.
       result.fpsZoomed = await page.evaluate((s) => window.__auvView.benchmark(s), benchmarkSeconds);
+      result.fpsZoomedMoving = await page.evaluate(
+        (s) => window.__auvView.benchmark(s, { moving: true }), benchmarkSeconds);
     }
     result.levelAfterZoomOut = await page.evaluate((z) => window.__auvView.zoom(1 / z), zoom);
   }

@@ -51,7 +51,7 @@ struct Tile {
 };
 
 /// Reorders `mesh.index` so the triangles of each tile are contiguous, tile by tile and page by
-/// page within a tile, on a grid of up to 8 x 8 tiles over the mesh's two longest extents
+/// page within a tile, on a grid of up to 16 x 16 tiles over the mesh's two longest extents
 /// (by triangle centroid), about `triangles_per_tile` each (one tile for a small mesh).
 /// `mesh.groups` becomes the tiles' groups in that order. Partitions only: no new vertices, no
 /// cracks.

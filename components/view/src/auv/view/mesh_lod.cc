@@ -77,7 +77,7 @@ std::vector<Tile> tileMesh(TexturedMesh& mesh, size_t triangles_per_tile) {
   const int side = static_cast<int>(
       std::clamp<double>(std::floor(std::sqrt(static_cast<double>(mesh.triangles()) /
                                               std::max<size_t>(triangles_per_tile, 1))),
-                         1, 8));
+                         1, 16));
   auto cell = [&](float value, int axis) {
     const float extent = std::max(hi[axis] - lo[axis], 1e-6f);
     return std::min(side - 1, static_cast<int>((value - lo[axis]) / extent * side));

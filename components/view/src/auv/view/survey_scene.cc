@@ -67,8 +67,8 @@ void push(std::vector<float>& out, const Eigen::Vector3d& p) {
 }
 
 /// Zoomed in, the page draws only the tiles in view of a finer level; a tile this large keeps
-/// the number of objects (draw calls) per level at 64 at most.
-constexpr size_t kTrianglesPerTile = 20000;
+/// the number of objects (draw calls) of a level at 256 at most.
+constexpr size_t kTrianglesPerTile = 5000;
 
 void addModel(Scene& scene, const fs::path& obj, const Alignment& align,
               const SceneOptions& options) {
