@@ -50,8 +50,9 @@ TEST(Scene, PlannerTreeAndPathAreLines) {
   tree.parents({-1, 0, 1});
   const auto t = treeScene(tree)["entities"][0];
   EXPECT_EQ(t["id"], "tree");
-  EXPECT_EQ(t["lines"][0]["type"], 2);  // line list
-  EXPECT_EQ(t["lines"][0]["points"].size(), 4u);
+  EXPECT_EQ(t["lines"][0]["type"], 2);                                       // line list
+  EXPECT_EQ(t["lines"][0]["points"].size(), 3u);                             // each node once
+  EXPECT_EQ(t["lines"][0]["indices"], nlohmann::json::array({0, 1, 1, 2}));  // parent, child
   msg::Path path;
   msg::Pose a, b;
   a.position(point(0, 0, 1));

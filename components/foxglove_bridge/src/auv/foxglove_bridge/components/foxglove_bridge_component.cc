@@ -106,6 +106,10 @@ FoxgloveBridgeComponent::Options::table() {
       {"path_topic", &O::path_topic, "Path topic drawn on /foxglove/planner"},
       {"map_period", &O::map_period, "shortest time between two map scenes", "s",
        Range::closed(0.05, 600)},
+      {"tree_period", &O::tree_period,
+       "shortest time between two planner trees on /foxglove/planner (a tree of 10^4 nodes is "
+       "~0.5 MB of JSON)",
+       "s", Range::closed(0.05, 600)},
       {"map_show_free", &O::map_show_free, "draw free leaves too (faint green)"},
       {"map_show_unknown", &O::map_show_unknown,
        "draw unknown cells inside the map's extent too (faint grey)"},
@@ -212,9 +216,7 @@ void FoxgloveBridgeComponent::createVisuals() {
   subscriptions_.push_back(node.createSubscription<msg::PlannerTree>(
       o.tree_topic, interfaces::viewingQos(), [this](const msg::PlannerTree& m) {
         last_tree_ = std::make_shared<msg::PlannerTree>(m);
-        if (core_->hasSubscribers(planner_channel_))
-          publishJson(planner_channel_, treeScene(m),
-                      interfaces::toNanoseconds(m.header().stamp()));
+        tree_dirty_ = true;  // drawn by tree_timer_: trees come faster than a client needs
       }));
   subscriptions_.push_back(node.createSubscription<msg::Path>(
       o.path_topic, interfaces::viewingQos(), [this](const msg::Path& m) {
@@ -224,6 +226,12 @@ void FoxgloveBridgeComponent::createVisuals() {
                       interfaces::toNanoseconds(m.header().stamp()));
       }));
   map_timer_ = node.createTimer(o.map_period, [this] { publishMap(false); });
+  tree_timer_ = node.createTimer(o.tree_period, [this] {
+    if (!tree_dirty_ || !last_tree_ || !core_->hasSubscribers(planner_channel_)) return;
+    tree_dirty_ = false;
+    publishJson(planner_channel_, treeScene(*last_tree_),
+                interfaces::toNanoseconds(last_tree_->header().stamp()));
+  });
   vehicle_timer_ = node.createTimer(o.vehicle_period, [this] {
     publishVehicle();
     // A new subscriber of the planner gets the last tree and path at once.
@@ -294,6 +302,7 @@ void FoxgloveBridgeComponent::cleanup() {
   deactivate();
   map_timer_.reset();
   vehicle_timer_.reset();
+  tree_timer_.reset();
   subscriptions_.clear();
   forwarder_.reset();
   start_.reset();

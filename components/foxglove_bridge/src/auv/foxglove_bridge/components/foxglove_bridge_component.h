@@ -45,6 +45,7 @@ class FoxgloveBridgeComponent : public interfaces::Component, private Listener {
     std::string tree_topic = "planner/tree";
     std::string path_topic = "planner/path";
     double map_period = 1.0;
+    double tree_period = 1.0;
     bool map_show_free = false;
     bool map_show_unknown = false;
     int64_t map_max_cubes = 200000;
@@ -96,13 +97,14 @@ class FoxgloveBridgeComponent : public interfaces::Component, private Listener {
   uint32_t map_channel_ = 0, planner_channel_ = 0, vehicle_channel_ = 0, tf_channel_ = 0;
   std::unique_ptr<mapping::MapReplica> map_;
   bool map_dirty_ = false;
+  bool tree_dirty_ = false;
   std::atomic<bool> resend_map_{false}, resend_planner_{false};
   std::unique_ptr<Trajectory> estimated_, truth_;
   int64_t last_odometry_ns_ = 0;
   std::shared_ptr<msg::PlannerTree> last_tree_;
   std::shared_ptr<msg::Path> last_path_;
   std::vector<std::shared_ptr<void>> subscriptions_;
-  std::shared_ptr<interfaces::Timer> map_timer_, vehicle_timer_;
+  std::shared_ptr<interfaces::Timer> map_timer_, vehicle_timer_, tree_timer_;
 
   // Services: calls queue for a worker thread (a call waits for its reply; the WebSocket
   // thread must not).
