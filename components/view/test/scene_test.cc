@@ -212,7 +212,9 @@ TEST(MeshTiles, PartitionEveryTriangleOnceWithBoundsThatHoldThem) {
           ASSERT_LE(d, t.radius * 1.0001f + 1e-4f);
         }
         // A triangle keeps its page: rows of page 1 have v >= 0.5.
-        if (g.texture.filename() == "model_1.png") ASSERT_GE(mesh.uv[2 * mesh.index[i] + 1], 0.5f);
+        if (g.texture.filename() == "model_1.png") {
+          ASSERT_GE(mesh.uv[2 * mesh.index[i] + 1], 0.5f);
+        }
       }
     }
   }
