@@ -17,8 +17,8 @@ const char* const kUsage =
     "                        the data, unauthenticated, to the network)\n"
     "  --live [URL]          follow a running mission through a Foxglove WebSocket bridge\n"
     "                        (default ws://127.0.0.1:8765)\n"
-    "  --max-triangles N     the model's level shown first has at most N triangles\n"
-    "                        (default 300000; coarser and finer levels are in the page)\n"
+    "  --max-triangles N     the finest model level the page picks by itself has at most\n"
+    "                        N triangles (default 300000; every level can be chosen in it)\n"
     "  --max-points N        clouds thinned to at most N points (default 1000000)\n"
     "Exit codes: 0 stopped (Ctrl-C), 1 could not serve, 2 bad options or folder.\n";
 

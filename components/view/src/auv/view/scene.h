@@ -53,7 +53,7 @@ struct Scene {
 
 /// Triangle and point budgets and the frame of the data (README.md, "Levels of detail").
 struct SceneOptions {
-  size_t default_triangles = 300000;  ///< the level the page loads first is at most this
+  size_t default_triangles = 300000;  ///< the finest level the page picks by itself ("auto")
   size_t min_triangles = 10000;       ///< levels stop at the first one this small
   size_t max_points = 1000000;        ///< clouds are thinned to this many points
 };
