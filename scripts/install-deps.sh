@@ -33,7 +33,7 @@ PACKAGES=(
   # change detection: CloudCompare (command-line mode) reads the change clouds in the tests
   cloudcompare
   # bags (MCAP chunk compression) and the Foxglove bridge (WebSocket server, header-only)
-  libzstd-dev liblz4-dev zlib1g-dev libwebsocketpp-dev
+  libzstd-dev liblz4-dev zlib1g-dev libwebsocketpp-dev libasio-dev
   # auv view: levels of detail that keep texture coordinates (meshoptimizer); headless Chromium
   # for the page's tests and benchmark (puppeteer-core drives it, js/README.md)
   libmeshoptimizer-dev chromium

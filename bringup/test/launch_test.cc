@@ -1129,6 +1129,32 @@ TEST(ShippedLaunchTest, VehicleRecordsABagOnlyWhenAsked) {
   EXPECT_FALSE(bag->required);
 }
 
+// viewer:=true adds the Foxglove bridge, bound to loopback unless told otherwise, restarted on
+// failure and never required, to the vehicle and to the shore.
+TEST(ShippedLaunchTest, ViewerAddsTheBridgeOnLoopback) {
+  for (const char* name : {"vehicle.yaml", "shore.yaml"}) {
+    SCOPED_TRACE(name);
+    const std::string file = std::string(AUV_SHIPPED_LAUNCH_DIR) + "/" + name;
+    std::map<std::string, std::string> arguments = {{"survey", "surveys/s1"}};
+    if (std::string(name) == "vehicle.yaml") arguments.clear();
+    const auto bridge = [](const LaunchDescription& launch) -> const ProcessDescription* {
+      for (const ProcessDescription& process : launch.processes)
+        if (process.name == "foxglove_bridge") return &process;
+      return nullptr;
+    };
+    EXPECT_EQ(bridge(parseLaunchFile(file, arguments)), nullptr);
+    arguments["viewer"] = "true";
+    const LaunchDescription launch = parseLaunchFile(file, arguments);
+    const ProcessDescription* process = bridge(launch);
+    ASSERT_NE(process, nullptr);
+    ASSERT_EQ(process->components.size(), 1u);
+    EXPECT_EQ(process->components[0].component, "foxglove_bridge");
+    EXPECT_EQ(process->components[0].parameters["address"].as<std::string>(), "127.0.0.1");
+    EXPECT_EQ(process->restart, RestartPolicy::ON_FAILURE);
+    EXPECT_FALSE(process->required);
+  }
+}
+
 // Like ROS_DOMAIN_ID for ros2 launch: an exported AUV_DOMAIN_ID / AUV_DDS is every shipped
 // launch file's default domain and vendor, and domain:= / vendor:= still win.
 TEST(ShippedLaunchTest, ExportedDomainAndVendorAreTheDefaults) {
