@@ -27,6 +27,7 @@ constexpr const char* kUsage =
     "  recon pull                       shore: pull a vehicle's recordings (`auv recon --help`)\n"
     "  security init|add|list|check     DDS Security keystores (`auv security --help`)\n"
     "  bag record|play|info             MCAP bags of any topics (`auv bag record --help`)\n"
+    "  view <folder> | --live           a survey, a run or a live mission in the browser\n"
     "Other commands run the program `auv-<command>` (next to `auv`, in a sibling install\n"
     "prefix, or on PATH), like git; `auv <command> <sub>` runs `auv-<command>-<sub>` first\n"
     "where that program exists.\n"
