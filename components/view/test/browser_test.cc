@@ -237,7 +237,7 @@ TEST(Browser, LiveModeWaitsForABridgeThatComesLater) {
   EXPECT_GE(result["view"]["live"].value("connections", 0), 1) << result.dump();
 }
 
-/// The real bridge (components/foxglove_bridge, `auv run foxglove_bridge`) on DDS domain 8, fed
+/// The real bridge (components/foxglove_bridge, `auv run foxglove_bridge`) on DDS domain 27, fed
 /// odometry by `auv topic pub` moving 1 m every half second: the page follows /tf and the
 /// vehicle entities it publishes. Skipped when the bridge component is not installed.
 TEST(Browser, LiveModeWithTheFoxgloveBridge) {
@@ -251,7 +251,7 @@ TEST(Browser, LiveModeWithTheFoxgloveBridge) {
       GTEST_SKIP() << "`auv run --list` (install/setup.bash sourced) has no foxglove_bridge";
     }
   }
-  ::setenv("AUV_DOMAIN_ID", "8", 1);  // the children's domain (test/README.md)
+  ::setenv("AUV_DOMAIN_ID", "27", 1);  // the children's domain (test/README.md)
   test::Child bridge({"sh", "-c", "exec auv run foxglove_bridge -p port:=0 2>&1"});
   const std::string line = bridge.waitFor("Foxglove WebSocket server on ws://", 60);
   const size_t start = line.find("ws://");
