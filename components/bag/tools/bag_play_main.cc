@@ -23,6 +23,8 @@ constexpr const char* kUsage =
     "  --start-offset S       skip the first S seconds of the bag\n"
     "  --delay S              wait S seconds after creating the writers, for readers to\n"
     "                         match, before the first message (default 1)\n"
+    "  --wait-for-readers     start as soon as every topic has a matched reader (waiting\n"
+    "                         at most --delay)\n"
     "  --qos TOPIC=PROFILE    offer a named profile (sensor_data, state, map, command,\n"
     "                         bulk_transfer, viewing, latched_state, clock) instead of the\n"
     "                         recorded QoS (repeatable)\n"
@@ -54,6 +56,8 @@ int main(int argc, char** argv) {
         options.start_offset_s = args.number();
       } else if (arg == "--delay") {
         options.delay_s = args.number();
+      } else if (arg == "--wait-for-readers") {
+        options.wait_for_readers = true;
       } else if (arg == "--qos") {
         options.qos_overrides.push_back(args.value());
       } else if (arg == "--vendor") {

@@ -154,7 +154,8 @@ int main(int argc, char** argv) {
   bool live_qos = false, compare_live = false;
   auv::bag::PlayerOptions play;
   play.domain_id = 44;
-  play.delay_s = 2.0;
+  play.delay_s = 20.0;
+  play.wait_for_readers = true;  // the component's readers exist before the player starts
   try {
     for (int i = 1; i < argc; ++i) {
       const std::string arg = argv[i];

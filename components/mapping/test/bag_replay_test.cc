@@ -130,6 +130,10 @@ TEST(MappingBagReplay, AMissionBagReplayedIntoAFreshComponentGivesTheSameMap) {
   play.input = bag.string();
   play.domain_id = 26;
   play.rate = 4.0;
+  // The fresh component's readers exist already: start once they matched (across vendors on a
+  // busy machine that can take seconds; a reader that matches late misses the first beams).
+  play.wait_for_readers = true;
+  play.delay_s = 20.0;
   play.qos_overrides = {"/nav/odometry=bulk_transfer", "/sonar/beam=bulk_transfer"};
   std::atomic<bool> stop{false};
   const auto stats = bag::Player(play).play(stop);

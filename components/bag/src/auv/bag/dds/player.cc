@@ -22,6 +22,8 @@ const config::OptionTable<PlayerOptions>& PlayerOptions::table() {
       {"loop", &O::loop, "start again at the end until stopped"},
       {"delay_s", &O::delay_s, "wait after creating the writers, for readers to match", "s",
        config::Range::closed(0, 3600)},
+      {"wait_for_readers", &O::wait_for_readers,
+       "start as soon as every writer has a matched reader (at most delay_s)"},
       {"start_offset_s", &O::start_offset_s, "skip this much of the bag's beginning", "s",
        config::Range::atLeast(0)},
       {"vendor",
@@ -158,8 +160,19 @@ PlayStats Player::play(const std::atomic<bool>& stop) {
       std::this_thread::sleep_for(
           std::min<Clock::duration>(when - Clock::now(), std::chrono::milliseconds(50)));
   };
-  sleep_until(Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                 std::chrono::duration<double>(options_.delay_s)));
+  const auto delay_end = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                            std::chrono::duration<double>(options_.delay_s));
+  if (options_.wait_for_readers) {
+    const auto all_matched = [&] {
+      for (const auto& [id, output] : outputs_)
+        if (output->writer->matchedReaders() == 0) return false;
+      return true;
+    };
+    while (!stop && !all_matched() && Clock::now() < delay_end)
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  } else {
+    sleep_until(delay_end);
+  }
 
   ReadFilter filter;
   for (const auto& [id, output] : outputs_)

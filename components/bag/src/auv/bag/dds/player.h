@@ -25,9 +25,13 @@ struct PlayerOptions {
   double rate = 1.0;                ///< playback speed: 2 = twice as fast as recorded
   bool loop = false;                ///< start again at the end, until stopped
   double delay_s = 1.0;             ///< wait after creating the writers (discovery) before playing
-  double start_offset_s = 0.0;      ///< skip this much of the bag's beginning
-  std::string vendor;               ///< cyclonedds or fastdds; empty: AUV_DDS (cyclonedds)
-  int domain_id = -1;               ///< -1: AUV_DOMAIN_ID (0)
+  /// Wait (up to delay_s) until every writer has a matched reader instead of the whole
+  /// delay_s: for a replay into readers that exist already (discovery across vendors on a busy
+  /// machine can take seconds, and a volatile reader misses what came before it matched).
+  bool wait_for_readers = false;
+  double start_offset_s = 0.0;  ///< skip this much of the bag's beginning
+  std::string vendor;           ///< cyclonedds or fastdds; empty: AUV_DDS (cyclonedds)
+  int domain_id = -1;           ///< -1: AUV_DOMAIN_ID (0)
   /// "topic=profile": offer a named profile (qos.h) instead of the recorded QoS, e.g.
   /// "/sonar/beam=bulk_transfer" to feed a reader set to the same profile without loss.
   std::vector<std::string> qos_overrides;
