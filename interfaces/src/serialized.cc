@@ -123,4 +123,12 @@ bool SerializedReaderAdapter::take(SerializedSample& sample) {
 }
 
 }  // namespace detail
+
+bool decodeSerialized(const msg::TypeSupport& type, const uint8_t* cdr, size_t size, void* sample) {
+  // The generated type is guarded (GuardedPubSubType): malformed bytes give false.
+  std::unique_ptr<eprosima::fastdds::dds::TopicDataType> typed(type.make_topic_data_type());
+  detail::BorrowedPayload payload(cdr, size);
+  return typed->deserialize(&payload, sample);
+}
+
 }  // namespace auv::interfaces

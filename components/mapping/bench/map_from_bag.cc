@@ -9,7 +9,6 @@
 //   map_from_bag BAG.mcap OUT.bt [--compare REF.bt] [--compare-live] [--rate R] [--domain N]
 //                [--vendor V] [--live-qos] [name:=value ...]   (mapping parameters)
 #include <octomap/OcTree.h>
-#include <fastdds/dds/topic/TopicDataType.hpp>
 
 #include <atomic>
 #include <chrono>
@@ -57,15 +56,6 @@ std::string fileBytes(const std::string& path) {
 
 double seconds(const auv::msg::Time& t) { return t.sec() + 1e-9 * t.nanosec(); }
 
-bool decode(const std::vector<uint8_t>& cdr, const char* type_name, void* sample) {
-  const auto& type = auv::interfaces::typeSupportByName(type_name);
-  std::unique_ptr<eprosima::fastdds::dds::TopicDataType> tdt(type.make_topic_data_type());
-  eprosima::fastrtps::rtps::SerializedPayload_t payload(static_cast<uint32_t>(cdr.size()));
-  std::memcpy(payload.data, cdr.data(), cdr.size());
-  payload.length = static_cast<uint32_t>(cdr.size());
-  return tdt->deserialize(&payload, sample);
-}
-
 /// The live mapping's last map, as its readers had it: every `map/update` of the bag applied
 /// in order to a replica (what the mission handler and the planner held); the newest
 /// measurement time it includes, and how many beams of the bag are newer.
@@ -83,9 +73,10 @@ LiveMap liveMap(const std::string& bag, double resolution) {
   auv::bag::ReadFilter filter;
   filter.topics = {"/map/update"};
   auto updates = reader.messages(filter);
+  const auto& update_type = auv::interfaces::typeSupportByName("OctomapUpdate");
   auv::msg::OctomapUpdate update;
   while (auto m = updates.next()) {
-    if (!decode(m->message.data, "OctomapUpdate", &update)) continue;
+    if (!auv::interfaces::decodeSerialized(update_type, m->message.data, &update)) continue;
     if (live.replica->apply(update) == auv::mapping::MapReplica::Outcome::APPLIED) {
       ++live.updates;
       live.stamp_s = seconds(update.header().stamp());
@@ -93,9 +84,10 @@ LiveMap liveMap(const std::string& bag, double resolution) {
   }
   filter.topics = {"/sonar/beam"};
   auto beams = reader.messages(filter);
+  const auto& beam_type = auv::interfaces::typeSupportByName("SonarBeam");
   auv::msg::SonarBeam beam;
   while (auto m = beams.next())
-    if (decode(m->message.data, "SonarBeam", &beam) &&
+    if (auv::interfaces::decodeSerialized(beam_type, m->message.data, &beam) &&
         seconds(beam.header().stamp()) > live.stamp_s)
       ++live.beams_after;
   return live;

@@ -72,6 +72,16 @@ class SerializedReader {
 /// std::invalid_argument naming it otherwise.
 const msg::TypeSupport& typeSupportByName(const std::string& type_name);
 
+/// Decodes serialized bytes (encapsulation header first, as SerializedSample::cdr holds them)
+/// into `sample`, a sample of `type` (TypeSupport::create_sample): for a tool that reads one
+/// topic of a bag or a bridge in C++. False when they do not decode; never throws for bad
+/// bytes.
+bool decodeSerialized(const msg::TypeSupport& type, const uint8_t* cdr, size_t size, void* sample);
+inline bool decodeSerialized(const msg::TypeSupport& type, const std::vector<uint8_t>& cdr,
+                             void* sample) {
+  return decodeSerialized(type, cdr.data(), cdr.size(), sample);
+}
+
 /// Whether `size` bytes start with an encapsulation header of XCDR1 (CDR_BE or CDR_LE),
 /// what every type of this message set uses on both vendors.
 bool hasXcdr1Header(const uint8_t* cdr, size_t size);

@@ -2,9 +2,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstring>
-
-#include <fastdds/rtps/common/SerializedPayload.h>
 
 #include "auv/foxglove_bridge/scene.h"
 
@@ -14,15 +11,6 @@ namespace {
 constexpr const char* kCompressedImageType = "auv::msg::CompressedImage";
 
 std::string rosName(const std::string& topic) { return "/" + interfaces::toDdsTopicName(topic); }
-
-// The CDR bytes (encapsulation header first) as a message, by fastddsgen's code.
-bool decodeImage(const std::vector<uint8_t>& cdr, msg::CompressedImage& image) {
-  eprosima::fastrtps::rtps::SerializedPayload_t payload(static_cast<uint32_t>(cdr.size()));
-  std::memcpy(payload.data, cdr.data(), cdr.size());
-  payload.length = static_cast<uint32_t>(cdr.size());
-  msg::GuardedPubSubType<msg::CompressedImagePubSubType> type;
-  return type.deserialize(&payload, &image);
-}
 
 }  // namespace
 
@@ -173,8 +161,9 @@ void TopicForwarder::onSamples(Topic& topic, interfaces::SerializedReader& reade
     if (core_.publish(topic.channel, stamp, s.cdr.data(), s.cdr.size(), topic.droppable))
       ++forwarded_;
     if (topic.camera_channel && core_.hasSubscribers(topic.camera_channel)) {
+      static const auto& image_type = interfaces::typeSupportByName(kCompressedImageType);
       msg::CompressedImage image;
-      if (!decodeImage(s.cdr, image)) continue;
+      if (!interfaces::decodeSerialized(image_type, s.cdr, &image)) continue;
       const std::string text = compressedImage(image).dump();
       core_.publish(topic.camera_channel, stamp, reinterpret_cast<const uint8_t*>(text.data()),
                     text.size(), true);
