@@ -101,8 +101,11 @@ TEST(Browser, ShowsASurvey) {
   test::Child view({AUV_VIEW_EXE, survey.string(), "--port", "0"});
   const std::string url = startView(view);
   ASSERT_FALSE(url.empty());
-  const json result = check(url);
+  const json result = check(url, {"--delay-textures-ms", "2000"});
   expectCleanPage(result);
+  // The atlas drawn, not a black model: the page renders again when a texture arrives.
+  EXPECT_TRUE(result.value("drawnAfterTextures", false)) << result.dump();
+  EXPECT_GT(result.value("lit", 0.0), 0.05) << result.dump();
   const json& c = result["view"]["counts"];
   EXPECT_EQ(result["view"]["kind"], "survey");
   EXPECT_EQ(c.value("model", 0u), counts.triangles) << c.dump();
@@ -138,11 +141,15 @@ TEST(Browser, ShowsAMissionRun) {
   fs::remove_all(run);
 }
 
-TEST(Browser, ModelLevelFollowsTheView) {
+/// With one texture grid over the terrain (levels keep the atlas) and with a patch per face, as
+/// `auv recon texture` writes (coarse levels coloured per vertex).
+class BrowserLevels : public ::testing::TestWithParam<bool> {};
+
+TEST_P(BrowserLevels, ModelLevelFollowsTheView) {
   const std::string why = missing();
   if (!why.empty()) GTEST_SKIP() << why;
   const fs::path survey = tempDir("levels");
-  test::writeTerrainSurvey(survey, 200000);
+  test::writeTerrainSurvey(survey, 200000, 1, /*patch_per_face=*/GetParam());
   test::Child view({AUV_VIEW_EXE, survey.string(), "--port", "0"});
   const std::string url = startView(view);
   ASSERT_FALSE(url.empty());
@@ -157,8 +164,12 @@ TEST(Browser, ModelLevelFollowsTheView) {
   EXPECT_GT(result.value("trianglesAfterZoom", 0), result.value("trianglesBeforeZoom", 0))
       << result.dump();
   EXPECT_EQ(result.value("levelAfterZoomOut", -1), before) << result.dump();
+  EXPECT_GT(result.value("lit", 0.0), 0.05) << "a dark model: " << result.dump();
   fs::remove_all(survey);
 }
+
+INSTANTIATE_TEST_SUITE_P(Atlas, BrowserLevels, ::testing::Values(false, true),
+                         [](const auto& info) { return info.param ? "PatchPerFace" : "Grid"; });
 
 /// What the live view saw from a bridge at `ws`, over `seconds` of watching: the vehicle moved,
 /// and the `expected` entities arrived with lines or cubes (`entities`: what was seen).

@@ -1,5 +1,6 @@
 #include "fixtures.h"
 
+#include <array>
 #include <cmath>
 #include <fstream>
 
@@ -12,26 +13,30 @@
 namespace auv::view::test {
 namespace fs = std::filesystem;
 
+void texel(int x, int y, int size, uint8_t rgb[3]) {
+  const bool check = ((x * 8 / size) + (y * 8 / size)) % 2 == 0;
+  rgb[0] = static_cast<uint8_t>(check ? 220 : 40 + 150 * x / size);
+  rgb[1] = static_cast<uint8_t>(check ? 180 : 90);
+  rgb[2] = static_cast<uint8_t>(check ? 60 : 40 + 150 * y / size);
+}
+
 namespace {
 
 void writeTexture(const fs::path& file, int size) {
   open3d::geometry::Image image;
   image.Prepare(size, size, 3, 1);
   for (int y = 0; y < size; ++y) {
-    for (int x = 0; x < size; ++x) {
-      uint8_t* p = image.PointerAt<uint8_t>(x, y, 0);
-      const bool check = ((x * 8 / size) + (y * 8 / size)) % 2 == 0;
-      p[0] = static_cast<uint8_t>(check ? 220 : 40 + 150 * x / size);
-      p[1] = static_cast<uint8_t>(check ? 180 : 90);
-      p[2] = static_cast<uint8_t>(check ? 60 : 40 + 150 * y / size);
-    }
+    for (int x = 0; x < size; ++x) texel(x, y, size, image.PointerAt<uint8_t>(x, y, 0));
   }
   open3d::io::WriteImage(file.string(), image);
 }
 
 /// A height field n x n quads over [0, extent]² in x, y (NED: z down); its rows split over
-/// `pages` materials (atlas pages model_<k>.png), as the texture stage writes them.
-size_t writeGridObj(const fs::path& folder, int n, double extent, int pages) {
+/// `pages` materials (atlas pages model_<k>.png). Texture coordinates are one grid over the
+/// terrain, or with `patch_per_face` three of their own per face (the same values), as
+/// `auv recon texture` writes them: then every vertex lies on a seam.
+size_t writeGridObj(const fs::path& folder, int n, double extent, int pages,
+                    bool patch_per_face = false) {
   fs::create_directories(folder);
   std::ofstream mtl(folder / "model.mtl");
   for (int k = 0; k < pages; ++k) {
@@ -49,13 +54,23 @@ size_t writeGridObj(const fs::path& folder, int n, double extent, int pages) {
   for (int j = 0; j <= n; ++j) {
     for (int i = 0; i <= n; ++i) obj << "vt " << double(i) / n << " " << double(j) / n << "\n";
   }
+  int patch_uvs = 0;
   for (int j = 0; j < n; ++j) {
     if (j * pages % n == 0 || j == 0) obj << "usemtl page_" << j * pages / n << "\n";
     for (int i = 0; i < n; ++i) {
       const int a = j * (n + 1) + i + 1, b = a + 1, c = a + n + 1, d = c + 1;
       // Counter-clockwise seen from above (-z in NED): the faces point up, to the cameras.
-      obj << "f " << a << "/" << a << " " << d << "/" << d << " " << b << "/" << b << "\n";
-      obj << "f " << a << "/" << a << " " << c << "/" << c << " " << d << "/" << d << "\n";
+      for (const std::array<int, 3>& face : {std::array<int, 3>{a, d, b}, {a, c, d}}) {
+        std::array<int, 3> vt = face;
+        for (int k = 0; k < 3 && patch_per_face; ++k) {
+          const int v = face[k] - 1;
+          obj << "vt " << double(v % (n + 1)) / n << " " << double(v / (n + 1)) / n << "\n";
+          vt[k] = (n + 1) * (n + 1) + ++patch_uvs;
+        }
+        obj << "f";
+        for (int k = 0; k < 3; ++k) obj << " " << face[k] << "/" << vt[k];
+        obj << "\n";
+      }
     }
   }
   return static_cast<size_t>(2 * n * n);
@@ -170,9 +185,9 @@ RunCounts writeDemoRun(const fs::path& run) {
   return counts;
 }
 
-void writeTerrainSurvey(const fs::path& survey, size_t triangles, int pages) {
+void writeTerrainSurvey(const fs::path& survey, size_t triangles, int pages, bool patch_per_face) {
   const int n = static_cast<int>(std::lround(std::sqrt(triangles / 2.0)));
-  writeGridObj(survey / "textured", n, 60.0, pages);
+  writeGridObj(survey / "textured", n, 60.0, pages, patch_per_face);
   for (int k = 0; k < pages; ++k) {
     writeTexture(survey / "textured" / ("model_" + std::to_string(k) + ".png"), 2048);
   }

@@ -3,6 +3,7 @@
 // large textured terrain.
 
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 
 namespace auv::view::test {
@@ -23,7 +24,12 @@ struct RunCounts {
 RunCounts writeDemoRun(const std::filesystem::path& run);
 
 /// textured/model.obj of a rolling terrain of about `triangles` triangles on `pages` 2048²
-/// atlas pages (the benchmark's stand-in for the demo's model).
-void writeTerrainSurvey(const std::filesystem::path& survey, size_t triangles, int pages = 1);
+/// atlas pages (the benchmark's stand-in for the demo's model); with `patch_per_face` every
+/// face has texture coordinates of its own, as `auv recon texture` writes them.
+void writeTerrainSurvey(const std::filesystem::path& survey, size_t triangles, int pages = 1,
+                        bool patch_per_face = false);
+
+/// The fixture atlas's colour at pixel (x, y) of a `size`² page (y down, as stored).
+void texel(int x, int y, int size, uint8_t rgb[3]);
 
 }  // namespace auv::view::test

@@ -190,6 +190,51 @@ TEST(MeshLevels, HalfEachKeepingTextureCoordinatesAndPages) {
   EXPECT_LE(levels.back().mesh.triangles(), 5000u);
 }
 
+TEST(MeshLevels, AnAtlasOfAPatchPerFaceGoesOnAsVertexColours) {
+  const fs::path survey = tempDir("patches");
+  test::writeTerrainSurvey(survey, 20000, 2, /*patch_per_face=*/true);
+  const TexturedMesh mesh = readObj(survey / "textured" / "model.obj");
+  ASSERT_EQ(mesh.position.size() / 3, 3 * mesh.triangles());  // every vertex on a seam
+  const auto levels = buildLevels(mesh, 2000);
+  ASSERT_GE(levels.size(), 4u);
+  EXPECT_TRUE(levels[0].mesh.color.empty());
+  for (size_t k = 1; k < levels.size(); ++k) {
+    const TexturedMesh& m = levels[k].mesh;
+    EXPECT_LE(m.triangles(), levels[k - 1].mesh.triangles() * 0.6) << "level " << k;
+    ASSERT_EQ(m.groups.size(), 1u);
+    EXPECT_TRUE(m.groups[0].texture.empty());
+    EXPECT_TRUE(m.uv.empty());
+    ASSERT_EQ(m.color.size(), m.position.size());
+    for (uint32_t v : m.index) ASSERT_LT(v, m.position.size() / 3);
+  }
+  // Each vertex has the atlas's colour where it lies (the grid's uv: x, y over 60 m), but
+  // where it meets the checker's edges.
+  const TexturedMesh& m = levels[1].mesh;
+  size_t close = 0;
+  for (size_t v = 0; v < m.position.size() / 3; ++v) {
+    uint8_t expected[3];
+    test::texel(std::min(static_cast<int>(m.position[3 * v] / 60 * 2048), 2047),
+                std::min(static_cast<int>((1 - m.position[3 * v + 1] / 60) * 2048), 2047), 2048,
+                expected);
+    bool near = true;
+    for (int c = 0; c < 3; ++c) near = near && std::abs(m.color[3 * v + c] - expected[c]) <= 12;
+    close += near;
+  }
+  EXPECT_GE(close, m.position.size() / 3 * 9 / 10);
+  EXPECT_LE(levels.back().mesh.triangles(), 2000u);
+}
+
+TEST(MeshLevels, AnUndecodableAtlasPageLeavesItsVerticesGrey) {
+  const fs::path survey = tempDir("patches_bad");
+  test::writeTerrainSurvey(survey, 2000, 1, /*patch_per_face=*/true);
+  std::ofstream(survey / "textured" / "model_0.png") << "not a png";
+  const auto levels = buildLevels(readObj(survey / "textured" / "model.obj"), 200);
+  ASSERT_GE(levels.size(), 2u);
+  const TexturedMesh& m = levels[1].mesh;
+  ASSERT_FALSE(m.color.empty());
+  for (uint8_t c : m.color) ASSERT_EQ(c, 160);
+}
+
 TEST(MeshTiles, PartitionEveryTriangleOnceWithBoundsThatHoldThem) {
   const fs::path survey = tempDir("tiles");
   test::writeTerrainSurvey(survey, 80000, 2);

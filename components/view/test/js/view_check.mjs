@@ -33,6 +33,15 @@ const result = { errors: [], requestsFailed: [] };
 try {
   const page = await browser.newPage();
   await page.setViewport({ width, height });
+  const delayTextures = Number(option('--delay-textures-ms', 0));
+  if (delayTextures > 0) {
+    // Atlas pages that arrive after everything else (a large page over a slow link).
+    await page.setRequestInterception(true);
+    page.on('request', (r) => {
+      if (/\.(png|jpe?g)$/i.test(r.url())) setTimeout(() => r.continue(), delayTextures);
+      else r.continue();
+    });
+  }
   page.on('console', (m) => { if (m.type() === 'error') result.errors.push(m.text()); });
   page.on('pageerror', (e) => result.errors.push(String(e.message || e)));
   page.on('requestfailed', (r) => result.requestsFailed.push(r.url()));
@@ -42,6 +51,13 @@ try {
   await page.waitForFunction(
     () => window.__auvView?.ready && window.__auvView.firstFrameMs !== null, { timeout: 120000 });
   result.readyMs = Date.now() - t0;
+  // Texture pages decode after their level is on screen (the page renders on demand).
+  await page.waitForFunction(() => window.__auvView.texturesPending === 0, { timeout: 120000 });
+  result.texturesMs = Date.now() - t0;
+  // ... and the page draws them by itself, untouched (a user sees no black model).
+  result.drawnAfterTextures = await page.waitForFunction(
+    () => window.__auvView.lastFrameMs >= window.__auvView.textureArrivedMs, { timeout: 5000 })
+    .then(() => true, () => false);
   if (liveSeconds > 0) {
     await page.waitForFunction(() => window.__auvView.vehicle !== null, { timeout: 30000 });
     result.vehicleFirst = await page.evaluate(() => ({ ...window.__auvView.vehicle,
@@ -113,12 +129,15 @@ try {
     const ctx = copy.getContext('2d');
     ctx.drawImage(canvas, 0, 0);
     const data = ctx.getImageData(0, 0, copy.width, copy.height).data;
-    let differ = 0;
+    let differ = 0, lit = 0;
     for (let i = 0; i < data.length; i += 4) {
       if (Math.abs(data[i] - 11) + Math.abs(data[i + 1] - 30) + Math.abs(data[i + 2] - 45) > 24) differ++;
+      if (data[i] + data[i + 1] + data[i + 2] > 150) lit++;  // brighter than the background
     }
-    return differ / (data.length / 4);
+    return { differ: differ / (data.length / 4), lit: lit / (data.length / 4) };
   });
+  result.lit = result.nonBackground.lit;
+  result.nonBackground = result.nonBackground.differ;
 } catch (e) {
   result.errors.push(`view_check: ${e.message}`);
 } finally {

@@ -19,14 +19,26 @@ export async function fetchLayer(layer) {
   return arraysOf(layer, await response.arrayBuffer());
 }
 
-/** Set by the page before loading: software GL (no GPU) samples textures on the CPU. */
-export const renderHints = { softwareGl: false };
+/** Set by the page before loading: software GL (no GPU) samples textures on the CPU; the page
+ * renders on demand, so it is told when a texture arrives (or fails) after its level. */
+export const renderHints = {
+  softwareGl: false, texturesPending: 0, textureArrivedMs: 0, onTexture: () => {},
+  onError: () => {},
+};
 
 const textureLoader = new THREE.TextureLoader();
 const textures = new Map();
 function texture(url) {
   if (!textures.has(url)) {
-    const t = textureLoader.load(url);
+    renderHints.texturesPending++;
+    const t = textureLoader.load(url, () => {
+      renderHints.texturesPending--;
+      renderHints.textureArrivedMs = performance.now();
+      renderHints.onTexture();
+    }, undefined, () => {
+      renderHints.texturesPending--;
+      renderHints.onError(new Error(`texture ${url} could not be loaded`));
+    });
     t.colorSpace = THREE.SRGBColorSpace;
     t.anisotropy = 1;
     // Bilinear in the nearest mipmap instead of trilinear: +25 % frames per second on
@@ -45,11 +57,24 @@ export function setModelBackFaces(level, show) {
   for (const m of level?.userData.materials ?? []) { m.side = modelSide; m.needsUpdate = true; }
 }
 
+/** sRGB bytes per vertex as the linear floats three.js blends (as it decodes an sRGB texture). */
+function linearColours(bytes) {
+  const out = new Float32Array(bytes.length);
+  const c = new THREE.Color();
+  for (let i = 0; i < bytes.length; i += 3) {
+    c.setRGB(bytes[i] / 255, bytes[i + 1] / 255, bytes[i + 2] / 255, THREE.SRGBColorSpace);
+    out[i] = c.r; out[i + 1] = c.g; out[i + 2] = c.b;
+  }
+  return new THREE.BufferAttribute(out, 3);
+}
+
 /** A textured model level: one vertex and index buffer shared by its tiles, one object per
- * tile (so three.js skips the tiles out of view), one unlit material per atlas page. */
+ * tile (so three.js skips the tiles out of view), one unlit material per atlas page; a coarse
+ * level the atlas could not follow carries its colours per vertex instead (README.md). */
 export function meshObject(layer, a) {
   const position = new THREE.BufferAttribute(a.position, 3);
-  const uv = new THREE.BufferAttribute(a.uv, 2);
+  const uv = a.uv && new THREE.BufferAttribute(a.uv, 2);
+  const color = a.color && linearColours(a.color);
   const index = new THREE.BufferAttribute(a.index, 1);
   const materials = []; const materialOf = new Map();
   const materialFor = (url) => {
@@ -58,7 +83,8 @@ export function meshObject(layer, a) {
       // The texture carries the light of the photos: drawn unlit. Without one, shaded.
       materials.push(url
         ? new THREE.MeshBasicMaterial({ map: texture(url), side: modelSide })
-        : new THREE.MeshLambertMaterial({ color: 0xb0a890, side: modelSide }));
+        : color ? new THREE.MeshBasicMaterial({ vertexColors: true, side: modelSide })
+          : new THREE.MeshLambertMaterial({ color: 0xb0a890, side: modelSide }));
     }
     return materialOf.get(url);
   };
@@ -68,10 +94,11 @@ export function meshObject(layer, a) {
   for (const tile of tiles) {
     const g = new THREE.BufferGeometry();
     g.setAttribute('position', position);
-    g.setAttribute('uv', uv);
+    if (uv) g.setAttribute('uv', uv);
+    if (color) g.setAttribute('color', color);
     g.setIndex(index);
     for (const group of tile.groups) g.addGroup(group.start, group.count, materialFor(group.texture));
-    if (tile.groups.some((group) => !group.texture)) g.computeVertexNormals();
+    if (!color && tile.groups.some((group) => !group.texture)) g.computeVertexNormals();
     if (tile.center) {
       // The tile's own bounds (the shared buffer spans the whole level): what culling tests.
       g.boundingSphere = new THREE.Sphere(new THREE.Vector3(...tile.center), tile.radius);

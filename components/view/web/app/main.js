@@ -7,7 +7,7 @@ import { LiveView } from './live.js';
 
 const started = performance.now();
 const state = window.__auvView = {
-  ready: false, kind: null, counts: {}, frames: 0, errors: [], firstFrameMs: null,
+  ready: false, kind: null, counts: {}, frames: 0, lastFrameMs: 0, errors: [], firstFrameMs: null,
   modelLevel: null, live: null, vehicle: null,
 };
 window.addEventListener('error', (e) => state.errors.push(String(e.message)));
@@ -70,6 +70,7 @@ function frame(now) {
   dirty = false;
   renderer.render(scene, camera);
   state.frames++;
+  state.lastFrameMs = now;
   if (spin) {
     spin.frames++;
     if (now >= spin.until) { spin.resolve(spin.frames / ((now - spin.start) / 1000)); spin = null; }
@@ -158,6 +159,10 @@ state.renderer = debugInfo ? renderer.getContext().getParameter(debugInfo.UNMASK
 state.softwareGl = /swiftshader|llvmpipe|softpipe|software/i.test(state.renderer);
 const PIXELS_PER_TRIANGLE = state.softwareGl ? 64 : 16;
 renderHints.softwareGl = state.softwareGl;
+renderHints.onTexture = requestRender;
+renderHints.onError = (e) => report(e);
+Object.defineProperty(state, 'texturesPending', { get: () => renderHints.texturesPending });
+Object.defineProperty(state, 'textureArrivedMs', { get: () => renderHints.textureArrivedMs });
 const model = { levels: [], shown: null, level: null, auto: true, loading: new Map(), sphere: null };
 
 function autoLevel() {
@@ -165,9 +170,13 @@ function autoLevel() {
   const distance = Math.max(camera.position.distanceTo(model.sphere.center), 1e-6);
   const half = Math.tan((camera.fov * Math.PI) / 360) * distance;
   const radiusPx = (model.sphere.radius / half) * (renderer.domElement.height / 2);
-  const budget = Math.min((Math.PI * radiusPx * radiusPx) / PIXELS_PER_TRIANGLE, model.maxTriangles);
+  const pixels = Math.PI * radiusPx * radiusPx;
+  // A level coloured per vertex (README.md) has no texels between its vertices: four times the
+  // triangles for the same detail.
+  const budget = (level) => Math.min(
+    pixels / (level.vertexColours ? PIXELS_PER_TRIANGLE / 4 : PIXELS_PER_TRIANGLE), model.maxTriangles);
   // Levels run finest (0) to coarsest: the finest one within the budget, else the coarsest.
-  const k = model.levels.findIndex((level) => level.triangles <= budget);
+  const k = model.levels.findIndex((level) => level.triangles <= budget(level));
   return k < 0 ? model.levels.length - 1 : k;
 }
 

@@ -19,6 +19,7 @@ struct TexturedMesh {
   };
   std::vector<float> position;  ///< xyz per vertex
   std::vector<float> uv;        ///< uv per vertex (0, 0 where the OBJ gives none)
+  std::vector<uint8_t> color;   ///< sRGB per vertex, only on levels coloured by the atlas
   std::vector<uint32_t> index;  ///< three per triangle
   std::vector<Group> groups;
   size_t triangles() const { return index.size() / 3; }
@@ -38,9 +39,17 @@ struct MeshLevel {
 
 /// The original, then levels of about half the previous triangles each (meshoptimizer's
 /// edge collapse, per material so every triangle keeps its atlas page, group borders locked so
-/// pages do not crack apart, texture seams kept), down to about `min_triangles`. Stops early
-/// when a level would remove less than 20 % (locked borders, tiny meshes).
+/// pages do not crack apart, texture seams kept), down to about `min_triangles`. Where the
+/// atlas pins the surface (a patch per face, as `auv recon texture` writes, or charts so small
+/// that every vertex is on a seam) the coarser levels are simplified without it and carry its
+/// colours per vertex (bakeVertexColours). Stops early when a level would remove less than
+/// 20 % (tiny meshes).
 std::vector<MeshLevel> buildLevels(const TexturedMesh& mesh, size_t min_triangles);
+
+/// `mesh` welded by position (one vertex where the atlas's seams had several), one group
+/// without a texture, each vertex coloured by the mean of the atlas around its corners. A page
+/// that cannot be decoded leaves its vertices grey (named on stderr).
+TexturedMesh bakeVertexColours(const TexturedMesh& mesh);
 
 /// A part of a level the page draws as its own object, so the parts off screen are skipped
 /// (frustum culling is per object): its triangles as ranges of the level's index, per page.

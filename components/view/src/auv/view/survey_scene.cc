@@ -112,10 +112,14 @@ void addModel(Scene& scene, const fs::path& obj, const Alignment& align,
     const json groups = groupsJson(m.groups);
     BufferBuilder buffer;
     buffer.addFloat32("position", m.position, 3);
-    buffer.addFloat32("uv", m.uv, 2);
+    if (!m.uv.empty()) buffer.addFloat32("uv", m.uv, 2);
+    if (!m.color.empty()) buffer.addUint8("color", m.color, 3);
     buffer.addUint32("index", m.index, 3);
     const std::string id = "model_" + std::to_string(k);
-    lod.push_back({{"layer", id}, {"triangles", m.triangles()}, {"error", levels[k].error}});
+    lod.push_back({{"layer", id},
+                   {"triangles", m.triangles()},
+                   {"error", levels[k].error},
+                   {"vertexColours", !m.color.empty()}});
     scene.addLayer({{"id", id},
                     {"type", "mesh"},
                     {"label", "textured model"},
