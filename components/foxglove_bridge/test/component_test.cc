@@ -158,10 +158,20 @@ TEST(FoxgloveBridge, DrawsMapPlannerVehicleAndCameras) {
       << "tf " << jsonFrames(client, 10).size() << " vehicle " << jsonFrames(client, 11).size()
       << " map " << jsonFrames(client, 12).size() << " planner " << jsonFrames(client, 13).size()
       << " camera " << jsonFrames(client, 14).size();
-  const json tf = jsonFrames(client, 10).back();
-  EXPECT_EQ(tf["parent_frame_id"], "world");
-  EXPECT_EQ(tf["child_frame_id"], "vehicle");
-  EXPECT_GT(tf["translation"]["x"].get<double>(), 0);
+  // /tf: the vehicle in world, and world (NED) under the z-up display frame map.
+  ASSERT_TRUE(client.waitFor(
+      [&] {
+        bool vehicle = false, display = false;
+        for (const json& tf : jsonFrames(client, 10)) {
+          vehicle =
+              vehicle || (tf["parent_frame_id"] == "world" && tf["child_frame_id"] == "vehicle" &&
+                          tf["translation"]["x"].get<double>() > 0);
+          display = display || (tf["parent_frame_id"] == "map" && tf["child_frame_id"] == "world");
+        }
+        return vehicle && display;
+      },
+      5s))
+      << jsonFrames(client, 10).back().dump();
   ASSERT_TRUE(
       client.waitFor([&] { return jsonFrames(client, 11).back()["entities"].size() == 3; }, 5s));
   const json vehicle = jsonFrames(client, 11).back();

@@ -3,6 +3,8 @@
 // vehicle's entities, /tf, a CompressedImage with base64 data, the camera channel names.
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+
 #include "auv/foxglove_bridge/scene.h"
 
 namespace auv::foxglove_bridge {
@@ -84,6 +86,16 @@ TEST(Scene, VehicleTrajectoriesAndTransform) {
   EXPECT_EQ(tf["child_frame_id"], "vehicle");
   EXPECT_EQ(tf["translation"]["z"], 3.0);
   EXPECT_EQ(tf["rotation"]["w"], 1.0);
+  // The display frame: NED north (world x) is map y, east is map x, down is map -z.
+  const auto display = displayFrameTransform(0);
+  EXPECT_EQ(display["parent_frame_id"], "map");
+  EXPECT_EQ(display["child_frame_id"], "world");
+  const Eigen::Quaterniond q(
+      display["rotation"]["w"].get<double>(), display["rotation"]["x"].get<double>(),
+      display["rotation"]["y"].get<double>(), display["rotation"]["z"].get<double>());
+  EXPECT_TRUE((q * Eigen::Vector3d::UnitX()).isApprox(Eigen::Vector3d::UnitY()));
+  EXPECT_TRUE((q * Eigen::Vector3d::UnitY()).isApprox(Eigen::Vector3d::UnitX()));
+  EXPECT_TRUE((q * Eigen::Vector3d::UnitZ()).isApprox(-Eigen::Vector3d::UnitZ()));
 }
 
 TEST(Scene, CompressedImageAndCameraNames) {

@@ -269,6 +269,16 @@ json vehicleTransform(const msg::Odometry& odometry) {
           {"rotation", {{"x", q.x()}, {"y", q.y()}, {"z", q.z()}, {"w", q.w()}}}};
 }
 
+json displayFrameTransform(int64_t stamp_ns) {
+  // Half a turn about (1, 1, 0) / sqrt(2): x <-> y, z -> -z (NED <-> ENU).
+  const double h = std::sqrt(0.5);
+  return {{"timestamp", time(stamp_ns)},
+          {"parent_frame_id", kDisplayFrame},
+          {"child_frame_id", "world"},
+          {"translation", vec(0, 0, 0)},
+          {"rotation", {{"x", h}, {"y", h}, {"z", 0.0}, {"w", 0.0}}}};
+}
+
 json compressedImage(const msg::CompressedImage& image) {
   return {{"timestamp", time(image.header().stamp())},
           {"frame_id", image.header().frame_id()},

@@ -68,6 +68,11 @@ nlohmann::json vehicleScene(const Trajectory& estimated, const Trajectory& truth
                             double length, double width);
 /// foxglove.FrameTransform world -> vehicle from an odometry pose.
 nlohmann::json vehicleTransform(const msg::Odometry& odometry);
+/// The frame Foxglove and Lichtblick display by default ("map", REP-105), z up: x east, y north.
+constexpr const char* kDisplayFrame = "map";
+/// foxglove.FrameTransform map -> world: the NED `world` (x north, y east, z down) in the z-up
+/// display frame, so a 3-D panel shows the site the right way up without settings.
+nlohmann::json displayFrameTransform(int64_t stamp_ns);
 /// foxglove.CompressedImage (data in base64).
 nlohmann::json compressedImage(const msg::CompressedImage& image);
 /// The camera channel of a CompressedImage topic: "camera/left/compressed" ->

@@ -260,8 +260,11 @@ void FoxgloveBridgeComponent::publishMap(bool force) {
 }
 
 void FoxgloveBridgeComponent::publishVehicle() {
-  if (!core_->hasSubscribers(vehicle_channel_)) return;
   const int64_t stamp = last_odometry_ns_ > 0 ? last_odometry_ns_ : node_->clock().nowNs();
+  // Static, but the protocol has no latching: again every period, for clients that come later.
+  if (core_->hasSubscribers(tf_channel_))
+    publishJson(tf_channel_, displayFrameTransform(stamp), stamp);
+  if (!core_->hasSubscribers(vehicle_channel_)) return;
   publishJson(
       vehicle_channel_,
       vehicleScene(*estimated_, *truth_, stamp, options_.vehicle_length, options_.vehicle_width),
