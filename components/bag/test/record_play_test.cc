@@ -1,5 +1,5 @@
-// `auv bag record` and `auv bag play` on real DDS (domains 14-19, test/README.md): every type
-// of the message set, published by either vendor, is recorded with its schema and QoS, read
+// `auv bag record` and `auv bag play` on real DDS (domains 14-19 and 28, test/README.md): every
+// type of the message set, published by either vendor, is recorded with its schema and QoS, read
 // back by @mcap/core and decoded by Foxglove's modules into the values published, and played
 // back into typed readers of both vendors unchanged; play keeps the recorded order and
 // spacing and scales it by --rate; filters; and the programs as a user runs them refuse bad
@@ -23,6 +23,7 @@
 #include "auv/bag/dds/player.h"
 #include "auv/bag/dds/qos_metadata.h"
 #include "auv/bag/dds/recorder.h"
+#include "auv/interfaces/msg_time.h"
 #include "auv/interfaces/serialized.h"
 #include "auv/msg/all.h"
 #include "bag_test_util.h"
@@ -313,6 +314,79 @@ TEST(RecordPlay, PlayKeepsOrderAndSpacingScaledByRate) {
   const double fast = span_at(4.0);
   EXPECT_GT(normal, 0.6);
   EXPECT_LT(fast, normal / 2);
+}
+
+// A bag without a recorded clock (a real dive) played for nodes with use_sim_time: the player
+// publishes the bag's time on `clock`, advancing at `rate` through the bag's span and held at
+// its end; a bag with its own clock is refused (two clocks would fight).
+TEST(RecordPlay, ClockOptionPublishesTheBagsTimeAtTheRate) {
+  const int domain = 28;
+  TempDir dir("clock");
+  const fs::path bag = recordSequence(dir.path(), domain, 20, 50ms);
+  McapReader reader;
+  reader.open(bag);
+  const uint64_t start = reader.statistics().message_start_time,
+                 end = reader.statistics().message_end_time;
+  ASSERT_GT(end, start + 500000000ULL);
+
+  auto listener = interfaces::createParticipant(Vendor::FASTDDS, {domain, "listener"});
+  std::mutex mutex;
+  std::vector<int64_t> times;
+  auto clock_reader =
+      listener->createReader("clock", msg::makeTypeSupport<msg::Clock>(), interfaces::clockQos(),
+                             [&](interfaces::DataReader& r) {
+                               msg::Clock clock;
+                               while (r.take(&clock, nullptr)) {
+                                 std::lock_guard<std::mutex> lock(mutex);
+                                 times.push_back(interfaces::toNanoseconds(clock.sim_time()));
+                               }
+                             });
+  PlayerOptions options;
+  options.input = bag.string();
+  options.domain_id = domain;
+  options.rate = 2.0;
+  options.delay_s = 1.0;
+  options.clock_hz = 100;
+  std::atomic<bool> stop{false};
+  Player player(options);
+  std::thread play([&] { player.play(stop); });
+  play.join();
+  std::lock_guard<std::mutex> lock(mutex);
+  ASSERT_GT(times.size(), 10u);
+  for (size_t i = 1; i < times.size(); ++i) ASSERT_GE(times[i], times[i - 1]) << i;
+  EXPECT_GE(static_cast<uint64_t>(times.front()), start);
+  EXPECT_LE(static_cast<uint64_t>(times.back()), end);
+  // It went through most of the bag (the last message's time is the end; the clock is written
+  // every 10 ms of wall time, 20 ms of bag time at rate 2).
+  EXPECT_GT(static_cast<uint64_t>(times.back()), end - 100000000ULL);
+
+  // The bag records its own clock: refused, naming the option.
+  {
+    auto sender = interfaces::createParticipant(Vendor::CYCLONEDDS, {domain, "sim"});
+    auto writer =
+        sender->createWriter("clock", msg::makeTypeSupport<msg::Clock>(), interfaces::clockQos());
+    auto text_writer = sender->createWriter("/bag/timing", interfaces::typeSupportByName("String"),
+                                            interfaces::commandQos());
+    Recorder recorder(recorderOptions(dir.path() / "with_clock.mcap", domain));
+    recorder.start();
+    EXPECT_TRUE(waitUntil(
+        [&] { return writer->matchedReaders() > 0 && text_writer->matchedReaders() > 0; }, 10s));
+    msg::Clock clock;
+    writer->write(&clock);
+    msg::String text;
+    text_writer->write(&text);
+    std::this_thread::sleep_for(300ms);
+    recorder.stop();
+  }
+  options.input = (dir.path() / "with_clock.mcap").string();
+  try {
+    Player refused(options);
+    ADD_FAILURE() << "a bag with a recorded clock was accepted with clock_hz";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("clock_hz"), std::string::npos) << e.what();
+  }
+  options.topics = {"/bag/timing"};  // the recorded clock left out: accepted
+  EXPECT_NO_THROW(Player{options});
 }
 
 // Vehicle state is offered with a 0.5 s deadline and its readers request it: a player that

@@ -1,8 +1,8 @@
 // `auv bag play` (run by `auv` as auv-bag-play): publishes an MCAP bag's topics on DDS with
 // their recorded timing (or --rate), QoS and types; nodes with use_sim_time follow the
-// recorded `clock`. A damaged bag plays what is intact and names each break. Exit 0 when it
-// played (1 when damage was found, after playing), 2 for bad arguments, a missing or non-MCAP
-// file, or a topic the bag does not have.
+// recorded `clock` or, with --clock, the player's. A damaged bag plays what is intact and names
+// each break. Exit 0 when it played (1 when damage was found, after playing), 2 for bad arguments,
+// a missing or non-MCAP file, or a topic the bag does not have.
 #include <atomic>
 #include <csignal>
 #include <cstdio>
@@ -28,6 +28,8 @@ constexpr const char* kUsage =
     "  --qos TOPIC=PROFILE    offer a named profile (sensor_data, state, map, command,\n"
     "                         bulk_transfer, viewing, latched_state, clock) instead of the\n"
     "                         recorded QoS (repeatable)\n"
+    "  --clock HZ             publish clock with the bag's time at HZ, for nodes with\n"
+    "                         use_sim_time (a bag without a recorded clock)\n"
     "  --vendor V             cyclonedds or fastdds (default AUV_DDS); readers of both\n"
     "                         vendors receive it\n"
     "  --domain N             DDS domain (default AUV_DOMAIN_ID, else 0)\n";
@@ -60,6 +62,8 @@ int main(int argc, char** argv) {
         options.wait_for_readers = true;
       } else if (arg == "--qos") {
         options.qos_overrides.push_back(args.value());
+      } else if (arg == "--clock") {
+        options.clock_hz = args.number();
       } else if (arg == "--vendor") {
         options.vendor = args.value();
       } else if (arg == "--domain") {

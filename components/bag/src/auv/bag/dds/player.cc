@@ -2,13 +2,17 @@
 
 #include <algorithm>
 #include <chrono>
+#include <condition_variable>
 #include <cstring>
+#include <mutex>
 #include <set>
 #include <stdexcept>
 #include <thread>
 
 #include "auv/bag/dds/qos_metadata.h"
+#include "auv/interfaces/msg_time.h"
 #include "auv/interfaces/serialized.h"
+#include "auv/msg/all.h"  // msg::Clock and its type support
 
 namespace auv::bag {
 
@@ -35,7 +39,10 @@ const config::OptionTable<PlayerOptions>& PlayerOptions::table() {
       {"domain_id", &O::domain_id, "DDS domain; -1: AUV_DOMAIN_ID", "",
        config::Range::closed(-1, 232)},
       {"qos_overrides", &O::qos_overrides,
-       "topic=profile: offer a named QoS profile instead of the recorded QoS"}};
+       "topic=profile: offer a named QoS profile instead of the recorded QoS"},
+      {"clock_hz", &O::clock_hz,
+       "publish clock with the bag's time at this rate (wall Hz) for use_sim_time nodes; 0: off",
+       "Hz", config::Range::closed(0, 1000)}};
   return kTable;
 }
 
@@ -78,6 +85,64 @@ std::string unplayable(const Channel& channel, const Schema* schema,
            " differs from this build's (recorded by another version)";
   return "";
 }
+
+/// The bag's time as it plays, published on `clock` at a fixed wall rate by a thread of its
+/// own: before the first message the start time, then the first message's log time plus the
+/// wall time since, times the rate, held at the bag's end.
+class ClockPublisher {
+ public:
+  ClockPublisher(interfaces::Participant& participant, double hz, double rate, uint64_t start_ns,
+                 uint64_t end_ns)
+      : writer_(participant.createWriter("clock", msg::makeTypeSupport<msg::Clock>(),
+                                         interfaces::clockQos())),
+        rate_(rate),
+        end_ns_(end_ns),
+        base_ns_(start_ns) {
+    const auto period = std::chrono::duration<double>(1.0 / hz);
+    thread_ = std::thread([this, period] {
+      std::unique_lock<std::mutex> lock(mutex_);
+      while (!done_) {
+        msg::Clock clock;
+        clock.sim_time(interfaces::toMsgTime(static_cast<int64_t>(nowLocked())));
+        writer_->write(&clock);
+        wake_.wait_for(lock, period, [this] { return done_; });
+      }
+    });
+  }
+  ~ClockPublisher() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      done_ = true;
+    }
+    wake_.notify_all();
+    thread_.join();
+  }
+  /// A pass starts: bag time `log_ns` is now.
+  void startPass(uint64_t log_ns) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    base_ns_ = log_ns;
+    base_wall_ = std::chrono::steady_clock::now();
+    running_ = true;
+  }
+
+ private:
+  uint64_t nowLocked() const {
+    if (!running_) return base_ns_;
+    const double elapsed =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - base_wall_).count();
+    return std::min(end_ns_, base_ns_ + static_cast<uint64_t>(elapsed * rate_ * 1e9));
+  }
+
+  std::unique_ptr<interfaces::DataWriter> writer_;
+  const double rate_;
+  const uint64_t end_ns_;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  uint64_t base_ns_;
+  std::chrono::steady_clock::time_point base_wall_;
+  bool running_ = false, done_ = false;
+  std::thread thread_;
+};
 
 }  // namespace
 
@@ -131,6 +196,12 @@ Player::Player(PlayerOptions options) : options_(std::move(options)) {
       throw std::invalid_argument(options_.input + ": no channel '" + topic +
                                   "' in the bag (auv bag info lists them)");
   }
+  if (options_.clock_hz > 0 && std::any_of(outputs_.begin(), outputs_.end(), [](const auto& o) {
+        return o.second->topic == "/clock";
+      }))
+    throw std::invalid_argument(options_.input +
+                                ": clock_hz: the bag holds a recorded /clock; play it or leave it "
+                                "out with a topic filter, not both");
 }
 
 Player::~Player() = default;
@@ -155,6 +226,18 @@ PlayStats Player::play(const std::atomic<bool>& stop) {
   for (auto& [id, output] : outputs_)
     output->writer = participant->createSerializedWriter(output->topic, *output->type, output->qos);
 
+  ReadFilter filter;
+  for (const auto& [id, output] : outputs_)
+    filter.topics.push_back(reader_.channels().at(id).topic);
+  const uint64_t bag_start = reader_.statistics().message_start_time;
+  filter.start_ns = bag_start + static_cast<uint64_t>(options_.start_offset_s * 1e9);
+  // From the start: nodes with use_sim_time have a time while readers match.
+  std::unique_ptr<ClockPublisher> clock;
+  if (options_.clock_hz > 0)
+    clock =
+        std::make_unique<ClockPublisher>(*participant, options_.clock_hz, options_.rate,
+                                         filter.start_ns, reader_.statistics().message_end_time);
+
   const auto sleep_until = [&](Clock::time_point when) {
     while (!stop && Clock::now() < when)
       std::this_thread::sleep_for(
@@ -174,11 +257,6 @@ PlayStats Player::play(const std::atomic<bool>& stop) {
     sleep_until(delay_end);
   }
 
-  ReadFilter filter;
-  for (const auto& [id, output] : outputs_)
-    filter.topics.push_back(reader_.channels().at(id).topic);
-  const uint64_t bag_start = reader_.statistics().message_start_time;
-  filter.start_ns = bag_start + static_cast<uint64_t>(options_.start_offset_s * 1e9);
   while (!stop && !outputs_.empty()) {
     auto messages = reader_.messages(filter);
     std::optional<uint64_t> first_log;
@@ -191,6 +269,7 @@ PlayStats Player::play(const std::atomic<bool>& stop) {
       if (!first_log) {
         first_log = message->message.log_time;
         pass_start = Clock::now();
+        if (clock) clock->startPass(*first_log);
       }
       // Log times of one recording are in order; a message logged before the first (clocks
       // of several publishers) goes out at once.

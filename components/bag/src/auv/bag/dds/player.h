@@ -2,9 +2,9 @@
 // Plays an MCAP bag back onto DDS, as `auv bag play` does: one serialized writer per channel,
 // with the type its schema names and the QoS its metadata keeps (qos_metadata.h), each
 // message published unchanged at its recorded log time, scaled by `rate`. Nodes with
-// use_sim_time follow the recorded `clock` topic as it plays. A damaged bag plays what is
-// intact (the reader's linear scan) and says where it breaks. components/bag/README.md,
-// "Playing".
+// use_sim_time follow the recorded `clock` topic as it plays, or the player's own (clock_hz). A
+// damaged bag plays what is intact (the reader's linear scan) and says where it breaks.
+// components/bag/README.md, "Playing".
 
 #include <atomic>
 #include <cstdint>
@@ -35,6 +35,10 @@ struct PlayerOptions {
   /// "topic=profile": offer a named profile (qos.h) instead of the recorded QoS, e.g.
   /// "/sonar/beam=bulk_transfer" to feed a reader set to the same profile without loss.
   std::vector<std::string> qos_overrides;
+  /// Publish `clock` (msg::Clock) at this rate (Hz of wall time) with the bag's time as it
+  /// plays — for nodes with use_sim_time on a bag without a recorded clock (a real dive); 0:
+  /// off. Refused when the bag's own `clock` is played too.
+  double clock_hz = 0.0;
 
   static const config::OptionTable<PlayerOptions>& table();
   /// Throws std::invalid_argument naming the field and the value.
