@@ -109,6 +109,7 @@ class ClockPublisher {
       }
     });
   }
+  /// Publishes the time once more (the bag's end after a whole pass), then stops.
   ~ClockPublisher() {
     {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -116,6 +117,9 @@ class ClockPublisher {
     }
     wake_.notify_all();
     thread_.join();
+    msg::Clock clock;
+    clock.sim_time(interfaces::toMsgTime(static_cast<int64_t>(nowLocked())));
+    writer_->write(&clock);
   }
   /// A pass starts: bag time `log_ns` is now.
   void startPass(uint64_t log_ns) {
