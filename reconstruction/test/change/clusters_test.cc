@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 namespace auv::recon::change {
 namespace {
 
@@ -86,6 +88,30 @@ TEST(Clusters, TheVolumeTakesTheBlurredRimAndNotTheNoiseAroundIt) {
   // A wider margin takes noise that cancels: 9 x 9 - 7 x 7 = 32 points of ±2 cm.
   const auto wide = clusterChanges(site.cores, site.comparison, 0.2, 0.3, 0.05, 0.1, 0.45);
   EXPECT_NEAR(wide[0].volume_gained_m3, with[0].volume_gained_m3, 0.02 * 0.04 * 5);
+}
+
+TEST(Clusters, AtTwoScalesTheCoarseFindsTheRegionAndTheFineMeasuresIt) {
+  // The coarse comparison (a wider cylinder) sees a 1 m² block spread over 1.44 m² at +0.2 m;
+  // the fine one measures the block at +0.3 m and its surroundings at 0, one point unmeasured.
+  Patch coarse, fine;
+  coarse.add(-0.2, 6, 0.2);
+  fine.add(-0.2, 6, 0.0, false);
+  for (size_t i = 0; i < fine.cores.size(); ++i) {
+    const Eigen::Vector3d& c = fine.cores[i];
+    if (c.x() > -0.05 && c.y() > 0.15) fine.comparison[i].distance = 0.3;  // 5 x 5 points
+  }
+  fine.comparison[0].distance = std::numeric_limits<double>::quiet_NaN();  // not measured
+  ASSERT_FALSE(fine.comparison[0].valid());
+  std::vector<ChangeCluster> found =
+      clusterChanges(coarse.cores, coarse.comparison, 0.2, 0.3, 0.05, 0.1);
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_NEAR(found[0].volume_gained_m3, 36 * 0.2 * 0.04, 1e-9);
+  remeasureClusters(found, fine.cores, fine.comparison, 0.2, 0.0);
+  EXPECT_EQ(found[0].core_points.size(), 36u);  // the region is the coarse one
+  EXPECT_NEAR(found[0].area_m2, 36 * 0.04, 1e-9);
+  EXPECT_NEAR(found[0].volume_gained_m3, 25 * 0.3 * 0.04, 1e-9);  // its volume the fine one
+  EXPECT_NEAR(found[0].mean_distance_m, 25 * 0.3 / 35, 1e-9);     // over the measured 35
+  EXPECT_NEAR(found[0].max_abs_distance_m, 0.3, 1e-9);
 }
 
 }  // namespace

@@ -143,6 +143,39 @@ TEST(CompareStage, FindsTheBlockAndTheGrowthAndNothingElse) {
   EXPECT_NE(printed.lines[0].find("2 regions"), std::string::npos) << printed.lines[0];
 }
 
+// Two scales: regions found with cylinders twice as wide, measured with the default ones — the
+// same two regions, volumes as true, each region at most as wide as the coarse cylinder blurs.
+TEST(CompareStage, AtTwoScalesTheRegionsAreFoundCoarseAndMeasuredFine) {
+  TempDir dir;
+  const Survey first = survey(dir.path / "s1", false, Eigen::Vector3d::Zero(), 1);
+  const Survey second = survey(dir.path / "s2", true, Eigen::Vector3d(0.2, -0.1, 0.05), 2);
+  CompareOptions options;
+  options.later = second.root().string();
+  options.detection_scale = 2.0;
+  runCompare(first, options);
+  const nlohmann::json r =
+      nlohmann::json::parse(std::ifstream(second.root() / "change" / "report.json"));
+  ASSERT_TRUE(r.contains("detection")) << r.dump(1);
+  EXPECT_EQ(r["detection"]["projection_scale_m"].get<double>(),
+            2.0 * options.m3c2.projection_scale_m);
+  ASSERT_EQ(r["clusters"].size(), 2u) << r["clusters"].dump(1);
+  const auto& growth = r["clusters"][0];
+  const auto& block = r["clusters"][1];
+  const double d = 2.0 * options.m3c2.projection_scale_m;
+  EXPECT_GE(block["area_m2"].get<double>(), 9.0);
+  EXPECT_LE(block["area_m2"].get<double>(), (3.0 + d) * (3.0 + d));
+  EXPECT_NEAR(block["volume_gained_m3"].get<double>(), 9.0, 0.2 * 9.0);
+  EXPECT_NEAR(block["max_abs_distance_m"].get<double>(), 1.0, 0.05);
+  EXPECT_NEAR(growth["volume_gained_m3"].get<double>(), 4.8, 0.2 * 4.8);
+  std::ifstream ply(second.root() / "change" / "changes.ply", std::ios::binary);
+  std::string header((std::istreambuf_iterator<char>(ply)), {});
+  header = header.substr(0, header.find("end_header"));
+  EXPECT_NE(header.find("property float scalar_detection_distance"), std::string::npos) << header;
+  CompareOptions bad = options;
+  bad.detection_scale = 0.5;
+  EXPECT_THROW(bad.check(), OptionError);
+}
+
 /// CloudCompare's path, or empty when it is not installed.
 std::string cloudCompare() {
   for (const char* dir : {"/usr/bin", "/usr/local/bin"}) {

@@ -89,7 +89,37 @@ void addRimVolume(std::vector<ChangeCluster>& clusters,
   }
 }
 
+/// Mean, largest and volumes of `cluster`'s points from `comparison` (unmeasured points left
+/// out); returns how many changed by at least `min_change_m`.
+size_t measureCluster(ChangeCluster& cluster, const std::vector<M3C2Point>& comparison,
+                      double cell_m2, double min_change_m) {
+  cluster.mean_distance_m = cluster.max_abs_distance_m = 0.0;
+  cluster.volume_gained_m3 = cluster.volume_lost_m3 = 0.0;
+  size_t of_interest = 0, measured = 0;
+  for (size_t index : cluster.core_points) {
+    if (!comparison[index].valid()) continue;
+    const double d = comparison[index].distance;
+    ++measured;
+    of_interest += std::abs(d) >= min_change_m ? 1 : 0;
+    cluster.mean_distance_m += d;
+    if (std::abs(d) > std::abs(cluster.max_abs_distance_m)) cluster.max_abs_distance_m = d;
+    (d > 0 ? cluster.volume_gained_m3 : cluster.volume_lost_m3) += std::abs(d) * cell_m2;
+  }
+  if (measured > 0) cluster.mean_distance_m /= static_cast<double>(measured);
+  return of_interest;
+}
+
 }  // namespace
+
+void remeasureClusters(std::vector<ChangeCluster>& clusters,
+                       const std::vector<Eigen::Vector3d>& core_points,
+                       const std::vector<M3C2Point>& measurement, double spacing_m,
+                       double volume_margin_m) {
+  const double cell = spacing_m * spacing_m;
+  for (ChangeCluster& cluster : clusters) measureCluster(cluster, measurement, cell, 0.0);
+  if (volume_margin_m > 0 && !clusters.empty())
+    addRimVolume(clusters, core_points, measurement, cell, volume_margin_m);
+}
 
 std::vector<ChangeCluster> clusterChanges(const std::vector<Eigen::Vector3d>& core_points,
                                           const std::vector<M3C2Point>& comparison,
@@ -104,21 +134,13 @@ std::vector<ChangeCluster> clusterChanges(const std::vector<Eigen::Vector3d>& co
     const double n = static_cast<double>(group.size());
     cluster.area_m2 = n * cell;
     if (cluster.area_m2 < min_area_m2) continue;
-    size_t of_interest = 0;  // points changed by at least min_change_m
-    for (size_t index : group) {
-      const double d = comparison[index].distance;
-      of_interest += std::abs(d) >= min_change_m ? 1 : 0;
-      cluster.mean_distance_m += d;
-      if (std::abs(d) > std::abs(cluster.max_abs_distance_m)) cluster.max_abs_distance_m = d;
-      (d > 0 ? cluster.volume_gained_m3 : cluster.volume_lost_m3) += std::abs(d) * cell;
-      cluster.centroid += core_points[index];
-    }
+    cluster.core_points = std::move(group);
     // A change of interest has min_change_m over min_area_m2, not at one point: a lone spike of
     // reconstruction noise on a patch that moved a few centimetres is not one.
+    const size_t of_interest = measureCluster(cluster, comparison, cell, min_change_m);
     if (of_interest == 0 || static_cast<double>(of_interest) * cell < min_area_m2) continue;
-    cluster.mean_distance_m /= n;
+    for (size_t index : cluster.core_points) cluster.centroid += core_points[index];
     cluster.centroid /= n;
-    cluster.core_points = std::move(group);
     clusters.push_back(std::move(cluster));
   }
   if (volume_margin_m > 0 && !clusters.empty()) {

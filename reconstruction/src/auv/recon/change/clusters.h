@@ -46,4 +46,13 @@ std::vector<ChangeCluster> clusterChanges(const std::vector<Eigen::Vector3d>& co
                                           double spacing_m, double link_m, double min_area_m2,
                                           double min_change_m = 0.0, double volume_margin_m = 0.0);
 
+/// For a comparison at two scales: each cluster's distances and volumes again from
+/// `measurement` (the same core points compared at the finer scale; points it did not measure
+/// left out), with the rim's net change within `volume_margin_m` as in clusterChanges. Points,
+/// area and centroid stay: the coarse scale found the region, the fine one measures it.
+void remeasureClusters(std::vector<ChangeCluster>& clusters,
+                       const std::vector<Eigen::Vector3d>& core_points,
+                       const std::vector<M3C2Point>& measurement, double spacing_m,
+                       double volume_margin_m);
+
 }  // namespace auv::recon::change

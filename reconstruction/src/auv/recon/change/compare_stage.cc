@@ -34,6 +34,14 @@ double since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+/// One M3C2 comparison with the level of detection it was judged at.
+struct Measured {
+  std::vector<M3C2Point> points;
+  nlohmann::json bias;  ///< the local bias taken out (report.json `local_bias`)
+  double registration_error_m = 0.0;
+  std::string error_source;
+};
+
 /// A region's volume takes the net change within the cylinder's radius of it (clusters.h).
 double volumeMargin(const CompareOptions& options) { return 0.5 * options.m3c2.projection_scale_m; }
 
@@ -112,7 +120,8 @@ std::optional<open3d::geometry::TriangleMesh> writeChangeMesh(
 /// change/changes.ply: the core points with their normals and the comparison as scalar fields.
 scene::PlyData changesPly(const std::vector<Eigen::Vector3d>& cores,
                           const std::vector<M3C2Point>& comparison,
-                          const AppearanceResult& appearance) {
+                          const AppearanceResult& appearance,
+                          const std::vector<M3C2Point>* detection) {
   scene::PlyData ply;
   ply.positions = cores;
   std::vector<float> distance, lod, flag, delta_e, colour_flag;
@@ -131,6 +140,15 @@ scene::PlyData changesPly(const std::vector<Eigen::Vector3d>& cores,
                  {"scalar_significant", flag},
                  {"scalar_delta_e", delta_e},
                  {"scalar_appearance_significant", colour_flag}};
+  if (detection) {
+    std::vector<float> coarse_distance, coarse_lod;
+    for (const M3C2Point& p : *detection) {
+      coarse_distance.push_back(static_cast<float>(p.distance));
+      coarse_lod.push_back(static_cast<float>(p.level_of_detection));
+    }
+    ply.scalars.push_back({"scalar_detection_distance", coarse_distance});
+    ply.scalars.push_back({"scalar_detection_level_of_detection", coarse_lod});
+  }
   return ply;
 }
 
@@ -172,6 +190,8 @@ void CompareOptions::check() const {
                          "must be 0 (off) or >= 2 core spacings");
   AUV_RECON_CHECK_OPTION(min_cluster_area_m2 >= 0, min_cluster_area_m2, "must be >= 0");
   AUV_RECON_CHECK_OPTION(min_change_m >= 0, min_change_m, "must be >= 0");
+  AUV_RECON_CHECK_OPTION(detection_scale >= 1 && detection_scale <= 10, detection_scale,
+                         "must be in [1, 10] (1: one scale)");
   appearance.check();
 }
 
@@ -187,6 +207,8 @@ void CompareOptions::bind(OptionSet& set) {
           "changed by at least this much are dropped");
   set.add("min_cluster_area_m2", &min_cluster_area_m2,
           "m²: smaller clusters of significant change are dropped");
+  set.add("detection_scale", &detection_scale,
+          "> 1: regions found by M3C2 at this multiple of d and D, measured at d and D");
   set.add("normal_scale_m", &m3c2.normal_scale_m, "m: M3C2 normal scale D (diameter)");
   set.add("projection_scale_m", &m3c2.projection_scale_m,
           "m: M3C2 projection scale d (cylinder diameter)");
@@ -238,28 +260,52 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
 
   phase = std::chrono::steady_clock::now();
   const std::vector<Eigen::Vector3d> cores = first.VoxelDownSample(options.core_spacing_m)->points_;
-  M3C2Options m3c2_options = options.m3c2;
-  const bool given_error = m3c2_options.registration_error_m > 0.0;
-  if (!given_error) m3c2_options.registration_error_m = aligned.rms_m;
   const std::vector<Eigen::Vector3d> hints = towardsCameras(survey, cores);
-  std::vector<M3C2Point> comparison =
-      m3c2(first.points_, second.points_, cores, m3c2_options, hints,
-           sources1 ? &*sources1 : nullptr, sources2 ? &*sources2 : nullptr);
-  nlohmann::json bias_json = {{"radius_m", options.bias_radius_m}};
-  std::string error_source = given_error ? "option" : "co-registration rms";
-  if (options.bias_radius_m > 0.0) {
-    const LocalBias bias = removeLocalBias(cores, comparison, options.bias_radius_m);
-    bias_json["median_abs_bias_m"] = bias.median_abs_bias_m;
-    bias_json["residual_sigma_m"] = bias.residual_sigma_m;
-    if (!given_error) {
-      m3c2_options.registration_error_m = bias.residual_sigma_m;
-      error_source = "residual spread after the local bias";
+  // One M3C2 pass at `scales`' d and D, the surveys' smooth deformation taken out, and the
+  // level of detection with the registration error that is left.
+  const auto compareAt = [&](const M3C2Options& scales) {
+    Measured out;
+    M3C2Options m3c2_options = scales;
+    const bool given_error = m3c2_options.registration_error_m > 0.0;
+    if (!given_error) m3c2_options.registration_error_m = aligned.rms_m;
+    out.points = m3c2(first.points_, second.points_, cores, m3c2_options, hints,
+                      sources1 ? &*sources1 : nullptr, sources2 ? &*sources2 : nullptr);
+    out.bias = {{"radius_m", options.bias_radius_m}};
+    out.error_source = given_error ? "option" : "co-registration rms";
+    if (options.bias_radius_m > 0.0) {
+      const LocalBias bias = removeLocalBias(cores, out.points, options.bias_radius_m);
+      out.bias["median_abs_bias_m"] = bias.median_abs_bias_m;
+      out.bias["residual_sigma_m"] = bias.residual_sigma_m;
+      if (!given_error) {
+        m3c2_options.registration_error_m = bias.residual_sigma_m;
+        out.error_source = "residual spread after the local bias";
+      }
+      applyLevelOfDetection(out.points, m3c2_options.registration_error_m,
+                            m3c2_options.confidence_z);
     }
-    applyLevelOfDetection(comparison, m3c2_options.registration_error_m, m3c2_options.confidence_z);
+    out.registration_error_m = m3c2_options.registration_error_m;
+    return out;
+  };
+  const Measured fine = compareAt(options.m3c2);
+  std::vector<M3C2Point> comparison = fine.points;  // distances at d, D; regions by `detection`
+  std::optional<Measured> detection;
+  std::vector<ChangeCluster> clusters;
+  if (options.detection_scale > 1.0) {
+    M3C2Options coarse = options.m3c2;
+    coarse.normal_scale_m *= options.detection_scale;
+    coarse.projection_scale_m *= options.detection_scale;
+    detection = compareAt(coarse);
+    clusters = clusterChanges(cores, detection->points, options.core_spacing_m,
+                              1.5 * options.core_spacing_m, options.min_cluster_area_m2,
+                              options.min_change_m);
+    remeasureClusters(clusters, cores, fine.points, options.core_spacing_m, volumeMargin(options));
+    for (size_t i = 0; i < comparison.size(); ++i)
+      comparison[i].significant = detection->points[i].significant;
+  } else {
+    clusters =
+        clusterChanges(cores, comparison, options.core_spacing_m, 1.5 * options.core_spacing_m,
+                       options.min_cluster_area_m2, options.min_change_m, volumeMargin(options));
   }
-  const std::vector<ChangeCluster> clusters =
-      clusterChanges(cores, comparison, options.core_spacing_m, 1.5 * options.core_spacing_m,
-                     options.min_cluster_area_m2, options.min_change_m, volumeMargin(options));
   const double m3c2_s = since(phase);
 
   phase = std::chrono::steady_clock::now();
@@ -288,6 +334,7 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
         {"min_cluster_area_m2", options.min_cluster_area_m2},
         {"min_change_m", options.min_change_m},
         {"bias_radius_m", options.bias_radius_m},
+        {"detection_scale", options.detection_scale},
         {"volume_margin_m", volumeMargin(options)}}},
       {"registration",
        {{"rms_m", aligned.rms_m},
@@ -295,9 +342,9 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
         {"stable_fraction", aligned.stable_fraction},
         {"rounds", aligned.rounds},
         {"transform_2_to_1", {}}}},
-      {"level_of_detection_registration_error_m", m3c2_options.registration_error_m},
-      {"level_of_detection_registration_error_source", error_source},
-      {"local_bias", bias_json},
+      {"level_of_detection_registration_error_m", fine.registration_error_m},
+      {"level_of_detection_registration_error_source", fine.error_source},
+      {"local_bias", fine.bias},
       {"level_of_detection_n",
        sources1 ? "distinct images fused into the cylinder's points" : "points in the cylinder"},
       {"orientation", hints.empty() ? "option" : "towards survey 1's cameras"},
@@ -316,10 +363,20 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
         {aligned.transform(r, 0), aligned.transform(r, 1), aligned.transform(r, 2),
          aligned.transform(r, 3)});
   }
+  if (detection) {
+    report["detection"] = {
+        {"scale", options.detection_scale},
+        {"normal_scale_m", options.m3c2.normal_scale_m * options.detection_scale},
+        {"projection_scale_m", options.m3c2.projection_scale_m * options.detection_scale},
+        {"level_of_detection_registration_error_m", detection->registration_error_m},
+        {"local_bias", detection->bias}};
+  }
   for (const ChangeCluster& c : clusters) report["clusters"].push_back(clusterJson(c));
 
   StagedOutput staged(later.root() / "change");
-  scene::writePly(staged.path() / "changes.ply", changesPly(cores, comparison, appearance));
+  scene::writePly(
+      staged.path() / "changes.ply",
+      changesPly(cores, comparison, appearance, detection ? &detection->points : nullptr));
   const double scale_m = colourScale(clusters);
   writeChangeMap(staged.path() / "change_map.png", cores, comparison, options.core_spacing_m,
                  scale_m);

@@ -5,7 +5,8 @@
 // the significant changes clustered (clusters.h), and written into survey 2:
 //
 //   change/changes.ply     core points: normal, distance, level_of_detection, significant,
-//                          and the appearance change (appearance.h): delta_e, appearance
+//                          and the appearance change (appearance.h): delta_e, appearance;
+//                          at two scales also detection_distance, detection_level_of_detection
 //   change/change_map.png  the top-down change map (change_map.h)
 //   change/mesh_change.ply survey 2's mesh/mesh.ply, vertices coloured by the change
 //   change/change_view.png that mesh seen from above and to the side (change_view.h)
@@ -42,6 +43,10 @@ struct CompareOptions {
   /// out of the distances (local_bias.h); 0 = off. Changes must be smaller than about half
   /// this neighbourhood's area.
   double bias_radius_m = 4.0;
+  /// > 1: the regions are found by M3C2 at this multiple of d and D (its averages over the
+  /// larger cylinder are steadier: fewer false regions where the reconstructions disagree over
+  /// a few decimetres) and measured — distances, volumes — at d and D. 1: one scale.
+  double detection_scale = 1.0;
   double min_cluster_area_m2 = 0.05;  ///< smaller clusters of significant change are dropped
   double min_change_m =
       0.1;  ///< regions with less than min_cluster_area_m2 changed this much: dropped
