@@ -55,6 +55,7 @@ TEST(CompareStage, FindsTheBlockAndTheGrowthAndNothingElse) {
   const Survey second = survey(dir.path / "s2", true, Eigen::Vector3d(0.2, -0.1, 0.05), 2, true);
   CompareOptions options;
   options.later = second.root().string();
+  options.detection_scale = 1.0;  // one scale (the default's two: the next test)
   const CompareStage stage;
   const StageReport printed = stage.runWith(first, options);
   const nlohmann::json r =
@@ -143,8 +144,9 @@ TEST(CompareStage, FindsTheBlockAndTheGrowthAndNothingElse) {
   EXPECT_NE(printed.lines[0].find("2 regions"), std::string::npos) << printed.lines[0];
 }
 
-// Two scales: regions found with cylinders twice as wide, measured with the default ones — the
-// same two regions, volumes as true, each region at most as wide as the coarse cylinder blurs.
+// Two scales (the default): regions found with cylinders twice as wide, measured with d and D —
+// the same two regions, volumes as true, each region at most as wide as the coarse cylinder
+// blurs.
 TEST(CompareStage, AtTwoScalesTheRegionsAreFoundCoarseAndMeasuredFine) {
   TempDir dir;
   const Survey first = survey(dir.path / "s1", false, Eigen::Vector3d::Zero(), 1);

@@ -153,6 +153,31 @@ TEST_F(ChangeScoresTest, RegionsClustersAndFalseAreaAsConstructed) {
   EXPECT_TRUE(j["regions_scored"]["recall_all"].is_number());
 }
 
+// At two scales the clusters are found with compare's coarse distances (min_change_m) and
+// measured with the fine ones, as compare does: here the coarse pass saw the block at only
+// 5 cm, under the change of interest, so no cluster there; the pit's volume is the fine one.
+TEST_F(ChangeScoresTest, AtTwoScalesClustersAreFoundCoarseAndMeasuredFine) {
+  change_.min_change_m = 0.1;
+  change_.detection_distances = change_.distances;
+  for (size_t i = 0; i < change_.points.size(); ++i) {
+    const Eigen::Vector3d& p = change_.points[i];
+    if (p.x() > -6 && p.x() < -4 && p.y() > -6 && p.y() < -4) change_.detection_distances[i] = 0.05;
+    if (p.x() > 4 && p.x() < 6 && p.y() > -6 && p.y() < -4) change_.detection_distances[i] = -0.4;
+  }
+  const ChangeScores s = scoreChanges(truth_, change_, ChangeScoreOptions());
+  EXPECT_EQ(region(s, "pit").status, "detected");
+  bool pit = false;
+  for (const ClusterScore& c : s.clusters) {
+    const Eigen::Vector3d& at = c.cluster.centroid;
+    EXPECT_FALSE(at.x() > -6 && at.x() < -4 && at.y() > -6 && at.y() < -4) << "on the block";
+    if (c.verdict == "true") {
+      pit = true;
+      EXPECT_NEAR(c.cluster.volume_lost_m3, 100 * 0.65 * 0.04, 1e-9);  // fine, not 0.4 m
+    }
+  }
+  EXPECT_TRUE(pit);
+}
+
 TEST_F(ChangeScoresTest, OnlyTheWellImagedRegionCounts) {
   // The pit's side of the site imaged badly by one visit: its core points out of the region.
   change_.in_region.assign(change_.points.size(), 1);

@@ -141,13 +141,15 @@ scene::PlyData changesPly(const std::vector<Eigen::Vector3d>& cores,
                  {"scalar_delta_e", delta_e},
                  {"scalar_appearance_significant", colour_flag}};
   if (detection) {
-    std::vector<float> coarse_distance, coarse_lod;
+    std::vector<float> coarse_distance, coarse_lod, coarse_flag;
     for (const M3C2Point& p : *detection) {
       coarse_distance.push_back(static_cast<float>(p.distance));
       coarse_lod.push_back(static_cast<float>(p.level_of_detection));
+      coarse_flag.push_back(p.significant ? 1.0f : 0.0f);
     }
     ply.scalars.push_back({"scalar_detection_distance", coarse_distance});
     ply.scalars.push_back({"scalar_detection_level_of_detection", coarse_lod});
+    ply.scalars.push_back({"scalar_detection_significant", coarse_flag});
   }
   return ply;
 }
@@ -287,7 +289,9 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
     return out;
   };
   const Measured fine = compareAt(options.m3c2);
-  std::vector<M3C2Point> comparison = fine.points;  // distances at d, D; regions by `detection`
+  // The points at d and D (changes.ply, the map, the coloured mesh); the regions from
+  // `detection` when there is one.
+  const std::vector<M3C2Point>& comparison = fine.points;
   std::optional<Measured> detection;
   std::vector<ChangeCluster> clusters;
   if (options.detection_scale > 1.0) {
@@ -299,8 +303,6 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
                               1.5 * options.core_spacing_m, options.min_cluster_area_m2,
                               options.min_change_m);
     remeasureClusters(clusters, cores, fine.points, options.core_spacing_m, volumeMargin(options));
-    for (size_t i = 0; i < comparison.size(); ++i)
-      comparison[i].significant = detection->points[i].significant;
   } else {
     clusters =
         clusterChanges(cores, comparison, options.core_spacing_m, 1.5 * options.core_spacing_m,

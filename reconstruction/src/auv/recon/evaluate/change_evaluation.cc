@@ -71,6 +71,22 @@ WorldChange readComparison(const fs::path& file, std::string& missing) {
     change.distances.push_back(distance.GetDataPtr<double>()[i]);
     change.significant.push_back(flag.GetDataPtr<double>()[i] > 0.5 ? 1 : 0);
   }
+  // Two scales (compare's detection_scale > 1): the regions are made of the coarse flags.
+  if (cloud.HasPointAttr("scalar_detection_significant") &&
+      cloud.HasPointAttr("scalar_detection_distance")) {
+    const core::Tensor coarse_flag = cloud.GetPointAttr("scalar_detection_significant")
+                                         .To(core::Float64)
+                                         .Reshape({-1})
+                                         .Contiguous();
+    const core::Tensor coarse_distance = cloud.GetPointAttr("scalar_detection_distance")
+                                             .To(core::Float64)
+                                             .Reshape({-1})
+                                             .Contiguous();
+    for (size_t i = 0; i < n; ++i) {
+      change.significant[i] = coarse_flag.GetDataPtr<double>()[i] > 0.5 ? 1 : 0;
+      change.detection_distances.push_back(coarse_distance.GetDataPtr<double>()[i]);
+    }
+  }
   // The appearance fields came later: an older compare's file has the shape's change only.
   missing.clear();
   for (const char* property : {"scalar_delta_e", "scalar_appearance_significant"}) {

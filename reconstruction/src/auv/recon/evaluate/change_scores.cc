@@ -23,18 +23,30 @@ std::string regionStatus(const TrueChangeRegion& region, const RegionTally& tall
 /// Each cluster: on which region, if any, and whether it counts as true, false or neither.
 std::vector<ClusterScore> scoreClusters(const ChangeTruth& truth, const WorldChange& change,
                                         const Reach& reach, const ChangeScoreOptions& options) {
-  std::vector<change::M3C2Point> comparison(change.points.size());
+  const bool two_scales = !change.detection_distances.empty();
+  std::vector<change::M3C2Point> comparison(change.points.size()), fine;
   for (size_t i = 0; i < comparison.size(); ++i) {
     comparison[i].normal = change.normals[i];
     comparison[i].distance = change.distances[i];
     comparison[i].significant = change.significant[i] && change.measured(i);
   }
+  if (two_scales) {
+    fine = comparison;
+    for (size_t i = 0; i < comparison.size(); ++i) {
+      comparison[i].distance = change.detection_distances[i];
+      comparison[i].significant = change.significant[i] && comparison[i].valid();
+    }
+  }
   const double min_area =
       options.min_cluster_area_m2 > 0 ? options.min_cluster_area_m2 : change.min_cluster_area_m2;
-  // Joined as compare joins them (clusters.h): within 1.5 core spacings.
-  const std::vector<change::ChangeCluster> clusters = change::clusterChanges(
+  // Joined and measured as compare does (clusters.h): within 1.5 core spacings; at two scales
+  // found with the coarse distances and measured with the fine ones.
+  std::vector<change::ChangeCluster> clusters = change::clusterChanges(
       change.points, comparison, change.core_spacing_m, 1.5 * change.core_spacing_m, min_area,
-      change.min_change_m, change.volume_margin_m);
+      change.min_change_m, two_scales ? 0.0 : change.volume_margin_m);
+  if (two_scales)
+    change::remeasureClusters(clusters, change.points, fine, change.core_spacing_m,
+                              change.volume_margin_m);
   std::vector<ClusterScore> scores;
   for (const change::ChangeCluster& cluster : clusters) {
     ClusterScore score;

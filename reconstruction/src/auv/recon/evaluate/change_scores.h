@@ -45,7 +45,12 @@ struct WorldChange {
   std::vector<Eigen::Vector3d> points;   ///< core points (on survey 1's surface)
   std::vector<Eigen::Vector3d> normals;  ///< unit, the side + distances point to
   std::vector<double> distances;         ///< m; NaN: not measured
+  /// What the regions are made of: compare's `detection_significant` at two scales, else its
+  /// `significant`.
   std::vector<char> significant;
+  /// At two scales, the coarse distances the regions were found with (min_change_m); the
+  /// regions are measured with `distances`. Empty at one scale.
+  std::vector<double> detection_distances;
   /// Per core point: compare's colour difference ΔE*ab (NaN: colours not compared) and whether
   /// it is significant. Both empty when changes.ply has none (an older compare).
   std::vector<double> delta_e;
