@@ -151,4 +151,17 @@ std::vector<ChangeCluster> clusterChanges(const std::vector<Eigen::Vector3d>& co
   return clusters;
 }
 
+std::vector<ChangeCluster> findRegions(const std::vector<Eigen::Vector3d>& core_points,
+                                       const std::vector<M3C2Point>& detection,
+                                       const std::vector<M3C2Point>* measurement, double spacing_m,
+                                       double link_m, double min_area_m2, double min_change_m,
+                                       double volume_margin_m) {
+  std::vector<ChangeCluster> regions =
+      clusterChanges(core_points, detection, spacing_m, link_m, min_area_m2, min_change_m,
+                     measurement ? 0.0 : volume_margin_m);
+  if (measurement)
+    remeasureClusters(regions, core_points, *measurement, spacing_m, volume_margin_m);
+  return regions;
+}
+
 }  // namespace auv::recon::change

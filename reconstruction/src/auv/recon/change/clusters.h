@@ -55,4 +55,13 @@ void remeasureClusters(std::vector<ChangeCluster>& clusters,
                        const std::vector<M3C2Point>& measurement, double spacing_m,
                        double volume_margin_m);
 
+/// The regions as compare reports them: found in `detection` (clusterChanges) and measured in
+/// `measurement` when given (two scales, remeasureClusters), else in `detection` itself; the
+/// volumes take the rim within `volume_margin_m` either way.
+std::vector<ChangeCluster> findRegions(const std::vector<Eigen::Vector3d>& core_points,
+                                       const std::vector<M3C2Point>& detection,
+                                       const std::vector<M3C2Point>* measurement, double spacing_m,
+                                       double link_m, double min_area_m2, double min_change_m,
+                                       double volume_margin_m);
+
 }  // namespace auv::recon::change

@@ -293,21 +293,16 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
   // `detection` when there is one.
   const std::vector<M3C2Point>& comparison = fine.points;
   std::optional<Measured> detection;
-  std::vector<ChangeCluster> clusters;
   if (options.detection_scale > 1.0) {
     M3C2Options coarse = options.m3c2;
     coarse.normal_scale_m *= options.detection_scale;
     coarse.projection_scale_m *= options.detection_scale;
     detection = compareAt(coarse);
-    clusters = clusterChanges(cores, detection->points, options.core_spacing_m,
-                              1.5 * options.core_spacing_m, options.min_cluster_area_m2,
-                              options.min_change_m);
-    remeasureClusters(clusters, cores, fine.points, options.core_spacing_m, volumeMargin(options));
-  } else {
-    clusters =
-        clusterChanges(cores, comparison, options.core_spacing_m, 1.5 * options.core_spacing_m,
-                       options.min_cluster_area_m2, options.min_change_m, volumeMargin(options));
   }
+  const std::vector<ChangeCluster> clusters = findRegions(
+      cores, detection ? detection->points : comparison, detection ? &comparison : nullptr,
+      options.core_spacing_m, 1.5 * options.core_spacing_m, options.min_cluster_area_m2,
+      options.min_change_m, volumeMargin(options));
   const double m3c2_s = since(phase);
 
   phase = std::chrono::steady_clock::now();

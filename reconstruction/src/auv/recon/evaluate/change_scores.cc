@@ -41,12 +41,9 @@ std::vector<ClusterScore> scoreClusters(const ChangeTruth& truth, const WorldCha
       options.min_cluster_area_m2 > 0 ? options.min_cluster_area_m2 : change.min_cluster_area_m2;
   // Joined and measured as compare does (clusters.h): within 1.5 core spacings; at two scales
   // found with the coarse distances and measured with the fine ones.
-  std::vector<change::ChangeCluster> clusters = change::clusterChanges(
-      change.points, comparison, change.core_spacing_m, 1.5 * change.core_spacing_m, min_area,
-      change.min_change_m, two_scales ? 0.0 : change.volume_margin_m);
-  if (two_scales)
-    change::remeasureClusters(clusters, change.points, fine, change.core_spacing_m,
-                              change.volume_margin_m);
+  const std::vector<change::ChangeCluster> clusters = change::findRegions(
+      change.points, comparison, two_scales ? &fine : nullptr, change.core_spacing_m,
+      1.5 * change.core_spacing_m, min_area, change.min_change_m, change.volume_margin_m);
   std::vector<ClusterScore> scores;
   for (const change::ChangeCluster& cluster : clusters) {
     ClusterScore score;

@@ -102,9 +102,7 @@ class ClockPublisher {
     thread_ = std::thread([this, period] {
       std::unique_lock<std::mutex> lock(mutex_);
       while (!done_) {
-        msg::Clock clock;
-        clock.sim_time(interfaces::toMsgTime(static_cast<int64_t>(nowLocked())));
-        writer_->write(&clock);
+        publishNow();
         wake_.wait_for(lock, period, [this] { return done_; });
       }
     });
@@ -117,9 +115,7 @@ class ClockPublisher {
     }
     wake_.notify_all();
     thread_.join();
-    msg::Clock clock;
-    clock.sim_time(interfaces::toMsgTime(static_cast<int64_t>(nowLocked())));
-    writer_->write(&clock);
+    publishNow();  // the thread is gone: no lock needed
   }
   /// A pass starts: bag time `log_ns` is now.
   void startPass(uint64_t log_ns) {
@@ -130,6 +126,12 @@ class ClockPublisher {
   }
 
  private:
+  /// Under mutex_ (or with the thread gone).
+  void publishNow() {
+    msg::Clock clock;
+    clock.sim_time(interfaces::toMsgTime(static_cast<int64_t>(nowLocked())));
+    writer_->write(&clock);
+  }
   uint64_t nowLocked() const {
     if (!running_) return base_ns_;
     const double elapsed =
