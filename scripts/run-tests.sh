@@ -9,7 +9,8 @@ set +u; source install/setup.bash; set -u
 guard=()
 [ -x ../shared/tools/no-external-traffic ] && guard=(../shared/tools/no-external-traffic)
 status=0
-"${guard[@]}" colcon test --merge-install --event-handlers console_direct- console_cohesion+ \
+# In a network namespace of its own, DDS ports kept out of the ephemeral range (see the script).
+"${guard[@]}" ./scripts/isolated-network.sh colcon test --merge-install --event-handlers console_direct- console_cohesion+ \
   --return-code-on-test-failure --ctest-args --output-on-failure -j2 || status=$?
 if [ $status -eq 97 ]; then
   # The guard counts every process of the host; the tests themselves only use loopback.
