@@ -15,12 +15,14 @@ struct Patch {
   std::vector<M3C2Point> comparison;
 
   /// Core points 0.2 m apart on a `side` x `side` square at (x0, y0), all `distance`.
-  void add(double x0, int side, double distance, bool significant = true, double y0 = 0.0) {
+  void add(double x0, int side, double distance, bool significant = true, double y0 = 0.0,
+           double level_of_detection = 0.1) {
     for (int i = 0; i < side; ++i) {
       for (int j = 0; j < side; ++j) {
         cores.emplace_back(x0 + 0.2 * i, y0 + 0.2 * j, 10.0);
         M3C2Point p;
         p.distance = distance;
+        p.level_of_detection = level_of_detection;
         p.significant = significant;
         comparison.push_back(p);
       }
@@ -112,6 +114,54 @@ TEST(Clusters, AtTwoScalesTheCoarseFindsTheRegionAndTheFineMeasuresIt) {
   EXPECT_NEAR(found[0].volume_gained_m3, 25 * 0.3 * 0.04, 1e-9);  // its volume the fine one
   EXPECT_NEAR(found[0].mean_distance_m, 25 * 0.3 / 35, 1e-9);     // over the measured 35
   EXPECT_NEAR(found[0].max_abs_distance_m, 0.3, 1e-9);
+}
+
+TEST(Regions, FamilyWiseBoundGrowsWithTheSitesIndependentMeasurements) {
+  RegionOptions options;
+  options.spacing_m = 0.2;
+  options.footprint_m2 = 0.04;  // one core point per independent measurement
+  EXPECT_EQ(familyWiseZ(options, 1000), 0.0) << "off without a confidence";
+  options.family_confidence = 0.95;
+  EXPECT_NEAR(familyWiseZ(options, 1), 1.959964, 1e-5);     // one measurement: M3C2's own 95 %
+  EXPECT_NEAR(familyWiseZ(options, 0), 1.959964, 1e-5);     // never fewer than one
+  EXPECT_NEAR(familyWiseZ(options, 1000), 4.055626, 1e-5);  // Φ⁻¹(1 − 0.05 / 2000)
+  options.footprint_m2 = 0.4;                               // ten core points each
+  EXPECT_NEAR(familyWiseZ(options, 1000), 3.480756, 1e-5);  // Φ⁻¹(1 − 0.05 / 200)
+}
+
+TEST(Regions, OnlyChangesSignificantOverTheWholeSiteAreKept) {
+  // 1 600 measured core points of unchanged ground (LoD 0.1 m), a block 0.5 m high
+  // (z = 1.96 x 5) and a patch where the reconstructions disagree by 0.15 m (z = 2.9): each
+  // point of the patch passes its 95 % level of detection, the patch as a region does not pass
+  // the bound over the site's 1 600 measurements (z 4.2).
+  Patch site;
+  site.add(0.0, 40, 0.0, false, -10.0);
+  site.add(0.0, 5, 0.5);
+  site.add(4.0, 4, 0.15);
+  RegionOptions options;
+  options.min_change_m = 0.1;
+  options.footprint_m2 = 0.04;
+  const std::vector<ChangeCluster> all = findRegions(site.cores, site.comparison, nullptr, options);
+  ASSERT_EQ(all.size(), 2u) << "without the family-wise test both are regions";
+  EXPECT_NEAR(all[0].significance_z, 1.96 * 5, 1e-9);
+  EXPECT_NEAR(all[1].significance_z, 1.96 * 1.5, 1e-9);
+  EXPECT_NEAR(all[1].mean_level_of_detection_m, 0.1, 1e-9);
+
+  options.family_confidence = 0.95;
+  const std::vector<ChangeCluster> kept =
+      findRegions(site.cores, site.comparison, nullptr, options);
+  ASSERT_EQ(kept.size(), 1u);
+  EXPECT_NEAR(kept[0].mean_distance_m, 0.5, 1e-9);
+  EXPECT_NEAR(kept[0].area_m2, 1.0, 1e-9);
+
+  // A site of four independent measurements (41 core points, a cylinder over ten) has few
+  // chances of a false region: the same patch then stands (bound z 2.5).
+  Patch small;
+  small.add(0.0, 5, 0.5);
+  small.add(4.0, 4, 0.15);
+  options.footprint_m2 = 0.4;
+  EXPECT_EQ(findRegions(small.cores, small.comparison, nullptr, options).size(), 2u)
+      << "bound z " << familyWiseZ(options, 41);
 }
 
 }  // namespace

@@ -178,6 +178,26 @@ TEST_F(ChangeScoresTest, AtTwoScalesClustersAreFoundCoarseAndMeasuredFine) {
   EXPECT_TRUE(pit);
 }
 
+TEST_F(ChangeScoresTest, RegionsTestedFamilyWiseAsCompareRecorded) {
+  auto falseClusters = [this] {
+    int count = 0;
+    for (const ClusterScore& c : scoreChanges(truth_, change_, ChangeScoreOptions()).clusters)
+      count += c.verdict == "false" ? 1 : 0;
+    return count;
+  };
+  ASSERT_EQ(falseClusters(), 1) << "the 1 m² patch of 0.2 m";
+  change_.region_confidence = 0.95;  // compare's options, as report.json records them
+  change_.region_footprint_m2 = 0.04;
+  EXPECT_EQ(falseClusters(), 1) << "an older compare's file has no levels of detection: no test";
+  // LoD 0.1 m: the patch is z 3.9, under the bound over ~9 500 measurements (4.5); the block
+  // and the pit stand.
+  change_.levels_of_detection.assign(change_.points.size(), 0.1);
+  EXPECT_EQ(falseClusters(), 0);
+  const ChangeScores s = scoreChanges(truth_, change_, ChangeScoreOptions());
+  EXPECT_EQ(region(s, "block").status, "detected");
+  EXPECT_EQ(region(s, "pit").status, "detected");
+}
+
 TEST_F(ChangeScoresTest, OnlyTheWellImagedRegionCounts) {
   // The pit's side of the site imaged badly by one visit: its core points out of the region.
   change_.in_region.assign(change_.points.size(), 1);

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include <boost/math/distributions/normal.hpp>
+
 #include "auv/recon/change/indexed_cloud.h"
 
 namespace auv::recon::change {
@@ -15,7 +17,9 @@ nlohmann::json clusterJson(const ChangeCluster& c) {
           {"max_abs_distance_m", c.max_abs_distance_m},
           {"volume_gained_m3", c.volume_gained_m3},
           {"volume_lost_m3", c.volume_lost_m3},
-          {"centroid", {c.centroid.x(), c.centroid.y(), c.centroid.z()}}};
+          {"centroid", {c.centroid.x(), c.centroid.y(), c.centroid.z()}},
+          {"mean_level_of_detection_m", c.mean_level_of_detection_m},
+          {"significance_z", c.significance_z}};
 }
 
 std::vector<std::vector<size_t>> linkFlagged(const std::vector<Eigen::Vector3d>& points,
@@ -95,6 +99,7 @@ size_t measureCluster(ChangeCluster& cluster, const std::vector<M3C2Point>& comp
                       double cell_m2, double min_change_m) {
   cluster.mean_distance_m = cluster.max_abs_distance_m = 0.0;
   cluster.volume_gained_m3 = cluster.volume_lost_m3 = 0.0;
+  cluster.mean_level_of_detection_m = 0.0;
   size_t of_interest = 0, measured = 0;
   for (size_t index : cluster.core_points) {
     if (!comparison[index].valid()) continue;
@@ -102,10 +107,14 @@ size_t measureCluster(ChangeCluster& cluster, const std::vector<M3C2Point>& comp
     ++measured;
     of_interest += std::abs(d) >= min_change_m ? 1 : 0;
     cluster.mean_distance_m += d;
+    cluster.mean_level_of_detection_m += comparison[index].level_of_detection;
     if (std::abs(d) > std::abs(cluster.max_abs_distance_m)) cluster.max_abs_distance_m = d;
     (d > 0 ? cluster.volume_gained_m3 : cluster.volume_lost_m3) += std::abs(d) * cell_m2;
   }
-  if (measured > 0) cluster.mean_distance_m /= static_cast<double>(measured);
+  if (measured > 0) {
+    cluster.mean_distance_m /= static_cast<double>(measured);
+    cluster.mean_level_of_detection_m /= static_cast<double>(measured);
+  }
   return of_interest;
 }
 
@@ -119,6 +128,15 @@ void remeasureClusters(std::vector<ChangeCluster>& clusters,
   for (ChangeCluster& cluster : clusters) measureCluster(cluster, measurement, cell, 0.0);
   if (volume_margin_m > 0 && !clusters.empty())
     addRimVolume(clusters, core_points, measurement, cell, volume_margin_m);
+}
+
+double familyWiseZ(const RegionOptions& options, size_t measured_points) {
+  if (options.family_confidence <= 0 || options.footprint_m2 <= 0) return 0.0;
+  const double site_m2 =
+      static_cast<double>(measured_points) * options.spacing_m * options.spacing_m;
+  const double independent = std::max(1.0, site_m2 / options.footprint_m2);
+  const double p = 1.0 - (1.0 - options.family_confidence) / (2.0 * independent);
+  return boost::math::quantile(boost::math::normal(), p);
 }
 
 std::vector<ChangeCluster> clusterChanges(const std::vector<Eigen::Vector3d>& core_points,
@@ -153,14 +171,29 @@ std::vector<ChangeCluster> clusterChanges(const std::vector<Eigen::Vector3d>& co
 
 std::vector<ChangeCluster> findRegions(const std::vector<Eigen::Vector3d>& core_points,
                                        const std::vector<M3C2Point>& detection,
-                                       const std::vector<M3C2Point>* measurement, double spacing_m,
-                                       double link_m, double min_area_m2, double min_change_m,
-                                       double volume_margin_m) {
+                                       const std::vector<M3C2Point>* measurement,
+                                       const RegionOptions& options) {
   std::vector<ChangeCluster> regions =
-      clusterChanges(core_points, detection, spacing_m, link_m, min_area_m2, min_change_m,
-                     measurement ? 0.0 : volume_margin_m);
-  if (measurement)
-    remeasureClusters(regions, core_points, *measurement, spacing_m, volume_margin_m);
+      clusterChanges(core_points, detection, options.spacing_m, options.link_m, options.min_area_m2,
+                     options.min_change_m, 0.0);
+  const std::vector<M3C2Point>& measuring = measurement ? *measurement : detection;
+  remeasureClusters(regions, core_points, measuring, options.spacing_m, 0.0);
+  const size_t measured = static_cast<size_t>(std::count_if(
+      measuring.begin(), measuring.end(), [](const M3C2Point& p) { return p.valid(); }));
+  for (ChangeCluster& r : regions) {
+    if (r.mean_level_of_detection_m > 0) {
+      r.significance_z =
+          options.level_of_detection_z * std::abs(r.mean_distance_m) / r.mean_level_of_detection_m;
+    }
+  }
+  const double z = familyWiseZ(options, measured);
+  regions.erase(std::remove_if(regions.begin(), regions.end(),
+                               [z](const ChangeCluster& r) { return r.significance_z < z; }),
+                regions.end());
+  if (options.volume_margin_m > 0 && !regions.empty()) {
+    addRimVolume(regions, core_points, measuring, options.spacing_m * options.spacing_m,
+                 options.volume_margin_m);
+  }
   return regions;
 }
 

@@ -19,7 +19,36 @@ struct ChangeCluster {
   double volume_gained_m3 = 0.0;
   double volume_lost_m3 = 0.0;  ///< the same of the negative distances (as > 0)
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  double mean_level_of_detection_m = 0.0;  ///< over the measured points
+  /// The region's mean change in standard errors: z |mean distance| / mean level of detection,
+  /// z that of the levels (1.96); the whole region taken as one measurement (RegionOptions).
+  double significance_z = 0.0;
 };
+
+/// How significant core points become the regions compare reports (compare and evaluate
+/// alike: findRegions).
+struct RegionOptions {
+  double spacing_m = 0.2;  ///< each core point stands for spacing² of surface
+  double link_m = 0.3;     ///< significant points within this of each other: one region
+  double min_area_m2 = 0.05;
+  /// m: regions where less than min_area_m2 changed this much are dropped (not of interest)
+  double min_change_m = 0.0;
+  double volume_margin_m = 0.0;  ///< m: the rim whose net change a region's volume takes
+  /// > 0: a region is kept only when its mean change is significant at this confidence
+  /// *family-wise*, over every independent measurement of the site. Each core point's level of
+  /// detection holds at 95 % for that point alone; a site holds M = measured area / footprint_m2
+  /// independent ones, so ~5 % of them pass by chance and, where two reconstructions disagree
+  /// over a patch, neighbours pass together: a false region. The region is tested as one
+  /// measurement (its points share the reconstructions' errors, so averaging them proves
+  /// nothing more) against the Bonferroni bound: z >= Φ⁻¹(1 − (1 − confidence) / 2M).
+  double family_confidence = 0.0;
+  double footprint_m2 = 0.0;  ///< one independent measurement: the cylinder's cross-section
+  double level_of_detection_z = 1.96;  ///< the z the levels of detection were computed at
+};
+
+/// The z a region's mean change must reach (RegionOptions::family_confidence) on a site of
+/// `measured_points` core points; 0 when the test is off.
+double familyWiseZ(const RegionOptions& options, size_t measured_points);
 
 /// A region as report.json lists it (area, core points, distances, volumes, centroid).
 nlohmann::json clusterJson(const ChangeCluster& cluster);
@@ -56,12 +85,11 @@ void remeasureClusters(std::vector<ChangeCluster>& clusters,
                        double volume_margin_m);
 
 /// The regions as compare reports them: found in `detection` (clusterChanges) and measured in
-/// `measurement` when given (two scales, remeasureClusters), else in `detection` itself; the
-/// volumes take the rim within `volume_margin_m` either way.
+/// `measurement` when given (two scales), else in `detection` itself; those that fail the
+/// family-wise test dropped (before the rims are shared out); the volumes take the rim.
 std::vector<ChangeCluster> findRegions(const std::vector<Eigen::Vector3d>& core_points,
                                        const std::vector<M3C2Point>& detection,
-                                       const std::vector<M3C2Point>* measurement, double spacing_m,
-                                       double link_m, double min_area_m2, double min_change_m,
-                                       double volume_margin_m);
+                                       const std::vector<M3C2Point>* measurement,
+                                       const RegionOptions& options);
 
 }  // namespace auv::recon::change

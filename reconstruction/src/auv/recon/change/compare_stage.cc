@@ -42,8 +42,22 @@ struct Measured {
   std::string error_source;
 };
 
-/// A region's volume takes the net change within the cylinder's radius of it (clusters.h).
-double volumeMargin(const CompareOptions& options) { return 0.5 * options.m3c2.projection_scale_m; }
+/// How the significant core points become regions (clusters.h). A region's volume takes the
+/// net change within the measuring cylinder's radius of it; one independent measurement is
+/// that cylinder's cross-section.
+RegionOptions regionOptions(const CompareOptions& options) {
+  RegionOptions regions;
+  regions.spacing_m = options.core_spacing_m;
+  regions.link_m = 1.5 * options.core_spacing_m;
+  regions.min_area_m2 = options.min_cluster_area_m2;
+  regions.min_change_m = options.min_change_m;
+  const double radius_m = 0.5 * options.m3c2.projection_scale_m;
+  regions.volume_margin_m = radius_m;
+  regions.family_confidence = options.region_confidence;
+  regions.footprint_m2 = M_PI * radius_m * radius_m;
+  regions.level_of_detection_z = options.m3c2.confidence_z;
+  return regions;
+}
 
 /// The images fused into each point of a survey's dense cloud (dense/fused_views.bin), which
 /// make M3C2's n the independent measurements; none when the dense stage did not write them
@@ -192,6 +206,8 @@ void CompareOptions::check() const {
                          "must be 0 (off) or >= 2 core spacings");
   AUV_RECON_CHECK_OPTION(min_cluster_area_m2 >= 0, min_cluster_area_m2, "must be >= 0");
   AUV_RECON_CHECK_OPTION(min_change_m >= 0, min_change_m, "must be >= 0");
+  AUV_RECON_CHECK_OPTION(region_confidence >= 0 && region_confidence < 1, region_confidence,
+                         "must be in [0, 1) (0: every region with a significant point)");
   AUV_RECON_CHECK_OPTION(detection_scale >= 1 && detection_scale <= 10, detection_scale,
                          "must be in [1, 10] (1: one scale)");
   appearance.check();
@@ -209,6 +225,9 @@ void CompareOptions::bind(OptionSet& set) {
           "changed by at least this much are dropped");
   set.add("min_cluster_area_m2", &min_cluster_area_m2,
           "m²: smaller clusters of significant change are dropped");
+  set.add("region_confidence", &region_confidence,
+          "a region is kept when its mean change is significant at this confidence over the "
+          "whole site (Bonferroni over its independent measurements); 0 = off");
   set.add("detection_scale", &detection_scale,
           "> 1: regions found by M3C2 at this multiple of d and D, measured at d and D");
   set.add("normal_scale_m", &m3c2.normal_scale_m, "m: M3C2 normal scale D (diameter)");
@@ -299,10 +318,10 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
     coarse.projection_scale_m *= options.detection_scale;
     detection = compareAt(coarse);
   }
-  const std::vector<ChangeCluster> clusters = findRegions(
-      cores, detection ? detection->points : comparison, detection ? &comparison : nullptr,
-      options.core_spacing_m, 1.5 * options.core_spacing_m, options.min_cluster_area_m2,
-      options.min_change_m, volumeMargin(options));
+  const RegionOptions region_options = regionOptions(options);
+  const std::vector<ChangeCluster> clusters =
+      findRegions(cores, detection ? detection->points : comparison,
+                  detection ? &comparison : nullptr, region_options);
   const double m3c2_s = since(phase);
 
   phase = std::chrono::steady_clock::now();
@@ -332,7 +351,10 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
         {"min_change_m", options.min_change_m},
         {"bias_radius_m", options.bias_radius_m},
         {"detection_scale", options.detection_scale},
-        {"volume_margin_m", volumeMargin(options)}}},
+        {"volume_margin_m", region_options.volume_margin_m},
+        {"region_confidence", options.region_confidence},
+        {"region_footprint_m2", region_options.footprint_m2},
+        {"level_of_detection_z", region_options.level_of_detection_z}}},
       {"registration",
        {{"rms_m", aligned.rms_m},
         {"overlap", aligned.overlap},

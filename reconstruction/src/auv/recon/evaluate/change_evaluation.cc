@@ -87,6 +87,13 @@ WorldChange readComparison(const fs::path& file, std::string& missing) {
       change.detection_distances.push_back(coarse_distance.GetDataPtr<double>()[i]);
     }
   }
+  if (cloud.HasPointAttr("scalar_level_of_detection")) {
+    const core::Tensor lod = cloud.GetPointAttr("scalar_level_of_detection")
+                                 .To(core::Float64)
+                                 .Reshape({-1})
+                                 .Contiguous();
+    change.levels_of_detection.assign(lod.GetDataPtr<double>(), lod.GetDataPtr<double>() + n);
+  }
   // The appearance fields came later: an older compare's file has the shape's change only.
   missing.clear();
   for (const char* property : {"scalar_delta_e", "scalar_appearance_significant"}) {
@@ -279,10 +286,15 @@ json evaluateChange(const Survey& survey, const fs::path& ground_truth_run,
       compare_options.value("min_cluster_area_m2", kCompareMinClusterAreaM2);
   change.min_change_m = sim.scale * compare_options.value("min_change_m", 0.0);
   change.volume_margin_m = sim.scale * compare_options.value("volume_margin_m", 0.0);
+  change.region_confidence = compare_options.value("region_confidence", 0.0);
+  change.region_footprint_m2 =
+      sim.scale * sim.scale * compare_options.value("region_footprint_m2", 0.0);
+  change.level_of_detection_z = compare_options.value("level_of_detection_z", 1.96);
   for (size_t i = 0; i < change.points.size(); ++i) {
     change.points[i] = sim.apply(change.points[i]);
     change.normals[i] = sim.rotation * change.normals[i];
     change.distances[i] *= sim.scale;
+    if (!change.levels_of_detection.empty()) change.levels_of_detection[i] *= sim.scale;
   }
   const WellImagedSamples region1 =
       wellImagedRegion(truth1, keyframeViews(truth1, aligned1), options);

@@ -29,6 +29,8 @@ std::vector<ClusterScore> scoreClusters(const ChangeTruth& truth, const WorldCha
     comparison[i].normal = change.normals[i];
     comparison[i].distance = change.distances[i];
     comparison[i].significant = change.significant[i] && change.measured(i);
+    if (!change.levels_of_detection.empty())
+      comparison[i].level_of_detection = change.levels_of_detection[i];
   }
   if (two_scales) {
     fine = comparison;
@@ -37,13 +39,22 @@ std::vector<ClusterScore> scoreClusters(const ChangeTruth& truth, const WorldCha
       comparison[i].significant = change.significant[i] && comparison[i].valid();
     }
   }
-  const double min_area =
+  // Joined, measured and tested as compare does (clusters.h): within 1.5 core spacings; at two
+  // scales found with the coarse distances and measured with the fine ones.
+  change::RegionOptions regions;
+  regions.spacing_m = change.core_spacing_m;
+  regions.link_m = 1.5 * change.core_spacing_m;
+  regions.min_area_m2 =
       options.min_cluster_area_m2 > 0 ? options.min_cluster_area_m2 : change.min_cluster_area_m2;
-  // Joined and measured as compare does (clusters.h): within 1.5 core spacings; at two scales
-  // found with the coarse distances and measured with the fine ones.
-  const std::vector<change::ChangeCluster> clusters = change::findRegions(
-      change.points, comparison, two_scales ? &fine : nullptr, change.core_spacing_m,
-      1.5 * change.core_spacing_m, min_area, change.min_change_m, change.volume_margin_m);
+  regions.min_change_m = change.min_change_m;
+  regions.volume_margin_m = change.volume_margin_m;
+  if (!change.levels_of_detection.empty()) {
+    regions.family_confidence = change.region_confidence;
+    regions.footprint_m2 = change.region_footprint_m2;
+    regions.level_of_detection_z = change.level_of_detection_z;
+  }
+  const std::vector<change::ChangeCluster> clusters =
+      change::findRegions(change.points, comparison, two_scales ? &fine : nullptr, regions);
   std::vector<ClusterScore> scores;
   for (const change::ChangeCluster& cluster : clusters) {
     ClusterScore score;

@@ -45,6 +45,9 @@ struct WorldChange {
   std::vector<Eigen::Vector3d> points;   ///< core points (on survey 1's surface)
   std::vector<Eigen::Vector3d> normals;  ///< unit, the side + distances point to
   std::vector<double> distances;         ///< m; NaN: not measured
+  /// m, each point's level of detection at the distances' scale; empty in an older compare's
+  /// file (then no region is tested family-wise)
+  std::vector<double> levels_of_detection;
   /// What the regions are made of: compare's `detection_significant` at two scales, else its
   /// `significant`.
   std::vector<char> significant;
@@ -61,6 +64,9 @@ struct WorldChange {
   double min_cluster_area_m2 = 0.05;  ///< m², compare's minimum
   double min_change_m = 0.0;          ///< m, compare's smallest change of interest
   double volume_margin_m = 0.0;       ///< m, compare's rim of a region's volume (clusters.h)
+  double region_confidence = 0.0;     ///< compare's family-wise test of regions (0: off)
+  double region_footprint_m2 = 0.0;   ///< m², one independent measurement's area
+  double level_of_detection_z = 1.96;
 
   bool inRegion(size_t i) const { return in_region.empty() || in_region[i]; }
   bool measured(size_t i) const { return distances[i] == distances[i]; }
