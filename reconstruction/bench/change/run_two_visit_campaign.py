@@ -19,7 +19,9 @@ error, the clusters' verdicts (true / false), the false change on stable surface
 registration and the time of every step. A seed whose key (world, world seed, change seed,
 stretch of the route) is already in the file is skipped, so a
 campaign stopped or killed goes on where it was by running the same command again (only the seed
-in progress is redone); files from several machines are merged by --report, which pools them:
+in progress is redone; a finished visit folder without a row is refused, not redone over;
+--retry-failed runs failed seeds again); files from several machines are merged by --report,
+which pools them (the last row of a seed counts):
 
   reconstruction/bench/change/run_two_visit_campaign.py [--seeds 8] [--first-seed 1]
       [--world-seed 1] [--changes-along F,T] [--work DIR] [--results FILE.jsonl] [--domain 47]
@@ -128,9 +130,13 @@ def cluster_rows(change):
              "centroid": c.get("centroid")} for c in change.get("clusters", [])]
 
 
+def visit_folder(args, seed):
+    return os.path.join(args.work, f"{WORLD}-w{args.world_seed}-changes{seed}")
+
+
 def second_visit(args, seed, visit1_run, visit1_survey):
     """One change seed: site, mission, survey, reconstruction, compare, evaluate -> one row."""
-    folder = os.path.join(args.work, f"{WORLD}-w{args.world_seed}-changes{seed}")
+    folder = visit_folder(args, seed)
     shutil.rmtree(folder, ignore_errors=True)  # a seed in progress when stopped is redone
     os.makedirs(folder)
     log_file = os.path.join(folder, "log.txt")
@@ -204,7 +210,7 @@ def rescore(args):
     visit1_survey = os.path.join(args.work, f"{WORLD}-w{args.world_seed}-visit1", "survey")
     old = {json.dumps(r["key"], sort_keys=True): r for r in load_rows([args.old_results])}
     for seed in [CONTROL] + list(range(args.first_seed, args.first_seed + args.seeds)):
-        folder = os.path.join(args.work, f"{WORLD}-w{args.world_seed}-changes{seed}")
+        folder = visit_folder(args, seed)
         if not os.path.exists(os.path.join(folder, "survey", "evaluation.json")):
             continue  # not finished (or in progress in another campaign)
         row = new_row(args, seed)
@@ -337,6 +343,9 @@ def parse_args():
                         help="compare + evaluate again on the finished seeds of --work")
     parser.add_argument("--old-results", default=RESULTS,
                         help="--rescore: the rows whose mission figures are carried over")
+    parser.add_argument("--retry-failed", action="store_true",
+                        help="run again the seeds whose row says failed (the report keeps "
+                             "the last row of a seed)")
     parser.add_argument("--report", nargs="+", metavar="ROWS.jsonl",
                         help="print the figures of these result files and stop")
     return parser.parse_args()
@@ -357,10 +366,19 @@ def main():
             sys.exit("run_two_visit_campaign: --rescore writes new rows: give --results a new file")
         rescore(args)
         return
-    done = {json.dumps(r["key"], sort_keys=True) for r in load_rows([args.results])}
+    done = {json.dumps(r["key"], sort_keys=True) for r in load_rows([args.results])
+            if not (args.retry_failed and r.get("status") == "failed")}
     seeds = [CONTROL] if args.control else []
     seeds += list(range(args.first_seed, args.first_seed + args.seeds))
     seeds = [s for s in seeds if json.dumps(key(args, s), sort_keys=True) not in done]
+    # A finished visit whose row is not in --results (another file, a lost line) is not
+    # redone over: its folder is the only copy of its mission and reconstruction.
+    for seed in seeds:
+        finished = os.path.join(visit_folder(args, seed), "survey", "evaluation.json")
+        if os.path.exists(finished):
+            sys.exit(f"run_two_visit_campaign: {finished} exists but change seed {seed} has no "
+                     f"row in {args.results}: give the --results that holds it, or move the "
+                     "folder away to run the visit again")
     log(f"{len(seeds)} visits to run (the others are in {args.results})")
     if not seeds:
         report([args.results])
