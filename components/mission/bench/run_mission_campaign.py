@@ -299,6 +299,11 @@ def git_commit():
     return commit + ("-dirty" if git("status", "--porcelain", "--untracked-files=no") else "")
 
 
+# Consecutive runs without a report after which the campaign stops instead of writing a row
+# for every run left (a broken launch fails each in a second).
+MAX_RUNS_WITHOUT_REPORT = 3
+
+
 def configuration(args):
     """What besides world, seed and planner mode makes two runs the same experiment."""
     return {"launch": os.path.relpath(os.path.abspath(args.launch), ROOT),
@@ -426,6 +431,7 @@ def main():
     os.makedirs(out_dir, exist_ok=True)
     done = done_keys(args.results)
     commit = git_commit()
+    no_report = 0  # runs in a row that left no report: the launch itself is broken
     for world, seed in order:
         for planner in planners:
             key = row_key(world, seed, planner, config)
@@ -448,6 +454,13 @@ def main():
             append_row(args.results, row)
             done.add(key)
             print(json.dumps(row), flush=True)
+            no_report = no_report + 1 if row.get("state") == "NO REPORT" else 0
+            if no_report == MAX_RUNS_WITHOUT_REPORT:
+                sys.exit(f"run_mission_campaign: {no_report} runs in a row left no report (the "
+                         f"last: {os.path.relpath(run_dir, ROOT)}, its launch log beside it): "
+                         "the launch itself fails (a mixed workspace? source this checkout's "
+                         "install/setup.bash); stopped. Those runs are redone when the same "
+                         "command runs again.")
             if not args.keep_runs and not row.get("collisions"):  # runs with contacts: evidence
                 for sub in ("ground_truth",):
                     shutil.rmtree(os.path.join(run_dir, sub), ignore_errors=True)
