@@ -57,43 +57,35 @@ WorldChange readComparison(const fs::path& file, std::string& missing) {
   namespace core = open3d::core;
   const core::Tensor xyz = cloud.GetPointPositions().To(core::Float64).Contiguous();
   const core::Tensor normals = cloud.GetPointNormals().To(core::Float64).Contiguous();
-  const core::Tensor distance =
-      cloud.GetPointAttr("scalar_distance").To(core::Float64).Reshape({-1}).Contiguous();
-  const core::Tensor flag =
-      cloud.GetPointAttr("scalar_significant").To(core::Float64).Reshape({-1}).Contiguous();
   const size_t n = static_cast<size_t>(xyz.GetLength());
+  // One float property of every vertex, as doubles; flags are 0/1 floats.
+  auto scalars = [&cloud, n](const char* property) {
+    const core::Tensor t =
+        cloud.GetPointAttr(property).To(core::Float64).Reshape({-1}).Contiguous();
+    return std::vector<double>(t.GetDataPtr<double>(), t.GetDataPtr<double>() + n);
+  };
+  auto flags = [&scalars](const char* property) {
+    std::vector<char> out;
+    for (double v : scalars(property)) out.push_back(v > 0.5 ? 1 : 0);
+    return out;
+  };
   WorldChange change;
   for (size_t i = 0; i < n; ++i) {
     const double* p = xyz.GetDataPtr<double>() + 3 * i;
     const double* q = normals.GetDataPtr<double>() + 3 * i;
     change.points.emplace_back(p[0], p[1], p[2]);
     change.normals.emplace_back(q[0], q[1], q[2]);
-    change.distances.push_back(distance.GetDataPtr<double>()[i]);
-    change.significant.push_back(flag.GetDataPtr<double>()[i] > 0.5 ? 1 : 0);
   }
+  change.distances = scalars("scalar_distance");
+  change.significant = flags("scalar_significant");
   // Two scales (compare's detection_scale > 1): the regions are made of the coarse flags.
   if (cloud.HasPointAttr("scalar_detection_significant") &&
       cloud.HasPointAttr("scalar_detection_distance")) {
-    const core::Tensor coarse_flag = cloud.GetPointAttr("scalar_detection_significant")
-                                         .To(core::Float64)
-                                         .Reshape({-1})
-                                         .Contiguous();
-    const core::Tensor coarse_distance = cloud.GetPointAttr("scalar_detection_distance")
-                                             .To(core::Float64)
-                                             .Reshape({-1})
-                                             .Contiguous();
-    for (size_t i = 0; i < n; ++i) {
-      change.significant[i] = coarse_flag.GetDataPtr<double>()[i] > 0.5 ? 1 : 0;
-      change.detection_distances.push_back(coarse_distance.GetDataPtr<double>()[i]);
-    }
+    change.significant = flags("scalar_detection_significant");
+    change.detection_distances = scalars("scalar_detection_distance");
   }
-  if (cloud.HasPointAttr("scalar_level_of_detection")) {
-    const core::Tensor lod = cloud.GetPointAttr("scalar_level_of_detection")
-                                 .To(core::Float64)
-                                 .Reshape({-1})
-                                 .Contiguous();
-    change.levels_of_detection.assign(lod.GetDataPtr<double>(), lod.GetDataPtr<double>() + n);
-  }
+  if (cloud.HasPointAttr("scalar_level_of_detection"))
+    change.levels_of_detection = scalars("scalar_level_of_detection");
   // The appearance fields came later: an older compare's file has the shape's change only.
   missing.clear();
   for (const char* property : {"scalar_delta_e", "scalar_appearance_significant"}) {
@@ -102,16 +94,8 @@ WorldChange readComparison(const fs::path& file, std::string& missing) {
     }
   }
   if (!missing.empty()) return change;
-  const core::Tensor delta_e =
-      cloud.GetPointAttr("scalar_delta_e").To(core::Float64).Reshape({-1}).Contiguous();
-  const core::Tensor colour_flag = cloud.GetPointAttr("scalar_appearance_significant")
-                                       .To(core::Float64)
-                                       .Reshape({-1})
-                                       .Contiguous();
-  for (size_t i = 0; i < n; ++i) {
-    change.delta_e.push_back(delta_e.GetDataPtr<double>()[i]);
-    change.appearance_significant.push_back(colour_flag.GetDataPtr<double>()[i] > 0.5 ? 1 : 0);
-  }
+  change.delta_e = scalars("scalar_delta_e");
+  change.appearance_significant = flags("scalar_appearance_significant");
   return change;
 }
 
