@@ -678,6 +678,38 @@ processes:
   EXPECT_THAT(r.log, HasSubstr("a  exited with code 3, restarts: 2"));
 }
 
+// A restarted process learns it belongs to the same launch (what it may resume); another
+// launch gets another id, and an exported AUV_LAUNCH_ID (resuming after a reboot) is kept.
+TEST_F(SupervisorTest, ProcessesShareOneLaunchIdAcrossRestarts) {
+  const std::string launch = R"(
+processes:
+  - name: a
+    command: [sh, -c, "echo $AUV_LAUNCH_ID >> {dir}/ids; exit 3"]
+    restart: on-failure
+    max_restarts: 1
+    restart_delay: 0
+  - name: b
+    command: [sh, -c, "echo $AUV_LAUNCH_ID >> {dir}/ids"]
+)";
+  ::unsetenv("AUV_LAUNCH_ID");
+  runLaunch(launch);
+  const std::vector<std::string> first = lines(readFile(dir_.file("ids")));
+  ASSERT_EQ(first.size(), 3u);
+  EXPECT_EQ(first[0].size(), 16u) << first[0];
+  EXPECT_EQ(first[1], first[0]);
+  EXPECT_EQ(first[2], first[0]);
+  runLaunch(launch);
+  const std::vector<std::string> both = lines(readFile(dir_.file("ids")));
+  ASSERT_EQ(both.size(), 6u);
+  EXPECT_NE(both[3], first[0]) << "a new launch is not the old one";
+  ::setenv("AUV_LAUNCH_ID", "resumed", 1);
+  runLaunch(launch);
+  ::unsetenv("AUV_LAUNCH_ID");
+  const std::vector<std::string> all = lines(readFile(dir_.file("ids")));
+  ASSERT_EQ(all.size(), 9u);
+  EXPECT_EQ(all[6], "resumed");
+}
+
 TEST_F(SupervisorTest, OnFailureStopsRestartingAfterSuccess) {
   const Result r = runLaunch(R"(
 processes:

@@ -11,11 +11,14 @@
 #include <string>
 #include <vector>
 
+#include <unistd.h>
+
 #include <yaml-cpp/yaml.h>
 
 #include "auv/config/errors.h"
 #include "auv/config/option_table.h"
 #include "auv/config/spelling.h"
+#include "auv/config/state_file.h"
 #include "auv/config/yaml_scalars.h"
 #include "auv/config/yaml_section.h"
 #include "auv/interfaces/option_parameters.h"
@@ -23,6 +26,34 @@
 
 namespace auv::config {
 namespace {
+
+TEST(StateFile, ReplacesTheFileWholeAndLeavesNoTemporary) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("auv_state_file_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  const std::filesystem::path file = dir / "sub" / "state.yaml";
+  writeFileAtomically(file, "first: 1\n");
+  writeFileAtomically(file, "second: 2\n");
+  std::ifstream in(file);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(text, "second: 2\n");
+  EXPECT_FALSE(std::filesystem::exists(dir / "sub" / "state.yaml.tmp"));
+  // A folder that cannot be created is named.
+  try {
+    writeFileAtomically(file / "below_a_file", "x");
+    ADD_FAILURE() << "no error";
+  } catch (const std::runtime_error& error) {
+    EXPECT_NE(std::string(error.what()).find("state.yaml"), std::string::npos) << error.what();
+  }
+  std::filesystem::remove_all(dir);
+}
+
+TEST(StateFile, LaunchIdIsTheLaunchsEnvironment) {
+  ::setenv("AUV_LAUNCH_ID", "abc123", 1);
+  EXPECT_EQ(launchId(), "abc123");
+  ::unsetenv("AUV_LAUNCH_ID");
+  EXPECT_EQ(launchId(), "");
+}
 
 TEST(ExitCodeRule, InputErrorsAreTwoAndFailuresOne) {
   EXPECT_EQ(exitCodeFor(ConfigError("x")), 2);

@@ -17,6 +17,8 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
+#include <random>
 #include <sstream>
 #include <stdexcept>
 
@@ -30,6 +32,15 @@ using Clock = std::chrono::steady_clock;
 
 constexpr int kStartFailedExitCode = 127;  // like a shell's "command not found"
 constexpr int kLostStatusExitCode = 255;   // a child reaped by someone else
+
+/// 64 random bits in hex: unique per launch on this machine and across reboots.
+std::string newLaunchId() {
+  std::random_device random;
+  const uint64_t id = (static_cast<uint64_t>(random()) << 32) ^ random();
+  std::ostringstream out;
+  out << std::hex << std::setw(16) << std::setfill('0') << id;
+  return out.str();
+}
 
 Clock::duration toDuration(double seconds) {
   return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
@@ -137,6 +148,7 @@ class Run {
     const std::string parent_dir = tempParent();
     std::string params_dir;
     children_.resize(launch_.processes.size());
+    const std::string launch_id = newLaunchId();
     for (size_t i = 0; i < launch_.processes.size(); ++i) {
       Child& child = children_[i];
       child.process = &launch_.processes[i];
@@ -155,6 +167,9 @@ class Run {
           throw std::runtime_error("Supervisor: cannot write " + child.command.inline_params_path);
         }
       }
+      // One id for the whole launch, kept across restarts: what a restarted process may
+      // resume (auv/config/state_file.h). An exported AUV_LAUNCH_ID resumes an earlier launch.
+      if (!std::getenv("AUV_LAUNCH_ID")) child.command.environment["AUV_LAUNCH_ID"] = launch_id;
       child.environment = mergeEnvironment(environ, child.command.environment);
       std::string path_variable;
       for (const std::string& entry : child.environment) {

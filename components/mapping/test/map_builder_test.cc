@@ -354,6 +354,43 @@ TEST(MapBuilderTest, SavedBtLoadsBackWithTheSameOccupancy) {
   std::remove(path.c_str());
 }
 
+// A checkpoint (.ot) gives the map back with every cell's log-odds, not only occupied / free;
+// a damaged one is refused naming the file and leaves the map as it was.
+TEST(MapBuilderTest, LoadOfACheckpointKeepsEveryCellsLogOdds) {
+  MapBuilder earlier;
+  insertRingOfReturns(earlier);
+  const std::string path = testing::TempDir() + "map_builder_checkpoint_test.ot";
+  std::ofstream(path, std::ios::binary) << earlier.fullWithProbabilities();
+
+  MapBuilder restarted;
+  restarted.load(path);
+  EXPECT_EQ(restarted.fullWithProbabilities(), earlier.fullWithProbabilities());
+  EXPECT_EQ(restarted.tree().getNumLeafNodes(), earlier.tree().getNumLeafNodes());
+  std::size_t between = 0;  // cells not at a clamping bound: what a .bt would lose
+  for (auto it = earlier.tree().begin_leafs(); it != earlier.tree().end_leafs(); ++it) {
+    const octomap::OcTreeNode* node = restarted.tree().search(it.getKey());
+    ASSERT_NE(node, nullptr);
+    EXPECT_FLOAT_EQ(node->getLogOdds(), it->getLogOdds());
+    between += it->getLogOdds() > earlier.tree().getClampingThresMinLog() &&
+               it->getLogOdds() < earlier.tree().getClampingThresMaxLog();
+  }
+  EXPECT_GT(between, 0u) << "the test map should hold cells a .bt cannot express";
+
+  const std::string before = restarted.fullWithProbabilities();
+  const std::string damaged = testing::TempDir() + "map_builder_checkpoint_damaged.ot";
+  const std::string text = earlier.fullWithProbabilities();
+  std::ofstream(damaged, std::ios::binary) << text.substr(0, text.size() / 2);
+  try {
+    restarted.load(damaged);
+    ADD_FAILURE() << "a cut checkpoint was loaded";
+  } catch (const std::runtime_error& error) {
+    EXPECT_NE(std::string(error.what()).find(damaged), std::string::npos) << error.what();
+  }
+  EXPECT_EQ(restarted.fullWithProbabilities(), before);
+  std::remove(path.c_str());
+  std::remove(damaged.c_str());
+}
+
 // An earlier mission's map as the start of the next: load() gives the saved map exactly, with
 // nothing pending and a snapshot of it; a file it cannot take leaves the map as it was.
 TEST(MapBuilderTest, LoadStartsFromASavedMapAndRefusesFilesItCannotTake) {

@@ -79,10 +79,11 @@ class MissionExecutiveTest : public ::testing::Test {
   void advance(double seconds) {
     t += seconds;
     odometry();
-    controller(manoeuvre);
+    controller(manoeuvre, active_command);
     executive.tick(t);
   }
-  bool manoeuvre = false;  ///< the controller reports a safety manoeuvre (advance())
+  bool manoeuvre = false;       ///< the controller reports a safety manoeuvre (advance())
+  uint64_t active_command = 0;  ///< the command the controller reports (advance(); follow())
   msg::SafetyReason safety_reason = msg::SAFETY_REASON_MIN_ALTITUDE;  ///< of controller(true)
 
   /// Starts `queries` with everything ready; returns the outbox of the start.
@@ -111,6 +112,7 @@ class MissionExecutiveTest : public ::testing::Test {
     executive.onWaypoint(w, t);
     auto out = executive.takeOutbox();
     EXPECT_EQ(out.commands.size(), 1u);
+    if (!out.commands.empty()) active_command = out.commands.back().command_id();
     return out.commands.empty() ? msg::ControllerCommand() : out.commands.back();
   }
 

@@ -19,6 +19,7 @@
 #include "auv/interfaces/executor.h"
 #include "auv/interfaces/msg_eigen.h"
 #include "auv/mission/components/mission_component.h"
+#include "auv/mission/mission_progress.h"
 
 namespace auv::mission {
 namespace {
@@ -83,8 +84,10 @@ class MissionHarness {
             [this](const msg::WaypointRequest& r) { requests.push_back(r); }));
     command_sub_ = player_.createSubscription<msg::ControllerCommand>(
         "control/waypoint", interfaces::commandQos(),
-        std::function<void(const msg::ControllerCommand&)>(
-            [this](const msg::ControllerCommand& c) { commands.push_back(c); }));
+        std::function<void(const msg::ControllerCommand&)>([this](const msg::ControllerCommand& c) {
+          commands.push_back(c);
+          controller.active_command_id(c.command_id());  // as a controller does
+        }));
     status_sub_ = player_.createSubscription<msg::MissionStatus>(
         "mission/status", interfaces::latchedStateQos(),
         std::function<void(const msg::MissionStatus&)>(
@@ -549,6 +552,80 @@ TEST(MissionComponentTest, LogIsCompleteWhenTheMissionEnds) {
   ASSERT_EQ(logged.queries.size(), 1u);
   EXPECT_EQ(logged.queries[0].goal, goal);
   EXPECT_EQ(logged.queries[0].goal_tolerance, 1.0);
+  std::filesystem::remove_all(log_dir);
+}
+
+// A handler restarted within its launch finds progress.yaml and goes on with the mission: the
+// query in progress again, with ids after the ones it had sent, the log appended to. The
+// progress of another launch is left alone.
+MissionProgress progressOf(const std::string& launch_id) {
+  MissionProgress progress;
+  progress.launch_id = launch_id;
+  progress.mission_id = "resumed";
+  progress.state = msg::MISSION_STATE_EXECUTING;
+  progress.query_index = 0;
+  progress.next_query_id = 7;
+  progress.next_command_id = 20;
+  progress.waypoints_received = 4;
+  progress.plan.name = "resumed";
+  progress.plan.queries.push_back(fromPlannerQuery(queryTo({3, 0, 5}), 0));
+  return progress;
+}
+
+TEST(MissionComponentTest, RestartedHandlerResumesItsLaunchsMission) {
+  const std::filesystem::path log_dir = ::testing::TempDir() + "mission_component_test_resume";
+  std::filesystem::remove_all(log_dir);
+  std::filesystem::create_directories(log_dir);
+  writeProgress(log_dir / "progress.yaml", progressOf("launch-157"));
+  std::ofstream(log_dir / "events.csv")
+      << "t,event,query_index,query_id,waypoint_id,x,y,z,detail\n1,EXECUTING/waypoint,0,6,3,0";
+  ::setenv("AUV_LAUNCH_ID", "launch-157", 1);
+  {
+    MissionHarness harness(Vendor::CYCLONEDDS, Vendor::FASTDDS, 157,
+                           {"log_dir:=" + log_dir.string()});
+    ASSERT_TRUE(harness.discovered());
+    ASSERT_TRUE(harness.reachesState("resumed", msg::MISSION_STATE_WAITING_FOR_WAYPOINT));
+    ASSERT_TRUE(harness.spinUntil([&] { return !harness.queries.empty(); }));
+    EXPECT_EQ(harness.queries.front().query_id(), 7u);
+    EXPECT_EQ(harness.statusOf("resumed")->waypoints_received(), 4u);
+    const msg::Waypoint waypoint = harness.answerFirstRequest({3, 0, 5}, /*is_final=*/true);
+    ASSERT_TRUE(harness.spinUntil([&] {
+      return !harness.commands.empty() &&
+             harness.commands.back().mode() == msg::CONTROL_MODE_WAYPOINT;
+    }));
+    EXPECT_GE(harness.commands.back().command_id(), 20u);
+    harness.controller.state(msg::CONTROLLER_STATE_HOLDING);
+    harness.controller.reached(true);
+    ASSERT_TRUE(harness.reachesState("resumed", msg::MISSION_STATE_SUCCEEDED));
+  }
+  ::unsetenv("AUV_LAUNCH_ID");
+  const std::string events = readFile(log_dir / "events.csv");
+  EXPECT_EQ(events.rfind("t,event,", 0), 0u) << events;
+  EXPECT_CONTAINS(events, "\n1,EXECUTING/waypoint,0,6,3,0\n") << "the earlier log is kept whole";
+  EXPECT_CONTAINS(events, ",RESUMED,");
+  EXPECT_CONTAINS(events, "SUCCEEDED/");
+  const std::optional<MissionProgress> final = readProgress(log_dir / "progress.yaml");
+  ASSERT_TRUE(final.has_value());
+  EXPECT_EQ(final->state, msg::MISSION_STATE_SUCCEEDED);
+  EXPECT_EQ(final->launch_id, "launch-157");
+  std::filesystem::remove_all(log_dir);
+}
+
+TEST(MissionComponentTest, ProgressOfAnotherLaunchIsNotResumed) {
+  const std::filesystem::path log_dir = ::testing::TempDir() + "mission_component_test_other";
+  std::filesystem::remove_all(log_dir);
+  std::filesystem::create_directories(log_dir);
+  writeProgress(log_dir / "progress.yaml", progressOf("an-older-launch"));
+  ::setenv("AUV_LAUNCH_ID", "launch-158", 1);
+  {
+    MissionHarness harness(Vendor::FASTDDS, Vendor::CYCLONEDDS, 158,
+                           {"log_dir:=" + log_dir.string()});
+    ASSERT_TRUE(harness.discovered());
+    harness.spinUntil([] { return false; }, 2s);
+    EXPECT_FALSE(harness.statusOf("resumed").has_value());
+    EXPECT_TRUE(harness.queries.empty());
+  }
+  ::unsetenv("AUV_LAUNCH_ID");
   std::filesystem::remove_all(log_dir);
 }
 

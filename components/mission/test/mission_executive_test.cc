@@ -373,6 +373,50 @@ TEST_F(MissionExecutiveTest, PlannerErrorFailsTheMission) {
   EXPECT_EQ(out.commands.front().mode(), msg::CONTROL_MODE_HOLD);
 }
 
+// A restarted planner answers with UNKNOWN_QUERY: the query is given again from where the
+// vehicle is (new id), and the mission goes on.
+TEST_F(MissionExecutiveTest, QueryUnknownToARestartedPlannerIsReissuedFromHere) {
+  startReady({query({10, 0, 5})});
+  const msg::Waypoint w = waypoint({4, 0, 5});
+  follow(w);
+  moveTo({2.0, 0.5, 5.0});
+  executive.takeOutbox();
+  executive.onCancel(cancel(0, msg::CANCEL_REASON_UNKNOWN_QUERY), t);
+  const auto out = executive.takeOutbox();
+  EXPECT_EQ(state(), msg::MISSION_STATE_WAITING_FOR_WAYPOINT);
+  EXPECT_TRUE(executive.running());
+  ASSERT_EQ(out.commands.size(), 1u);
+  EXPECT_EQ(out.commands.front().mode(), msg::CONTROL_MODE_HOLD);
+  ASSERT_EQ(out.queries.size(), 1u);
+  EXPECT_GT(out.queries.front().query_id(), w.query_id());
+  EXPECT_EQ(vector(out.queries.front().start().position()), Eigen::Vector3d(2.0, 0.5, 5.0));
+  ASSERT_EQ(out.requests.size(), 1u);
+  EXPECT_EQ(out.requests.front().query_id(), out.queries.front().query_id());
+  ASSERT_EQ(out.events.size(), 1u);
+  EXPECT_EQ(out.events.front().name, "PLANNER_REISSUE");
+  EXPECT_EQ(executive.status().recoveries(), 0u) << "a planner restart is not a recovery";
+
+  // The new planner's waypoints (ids from 1 again) are followed.
+  msg::Waypoint again = waypoint({6, 0, 5});
+  again.query_id(out.queries.front().query_id());
+  again.waypoint_id(1);
+  const msg::ControllerCommand followed = follow(again);
+  EXPECT_EQ(followed.mode(), msg::CONTROL_MODE_WAYPOINT);
+  EXPECT_EQ(state(), msg::MISSION_STATE_EXECUTING);
+}
+
+// A planner that restarts again and again before its first waypoint does not keep the mission
+// waiting forever: the no-solution clock runs on across the re-issues.
+TEST_F(MissionExecutiveTest, PlannerLoosingTheQueryBeforeAnyWaypointStillTimesOut) {
+  startReady({query({10, 0, 5})});
+  for (int i = 0; i < 25; ++i) advance(1.0);
+  executive.onCancel(cancel(0, msg::CANCEL_REASON_UNKNOWN_QUERY), t);
+  EXPECT_EQ(state(), msg::MISSION_STATE_WAITING_FOR_WAYPOINT);
+  for (int i = 0; i < 6 && executive.running(); ++i) advance(1.0);
+  EXPECT_EQ(state(), msg::MISSION_STATE_ABORTED);
+  EXPECT_CONTAINS(message(), "no_solution_timeout");
+}
+
 TEST_F(MissionExecutiveTest, QueryReplacedByAnotherClientFailsTheMission) {
   startReady({query({10, 0, 5})});
   follow(waypoint({4, 0, 5}));
@@ -414,7 +458,9 @@ TEST_F(MissionExecutiveTest, StaleNavigationWhileExecutingAbortsToADepthHold) {
   EXPECT_TRUE(executive.takeOutbox().commands.empty());
 }
 
-TEST_F(MissionExecutiveTest, SilentControllerWhileExecutingAbortsToADepthHold) {
+// A silent controller may be a restarting one: the mission waits for it as for a manoeuvre,
+// then holds and re-issues the query from where the vehicle is.
+TEST_F(MissionExecutiveTest, SilentControllerIsWaitedForThenTheQueryIsReissued) {
   startReady({query({10, 0, 5})});
   follow(waypoint({4, 0, 5}));
   executive.takeOutbox();
@@ -428,9 +474,47 @@ TEST_F(MissionExecutiveTest, SilentControllerWhileExecutingAbortsToADepthHold) {
   t += 1.5;  // 5.5 s > controller_timeout 5 s
   odometry();
   executive.tick(t);
-  EXPECT_EQ(state(), msg::MISSION_STATE_ABORTED);
+  EXPECT_EQ(state(), msg::MISSION_STATE_RECOVERING);
   EXPECT_CONTAINS(message(), "controller silent");
-  expectDepthHold(executive.takeOutbox(), 5.0);
+  auto out = executive.takeOutbox();
+  EXPECT_TRUE(out.commands.empty()) << "nobody to command";
+  ASSERT_EQ(out.events.size(), 1u);
+  EXPECT_EQ(out.events[0].name, "RECOVERY_START");
+  // Back: a hold, then the query again after recovery_hold.
+  advance(1.0);
+  out = executive.takeOutbox();
+  ASSERT_EQ(out.commands.size(), 1u);
+  EXPECT_EQ(out.commands[0].mode(), msg::CONTROL_MODE_HOLD);
+  advance(5.5);
+  EXPECT_EQ(executive.takeOutbox().queries.size(), 1u);
+  EXPECT_EQ(state(), msg::MISSION_STATE_WAITING_FOR_WAYPOINT);
+}
+
+// A controller restarted within controller_timeout reports again, but without the command
+// it had: the mission notices and recovers instead of waiting for an arrival that cannot come.
+TEST_F(MissionExecutiveTest, ControllerThatLostItsCommandIsRecovered) {
+  startReady({query({10, 0, 5})});
+  follow(waypoint({4, 0, 5}));
+  advance(1.0);
+  active_command = 0;  // restarted: no command
+  for (int i = 0; i < 3; ++i) advance(1.0);
+  EXPECT_EQ(state(), msg::MISSION_STATE_EXECUTING) << "a command on its way is not lost";
+  for (int i = 0; i < 4; ++i) advance(1.0);  // no command for 6 s > controller_timeout
+  EXPECT_EQ(state(), msg::MISSION_STATE_RECOVERING);
+  EXPECT_CONTAINS(message(), "the controller has lost command");
+}
+
+TEST_F(MissionExecutiveTest, ControllerSilentPastRecoveryTimeoutAborts) {
+  startReady({query({10, 0, 5})});
+  follow(waypoint({4, 0, 5}));
+  for (int i = 0; i < 300 && executive.running(); ++i) {
+    t += 1.0;
+    odometry();
+    executive.tick(t);
+  }
+  EXPECT_EQ(state(), msg::MISSION_STATE_ABORTED);
+  EXPECT_CONTAINS(message(), "recovery given up: a silent controller");
+  EXPECT_CONTAINS(message(), "recovery_timeout");
 }
 
 TEST_F(MissionExecutiveTest, StaleNavigationWhileWaitingAbortsToo) {

@@ -113,14 +113,14 @@ TEST_F(Session3dTest, EveryNodeAndWaypointStaysInTheBand) {
   EXPECT_LE(deepest, 6.0);
   EXPECT_GT(deepest - shallowest, 1.5) << "depth is sampled: the tree is not a plane";
   // Waypoint by waypoint to the goal.
-  session.onWaypointRequest({1, 0});
+  session.onWaypointRequest({1, 0}, 200.0);
   std::vector<PlannedWaypoint> waypoints;
   for (int i = 0; i < 40; ++i) {
     for (const auto& m : session.takeOutbox().messages) {
       if (const auto* w = std::get_if<PlannedWaypoint>(&m)) waypoints.push_back(*w);
     }
     if (!waypoints.empty() && waypoints.back().is_final) break;
-    if (!waypoints.empty()) session.onWaypointRequest({1, waypoints.back().waypoint_id});
+    if (!waypoints.empty()) session.onWaypointRequest({1, waypoints.back().waypoint_id}, 200.0 + i);
     session.planSlice(waypoints.empty() ? query_.start : waypoints.back().position, 200.0 + i);
     session.finishSlice(200.0 + i);
   }

@@ -118,7 +118,7 @@ class PlanningSessionTest : public ::testing::Test {
     return started;
   }
   void request(uint64_t reached, uint64_t query_id = 1) {
-    session.onWaypointRequest({query_id, reached});
+    session.onWaypointRequest({query_id, reached}, t);
     collect();
   }
   /// One slice; `seconds` pass on the fake clock while the tree grows.
@@ -286,6 +286,37 @@ TEST_F(PlanningSessionTest, RepeatedRequestGetsTheActiveWaypointAgain) {
   EXPECT_FALSE(waypoints[3].repeat);
   EXPECT_EQ(waypoints[3].waypoint_id, first->waypoint_id + 1);
   EXPECT_LE((waypoints[3].position - first->position).norm(), kRange + 1e-9);
+}
+
+// A restarted planner meets a mission handler in the middle of a query: the handler must learn
+// that the query is gone (it re-issues it) instead of waiting for waypoints that never come.
+TEST_F(PlanningSessionTest, RequestForAQueryPlannedBeforeARestartIsCancelledAsUnknown) {
+  request(7, 3);  // reached waypoint 7 of query 3: planned by the planner before this one
+  EXPECT_TRUE(waypoints.empty());
+  ASSERT_EQ(cancels.size(), 1u);
+  EXPECT_EQ(cancels[0].reason, CancelReason::UNKNOWN_QUERY);
+  EXPECT_EQ(cancels[0].query_id, 3u);
+  EXPECT_EQ(cancels[0].waypoint_id, 0u);
+  EXPECT_CONTAINS(cancels[0].text, "no query 3");
+}
+
+TEST_F(PlanningSessionTest, FirstRequestRepeatedWithoutItsQueryIsCancelledAsUnknown) {
+  request(0, 5);  // may have overtaken its query: kept
+  t += 0.5 * PlanningSession::kLostQueryAfter;
+  request(0, 5);  // repeated soon: still kept
+  EXPECT_TRUE(cancels.empty());
+  t += PlanningSession::kLostQueryAfter;
+  request(0, 5);  // repeated long after: the query is lost
+  ASSERT_EQ(cancels.size(), 1u);
+  EXPECT_EQ(cancels[0].reason, CancelReason::UNKNOWN_QUERY);
+  EXPECT_CONTAINS(cancels[0].text, "lost");
+  // The re-issued query is planned as usual.
+  ASSERT_TRUE(start(makeQuery(6, kStart, kGoal)));
+  request(0, 6);
+  for (int i = 0; i < 100 && waypoints.empty(); ++i) slice();
+  ASSERT_EQ(waypoints.size(), 1u);
+  EXPECT_EQ(waypoints[0].query_id, 6u);
+  EXPECT_EQ(cancels.size(), 1u);
 }
 
 TEST_F(PlanningSessionTest, RequestThatOvertakesItsQueryIsAnsweredOnceItStarts) {

@@ -98,7 +98,7 @@ class ScratchSessionTest : public ::testing::TestWithParam<std::string> {
   }
   std::optional<PlannedWaypoint> next(uint64_t reached) {
     const std::size_t before = waypoints.size();
-    session.onWaypointRequest({1, reached});
+    session.onWaypointRequest({1, reached}, t);
     collect();
     for (int i = 0; i < 100 && waypoints.size() == before; ++i) slice();
     if (waypoints.size() == before) return std::nullopt;

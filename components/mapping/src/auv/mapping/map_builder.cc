@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -380,7 +381,21 @@ void MapBuilder::load(const std::string& path) {
   configureTree(loaded);
   std::ifstream file(path, std::ios::binary);
   if (!file) throw std::runtime_error("cannot open map file " + path);
-  if (!loaded.readBinary(file)) {
+  // `.ot` (with log-odds, a checkpoint) or `.bt` (maximum likelihood), told by the header.
+  if (file.peek() == '#' && std::filesystem::path(path).extension() == ".ot") {
+    std::unique_ptr<octomap::OcTree> read;
+    try {
+      read = ot_stream::readTree(file);
+    } catch (const std::runtime_error& error) {
+      throw std::runtime_error(path + " is not an OctoMap .ot file: " + error.what());
+    }
+    if (std::abs(read->getResolution() - options_.resolution) > 1e-9) {
+      throw std::runtime_error(path + " has resolution " + std::to_string(read->getResolution()) +
+                               " m, the map " + std::to_string(options_.resolution) + " m");
+    }
+    // Its cells keep their log-odds; new evidence is clamped by our settings.
+    loaded.swapContent(*read);
+  } else if (!loaded.readBinary(file)) {
     throw std::runtime_error(path + " is not an OctoMap binary (.bt) file");
   }
   if (std::abs(loaded.getResolution() - options_.resolution) > 1e-9) {

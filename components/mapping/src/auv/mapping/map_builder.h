@@ -152,11 +152,14 @@ class MapBuilder {
   /// Empties the map and the pending changes.
   void clear();
   /// Replaces the map with a .bt file (save()'s format: occupied and free cells at the clamping
-  /// bounds), e.g. the map of an earlier mission at the same site; drops the pending changes.
+  /// bounds), e.g. the map of an earlier mission at the same site, or an .ot file
+  /// (fullWithProbabilities(): every cell's log-odds, a checkpoint); drops the pending changes.
   /// Throws std::runtime_error naming the file when it cannot be read or holds another
   /// resolution; the map is then unchanged.
   void load(const std::string& path);
 
+  /// Counts the changes of the live tree (a checkpoint is due only when it moved).
+  uint64_t version() const { return version_; }
   /// Copies the live tree into a new immutable snapshot and publishes it (writer thread only).
   std::shared_ptr<const octomap::OcTree> takeSnapshot();
   /// takeSnapshot() if snapshot() was called since the last copy and the map changed since;

@@ -1,6 +1,8 @@
 #include "auv/mission/mission_executive.h"
 #include "auv/interfaces/msg_eigen.h"
+#include "auv/mission/executive_text.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -8,29 +10,8 @@
 namespace auv::mission {
 namespace {
 
-std::string formatSeconds(double seconds) {
-  std::ostringstream out;
-  out.precision(2);
-  out << std::fixed << seconds << " s";
-  return out.str();
-}
-
 Eigen::Vector3d toVector(const msg::Point& p) { return interfaces::toEigen(p); }
 using interfaces::toPoint;
-
-const char* reasonName(msg::SafetyReason reason) {
-  static const char* const kNames[] = {
-      "NONE",        "MIN_ALTITUDE", "MAX_DEPTH",       "OBSTACLE", "NAVIGATION_LOST",
-      "LOW_BATTERY", "LEAK",         "COMMAND_TIMEOUT", "OPERATOR", "OTHER"};
-  const auto index = static_cast<size_t>(reason);
-  return index < sizeof(kNames) / sizeof(kNames[0]) ? kNames[index] : "UNKNOWN";
-}
-
-// Manoeuvres a re-issued query cannot help with: the vehicle must come home or be looked at.
-bool abortsAtOnce(msg::SafetyReason reason) {
-  return reason == msg::SAFETY_REASON_OPERATOR || reason == msg::SAFETY_REASON_LEAK ||
-         reason == msg::SAFETY_REASON_LOW_BATTERY;
-}
 
 }  // namespace
 
@@ -205,9 +186,11 @@ void MissionExecutive::tick(double now) {
     return;
   }
   if (now - controller_time_ > options_.controller_timeout) {
-    abortToHold("controller silent: no control/status for " +
-                formatSeconds(now - controller_time_) + " (controller_timeout " +
-                formatSeconds(options_.controller_timeout) + ")");
+    // Its process may be restarting: the recovery waits for it (up to recovery_timeout).
+    const std::string cause = "controller silent: no control/status for " +
+                              formatSeconds(now - controller_time_) + " (controller_timeout " +
+                              formatSeconds(options_.controller_timeout) + ")";
+    beginRecovery(cause, cause, now);
     return;
   }
   if (state == msg::MISSION_STATE_WAITING_FOR_WAYPOINT) {
@@ -291,6 +274,21 @@ void MissionExecutive::onControllerStatus(const msg::ControllerStatus& status, d
   if (status_.state() == msg::MISSION_STATE_EXECUTING && status.reached() &&
       status.active_command_id() == command_id_ && command_id_ != 0) {
     waypointReached(now);
+    return;
+  }
+  // A controller that restarted faster than controller_timeout reports no command at all: it
+  // holds nothing and drives nowhere, so the waypoint would never be reached.
+  const bool commandless = status_.state() == msg::MISSION_STATE_EXECUTING && command_id_ != 0 &&
+                           status.active_command_id() == 0;
+  if (!commandless) {
+    commandless_since_.reset();
+  } else if (!commandless_since_) {
+    commandless_since_ = now;  // the command may still be on its way
+  } else if (now - *commandless_since_ > options_.controller_timeout) {
+    const std::string cause =
+        "the controller has lost command " + std::to_string(command_id_) + " (restarted?)";
+    commandless_since_.reset();
+    beginRecovery(cause, cause, now);
   }
 }
 
@@ -410,6 +408,10 @@ void MissionExecutive::onCancel(const msg::WaypointCancel& cancel, double now) {
              "the planner dropped this mission's query: " + cancel.reason_text());
     return;
   }
+  if (cancel.reason() == msg::CANCEL_REASON_UNKNOWN_QUERY) {
+    reissueLostQuery(cancel, now);
+    return;
+  }
   if (cancel.reason() == msg::CANCEL_REASON_PLANNER_ERROR) {
     hold(true);
     status_.queries_failed(status_.queries_failed() + 1);
@@ -463,83 +465,6 @@ void MissionExecutive::abortToHold(const std::string& reason) {
   command_id_ = 0;
   setState(msg::MISSION_STATE_ABORTED,
            reason + (commanded ? "; holding depth" : "; the vehicle was not commanded yet"));
-}
-
-void MissionExecutive::startRecovery(const msg::ControllerStatus& status, double now) {
-  const std::string cause =
-      std::string(reasonName(status.safety_reason())) + ": " + status.safety_text();
-  const auto limit = static_cast<uint32_t>(options_.max_recoveries);
-  if (abortsAtOnce(status.safety_reason()) || query_recoveries_ >= limit) {
-    const std::string why = abortsAtOnce(status.safety_reason())
-                                ? ""
-                                : "; recoveries exhausted (" + std::to_string(query_recoveries_) +
-                                      " of max_recoveries " + std::to_string(limit) +
-                                      " used by this query)";
-    current_.reset();
-    next_.reset();
-    command_id_ = 0;
-    setState(msg::MISSION_STATE_ABORTED,
-             "controller safety manoeuvre " + cause + why +
-                 " (the controller keeps the vehicle safe; restart the mission when clear)");
-    return;
-  }
-  ++query_recoveries_;
-  status_.recoveries(status_.recoveries() + 1);
-  recovery_since_ = now;
-  holding_since_.reset();
-  recovery_cause_ = cause;
-  current_.reset();
-  next_.reset();
-  command_id_ = 0;
-  next_requested_ = false;
-  const std::string detail = "recovery " + std::to_string(query_recoveries_) + "/" +
-                             std::to_string(limit) + " of query " +
-                             std::to_string(status_.current_query_index() + 1) + " after " + cause;
-  outbox_.events.push_back({"RECOVERY_START", detail});
-  // The controller refuses commands during its manoeuvre: nothing is sent until it is over.
-  setState(msg::MISSION_STATE_RECOVERING, detail + "; waiting for the manoeuvre to end");
-}
-
-void MissionExecutive::continueRecovery(double now) {
-  if (now - controller_time_ > options_.controller_timeout) {
-    abortToHold("controller silent while recovering: no control/status for " +
-                formatSeconds(now - controller_time_) + " (controller_timeout " +
-                formatSeconds(options_.controller_timeout) + ")");
-    return;
-  }
-  const bool manoeuvre = controller_ && controller_->safety_maneuver();
-  const bool navigation = position_ && now - odometry_time_ <= options_.odometry_timeout;
-  if (!holding_since_ && (manoeuvre || !navigation)) {
-    if (now - recovery_since_ > options_.recovery_timeout) {
-      const std::string what = manoeuvre ? "the safety manoeuvre (" + recovery_cause_ + ")"
-                                         : std::string("stale navigation");
-      abortToHold("recovery given up: " + what + " still on after " +
-                  formatSeconds(now - recovery_since_) + " (recovery_timeout " +
-                  formatSeconds(options_.recovery_timeout) + ")");
-    }
-    return;
-  }
-  if (!holding_since_) {
-    // Over: hold where the controller left the vehicle while the map takes in the cause.
-    holding_since_ = now;
-    hold(true);
-    setState(msg::MISSION_STATE_RECOVERING, "manoeuvre over (" + recovery_cause_ + "); holding " +
-                                                formatSeconds(options_.recovery_hold) +
-                                                " before re-issuing query " +
-                                                std::to_string(status_.current_query_index() + 1));
-    return;
-  }
-  if (now - *holding_since_ < options_.recovery_hold) return;
-  if (!navigation) return;  // the query starts from the vehicle's position: wait for it
-  const uint64_t old_query = status_.current_query_id();
-  holding_since_.reset();
-  startQuery(now);
-  const std::string detail =
-      "query " + std::to_string(status_.current_query_index() + 1) + " re-issued as query id " +
-      std::to_string(status_.current_query_id()) + " (was " + std::to_string(old_query) +
-      "), recovery " + std::to_string(query_recoveries_) + " after " + recovery_cause_;
-  outbox_.events.push_back({"RECOVERY_REISSUE", detail});
-  setState(msg::MISSION_STATE_WAITING_FOR_WAYPOINT, detail + "; waiting for the first waypoint");
 }
 
 }  // namespace auv::mission

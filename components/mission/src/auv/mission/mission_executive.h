@@ -12,7 +12,10 @@
 //     takes in what caused it), re-issue the query from where the vehicle is (new query id)
 //     --> WAITING_FOR_WAYPOINT. At most max_recoveries per query; ABORTED when they are used up,
 //     when the manoeuvre (or stale navigation after it) lasts past recovery_timeout, or on abort.
-//     Manoeuvres for OPERATOR, LEAK and LOW_BATTERY abort at once (nothing to retry).
+//     Manoeuvres for OPERATOR, LEAK and LOW_BATTERY abort at once (nothing to retry). A
+//     controller silent past controller_timeout (its process restarting) is recovered alike.
+//   WAITING_FOR_WAYPOINT / EXECUTING --cancel UNKNOWN_QUERY (the planner restarted)--> hold,
+//     re-issue the query from where the vehicle is --> WAITING_FOR_WAYPOINT.
 
 #include <cstdint>
 #include <optional>
@@ -23,6 +26,7 @@
 
 #include "auv/config/option_table.h"
 #include "auv/mission/mission_plan.h"
+#include "auv/mission/mission_progress.h"
 #include "auv/msg/all.h"
 
 namespace auv::mission {
@@ -81,6 +85,13 @@ class MissionExecutive {
   /// `why`, when a mission is already running.
   bool start(const std::string& mission_id, const std::vector<MissionQuery>& queries, double now,
              std::string* why);
+  /// Goes on with a mission a handler had running before it restarted: CHECKING_READINESS,
+  /// then the query in progress is issued again from where the vehicle is, with new ids and
+  /// the recoveries it had used. False, with the reason in `why`, when a mission is running or
+  /// `progress` has none to resume.
+  bool resume(const MissionProgress& progress, double now, std::string* why);
+  /// What resume() needs (plan name and launch id left to the caller).
+  MissionProgress progress() const;
   /// Stops the running mission (ABORTED) and holds the vehicle (no command while still checking
   /// readiness: the mission has not commanded it). False when none is running.
   bool abort(const std::string& reason, double now);
@@ -109,12 +120,17 @@ class MissionExecutive {
   void command(const msg::Waypoint& waypoint);
   void waypointReached(double now);
   void finishQuery(bool succeeded, double now);
+  /// The planner has no such query (CANCEL_REASON_UNKNOWN_QUERY): hold, re-issue it from here.
+  void reissueLostQuery(const msg::WaypointCancel& cancel, double now);
   /// HOLD at the current position, or (keep_position false) a speed-0 setpoint at the current
   /// depth and heading.
   void hold(bool keep_position);
   void abortToHold(const std::string& reason);
   /// A safety manoeuvre interrupted the query: RECOVERING, or ABORTED when it may not.
   void startRecovery(const msg::ControllerStatus& status, double now);
+  /// RECOVERING after `cause` (a manoeuvre's reason, a silent controller), or ABORTED, saying
+  /// `interruption`, when this query's recoveries are used up.
+  void beginRecovery(const std::string& cause, const std::string& interruption, double now);
   /// RECOVERING: hold once the manoeuvre is over, re-issue after recovery_hold, or give up.
   void continueRecovery(double now);
 
@@ -149,6 +165,7 @@ class MissionExecutive {
   double recovery_since_ = 0.0;          // s, when the manoeuvre interrupted the query
   std::optional<double> holding_since_;  // s, manoeuvre over, HOLD sent
   std::string recovery_cause_;           // the manoeuvre's reason and text
+  std::optional<double> commandless_since_;  // s, EXECUTING and the controller reports no command
 };
 
 const char* toString(msg::MissionState state);

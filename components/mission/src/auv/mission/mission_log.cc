@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <sstream>
 #include <stdexcept>
 
 #include "auv/mission/mission_executive.h"
@@ -10,28 +11,63 @@ namespace auv::mission {
 namespace fs = std::filesystem;
 
 namespace {
-std::ofstream openCsv(const fs::path& path, const char* header) {
-  std::ofstream out(path, std::ios::trunc);
+bool endsWithNewline(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  if (!in || in.tellg() == 0) return true;
+  in.seekg(-1, std::ios::end);
+  return in.get() == '\n';
+}
+
+/// Appending, the header is written only to a new or empty file.
+std::ofstream openCsv(const fs::path& path, const char* header, bool append) {
+  std::error_code error;
+  const bool has_header = append && fs::exists(path, error) && fs::file_size(path, error) > 0;
+  std::ofstream out(path, append ? std::ios::app : std::ios::trunc);
   if (!out) throw std::runtime_error(path.string() + ": cannot write the mission log");
   out.precision(10);
-  out << header << "\n" << std::flush;
+  if (!has_header) {
+    out << header << "\n" << std::flush;
+  } else if (!endsWithNewline(path)) {
+    out << "\n" << std::flush;  // a line cut by the crash stays a line of its own
+  }
   return out;
+}
+/// The path_seq of the last row of paths.csv (0: none).
+uint64_t lastPathSeq(const fs::path& path) {
+  std::ifstream in(path);
+  std::string line, last;
+  while (std::getline(in, line)) {
+    if (!line.empty()) last = line;
+  }
+  std::istringstream row(last);
+  std::string t, query, seq;
+  if (!std::getline(row, t, ',') || !std::getline(row, query, ',') || !std::getline(row, seq, ','))
+    return 0;
+  try {
+    return std::stoull(seq);
+  } catch (const std::exception&) {
+    return 0;  // the header, or a line cut by a crash
+  }
 }
 }  // namespace
 
-MissionLog::MissionLog(const std::string& dir, const MissionPlan& plan) : dir_(dir) {
+MissionLog::MissionLog(const std::string& dir, const MissionPlan& plan, bool resume) : dir_(dir) {
   std::error_code error;
   fs::create_directories(dir, error);
   if (error)
     throw std::runtime_error(dir + ": cannot create the mission log folder: " + error.message());
-  for (const auto& entry : fs::directory_iterator(dir)) {
-    if (entry.path().filename().string().rfind("tree_", 0) == 0) fs::remove(entry.path());
+  if (!resume) {
+    for (const auto& entry : fs::directory_iterator(dir)) {
+      if (entry.path().filename().string().rfind("tree_", 0) == 0) fs::remove(entry.path());
+    }
+    std::ofstream(fs::path(dir) / "mission.yaml", std::ios::trunc) << toYaml(plan);
   }
-  std::ofstream(fs::path(dir) / "mission.yaml", std::ios::trunc) << toYaml(plan);
   events_ = openCsv(fs::path(dir) / "events.csv",
-                    "t,event,query_index,query_id,waypoint_id,x,y,z,detail");
-  waypoints_ = openCsv(fs::path(dir) / "waypoints.csv", "t,query_id,waypoint_id,x,y,z,is_final");
-  paths_ = openCsv(fs::path(dir) / "paths.csv", "t,query_id,path_seq,index,x,y,z");
+                    "t,event,query_index,query_id,waypoint_id,x,y,z,detail", resume);
+  waypoints_ =
+      openCsv(fs::path(dir) / "waypoints.csv", "t,query_id,waypoint_id,x,y,z,is_final", resume);
+  if (resume) path_seq_ = lastPathSeq(fs::path(dir) / "paths.csv");  // numbers go on
+  paths_ = openCsv(fs::path(dir) / "paths.csv", "t,query_id,path_seq,index,x,y,z", resume);
 }
 
 MissionLog::~MissionLog() = default;
@@ -68,7 +104,7 @@ void MissionLog::tree(const msg::PlannerTree& tree) { trees_[tree.query_id()] = 
 void MissionLog::finish(const msg::MissionStatus& status, const octomap::OcTree* map) {
   for (const auto& [query_id, tree] : trees_) {
     std::ofstream out = openCsv(fs::path(dir_) / ("tree_" + std::to_string(query_id) + ".csv"),
-                                "index,parent,x,y,z,cost");
+                                "index,parent,x,y,z,cost", /*append=*/false);
     for (std::size_t i = 0; i < tree.nodes().size(); ++i) {
       const auto& p = tree.nodes()[i];
       out << i << "," << (i < tree.parents().size() ? tree.parents()[i] : -1) << "," << p.x() << ","

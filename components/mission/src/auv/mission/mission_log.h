@@ -26,8 +26,9 @@ namespace auv::mission {
 class MissionLog {
  public:
   /// Creates `dir` (and parents); throws std::runtime_error naming it on failure. Files of an
-  /// earlier mission in the same folder are replaced.
-  MissionLog(const std::string& dir, const MissionPlan& plan);
+  /// earlier mission in the same folder are replaced; with `resume` (the same mission, by a
+  /// restarted handler) they are appended to.
+  MissionLog(const std::string& dir, const MissionPlan& plan, bool resume = false);
   ~MissionLog();
 
   void event(double t, const std::string& event, const msg::MissionStatus& status,

@@ -314,16 +314,30 @@ std::unique_ptr<PlanningSession::ActiveQuery> PlanningSession::buildQuery(
   return active;
 }
 
-void PlanningSession::onWaypointRequest(const WaypointRequest& request) {
+void PlanningSession::onWaypointRequest(const WaypointRequest& request, double now) {
   if (!query_ || query_->query.query_id != request.query_id) {
-    // Queries and requests travel on different topics: a mission handler's first request can
-    // overtake its query. Kept for the next query to start, used if it is that one.
-    early_request_ = request;
     if (query_ && request.query_id < query_->query.query_id) {
       outbox_.warnings.push_back("waypoint request for query " + std::to_string(request.query_id) +
                                  ", older than the one planned (" +
                                  std::to_string(query_->query.query_id) + ")");
+      return;
     }
+    // Queries and requests travel on different topics: a mission handler's first request can
+    // overtake its query. Kept for the next query to start, used if it is that one; unless
+    // it cannot be in flight any more.
+    const bool repeated = early_request_ && early_request_->query_id == request.query_id;
+    if (request.reached_waypoint_id != 0 ||
+        (repeated && now - early_request_since_ >= kLostQueryAfter)) {
+      early_request_.reset();
+      outbox_.messages.emplace_back(WaypointCancel{
+          0, request.query_id, CancelReason::UNKNOWN_QUERY,
+          "this planner has no query " + std::to_string(request.query_id) +
+              (request.reached_waypoint_id != 0 ? " (it restarted since the query began)"
+                                                : " (the query was lost)")});
+      return;
+    }
+    if (!repeated) early_request_since_ = now;
+    early_request_ = request;
     return;
   }
   if (query_->active_waypoint_id != 0 &&

@@ -132,6 +132,9 @@ enum class CancelReason {
   QUERY_REPLACED,
   NO_SOLUTION,
   PLANNER_ERROR,
+  /// A request for a query this planner never received (it restarted, or the query was lost):
+  /// the mission handler re-issues the query.
+  UNKNOWN_QUERY,
 };
 
 struct WaypointCancel {
@@ -183,8 +186,14 @@ class PlanningSession {
   bool startQuery(const PlanningQuery& query, octomap::OcTree& map,
                   const std::optional<Eigen::Vector3d>& vehicle, double now);
   /// Answers now (a repeat gets the active waypoint again) or keeps the request until the tree
-  /// has a solution; a request for a query not started yet is kept for that query.
-  void onWaypointRequest(const WaypointRequest& request);
+  /// has a solution; a request for a query not started yet is kept for that query. A request
+  /// for a newer query that cannot be in flight is cancelled as UNKNOWN_QUERY: one that
+  /// reached a waypoint (that query was planned, by a planner before a restart), or a first
+  /// request repeated kLostQueryAfter s (node time `now`) after it was kept.
+  void onWaypointRequest(const WaypointRequest& request, double now);
+  /// s: a query whose first request came this long ago without the query is lost. A request
+  /// overtakes its query by milliseconds; mission handlers repeat requests every few seconds.
+  static constexpr double kLostQueryAfter = 1.0;
 
   /// First half of a planning slice: re-checks the tree if the map changed (a blocked root or
   /// way to it cancels the active waypoint and restarts the tree at the vehicle, its budget
@@ -235,6 +244,7 @@ class PlanningSession {
   std::unique_ptr<ActiveQuery> query_;
   std::optional<WaypointRequest> pending_request_;  // for the active query
   std::optional<WaypointRequest> early_request_;    // for a query not started (yet)
+  double early_request_since_ = 0.0;                // s, when that query's first request came
   uint64_t next_waypoint_id_ = 1;
   uint64_t map_version_ = 0;
   // What changed in the map since the tree was last re-checked.

@@ -1,4 +1,5 @@
 #include "auv/mapping/components/mapping_component.h"
+#include "auv/config/state_file.h"
 #include "auv/interfaces/msg_eigen.h"
 #include "auv/interfaces/msg_time.h"
 #include "auv/interfaces/option_parameters.h"
@@ -35,6 +36,10 @@ const config::OptionTable<MappingComponent::Options>& MappingComponent::Options:
       {"initial_map", &O::initial_map,
        "a .bt map to start from (map/save's format, same resolution), e.g. an earlier "
        "mission's at the site; empty: start empty"},
+      {"checkpoint_period", &O::checkpoint_period,
+       "how often the changing map is checkpointed to map_directory/checkpoint_<launch>.ot, "
+       "which a mapping restarted within the same launch starts from (0: never)",
+       "s", Range::closed(0.0, 3600.0)},
       {"align_initial_map", &O::align_initial_map,
        "hold initial_map aside until the vehicle's returns align with it (false: trust it as "
        "it is, in this run's frame)"},
@@ -54,7 +59,9 @@ void MappingComponent::configure(interfaces::Node& node) {
   options_.prior.check();
 
   builder_ = std::make_unique<MapBuilder>(options_.map);  // checks cross-field constraints
-  loadInitialMap();
+  // A restart resumes this launch's map; a prior map to align is aligned again (its cells
+  // may be in the checkpoint already: the second insertion only meets the clamping bounds).
+  if (!loadCheckpoint() || options_.align_initial_map) loadInitialMap();
   builder_->enableChangeTracking(true);
   poses_ = std::make_unique<PoseBuffer>(options_.poses);
 
@@ -118,6 +125,47 @@ void MappingComponent::loadInitialMap() {
            "holding " << options_.initial_map << " (" << aligner_->prior().getNumLeafNodes()
                       << " leaves) aside until the vehicle's returns align with it; the map "
                          "holds only new sonar evidence until then");
+}
+
+std::filesystem::path MappingComponent::checkpointPath() const {
+  const std::string launch = config::launchId();
+  if (launch.empty() || options_.checkpoint_period <= 0.0) return {};
+  return std::filesystem::path(options_.map_directory) / ("checkpoint_" + launch + ".ot");
+}
+
+bool MappingComponent::loadCheckpoint() {
+  const std::filesystem::path path = checkpointPath();
+  std::error_code error;
+  if (path.empty() || !std::filesystem::exists(path, error)) return false;
+  try {
+    builder_->load(path.string());
+  } catch (const std::runtime_error& failure) {
+    // A damaged checkpoint must not keep the vehicle without a map: start as a new launch.
+    AUV_ERROR(node_->logger(), "not resuming the map: " << failure.what());
+    return false;
+  }
+  AUV_WARN(node_->logger(), "restarted within the launch: resumed the map from "
+                                << path.string() << " (" << builder_->tree().getNumLeafNodes()
+                                << " leaves)");
+  return true;
+}
+
+void MappingComponent::checkpointIfDue(int64_t now_ns) {
+  const std::filesystem::path path = checkpointPath();
+  if (path.empty() || builder_->version() == checkpoint_version_) return;
+  if (1e-9 * static_cast<double>(now_ns - last_checkpoint_ns_) < options_.checkpoint_period) return;
+  last_checkpoint_ns_ = now_ns;
+  try {
+    config::writeFileAtomically(path, builder_->fullWithProbabilities());
+    checkpoint_version_ = builder_->version();
+    checkpoint_error_.clear();
+  } catch (const std::runtime_error& failure) {
+    if (checkpoint_error_ != failure.what()) {  // a full disk would log every period
+      checkpoint_error_ = failure.what();
+      AUV_ERROR(node_->logger(),
+                "map checkpoint not written (a restart would start empty): " << failure.what());
+    }
+  }
 }
 
 void MappingComponent::collectReturn(const Eigen::Vector3d& point) {
@@ -361,6 +409,7 @@ void MappingComponent::tick() {
   } else if (builder_->pendingChangeCount() > 0 && now_ns >= hold_increments_until_ns_) {
     publishIncrement();
   }
+  checkpointIfDue(now_ns);
   // In-process readers: a copy of the whole tree, so only if one asked (map_builder.h).
   builder_->refreshSnapshot();
 }

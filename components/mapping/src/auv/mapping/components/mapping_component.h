@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <deque>
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <string>
@@ -58,6 +59,9 @@ class MappingComponent : public interfaces::Component {
     int64_t beam_queue_length = 500;
     /// Body-frame clouds newer than the latest odometry wait for it; at most this many.
     int64_t cloud_queue_length = 50;
+    /// s (node clock), how often the map is checkpointed to map_directory while it changes,
+    /// for a mapping restarted within the same launch to start from (0: never).
+    double checkpoint_period = 30.0;
     /// The component's own fields (rates, names, queue) with meaning, unit and range; the
     /// map's and the pose buffer's are in their own tables.
     static const config::OptionTable<Options>& table();
@@ -110,6 +114,12 @@ class MappingComponent : public interfaces::Component {
   void tick();
   /// Loads initial_map: into the map, or aside for the alignment (align_initial_map).
   void loadInitialMap();
+  /// This launch's checkpoint (empty outside a launch: none is written or read).
+  std::filesystem::path checkpointPath() const;
+  /// Starts from this launch's checkpoint when there is one (a restart); true if it did.
+  bool loadCheckpoint();
+  /// Writes the checkpoint when due and the map changed; a failure is logged, never fatal.
+  void checkpointIfDue(int64_t now_ns);
   /// Feeds returns (world frame) to the alignment while it collects.
   void collectReturn(const Eigen::Vector3d& point);
   /// An alignment attempt: logs and records it; once ALIGNED, the prior enters the map.
@@ -140,6 +150,9 @@ class MappingComponent : public interfaces::Component {
   uint64_t sequence_number_ = 0;
   int64_t newest_stamp_ns_ = 0;           // newest measurement in the map
   int64_t last_full_ns_ = 0;              // node clock at the last FULL
+  int64_t last_checkpoint_ns_ = 0;        // node clock at the last checkpoint
+  uint64_t checkpoint_version_ = 0;       // builder version written in it
+  std::string checkpoint_error_;          // the last failure, logged once
   int64_t hold_increments_until_ns_ = 0;  // node clock; see Options::late_joiner_hold
   bool full_due_ = true;          // FULL on the next tick (start, clear, request, new reader)
   int64_t version_stamp_ns_ = 0;  // newest data in the version published last (its stamp)

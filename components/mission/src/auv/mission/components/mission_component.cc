@@ -1,7 +1,9 @@
 #include "auv/mission/components/mission_component.h"
 
 #include <cmath>
+#include <filesystem>
 
+#include "auv/config/state_file.h"
 #include "auv/interfaces/msg_time.h"
 #include "auv/interfaces/option_parameters.h"
 
@@ -37,7 +39,8 @@ const config::OptionTable<MissionComponent::Options>& MissionComponent::Options:
        "mission YAML loaded at configure (started on activate when autostart)"},
       {"autostart", &O::autostart, "start mission_file when the component activates"},
       {"log_dir", &O::log_dir,
-       "folder of the mission log read by `auv mission report` (empty: no log)"},
+       "folder of the mission log read by `auv mission report` and of progress.yaml, from "
+       "which a handler restarted within the same launch resumes the mission (empty: neither)"},
   };
   return kTable;
 }
@@ -57,6 +60,7 @@ void MissionComponent::configure(interfaces::Node& node) {
     throw std::invalid_argument("parameter autostart: true needs a mission_file");
   }
   map_ = std::make_unique<mapping::MapReplica>(o.map_id, o.map_resolution);
+  loadProgress();
 
   query_pub_ = node.createPublisher<msg::PlannerQuery>("mission/query", interfaces::commandQos());
   request_pub_ = node.createPublisher<msg::WaypointRequest>("planner/waypoint_request",
@@ -117,6 +121,64 @@ void MissionComponent::configure(interfaces::Node& node) {
       "mission/abort", [this](const msg::TriggerRequest& request, msg::TriggerReply& reply) {
         onAbort(request, reply);
       });
+}
+
+void MissionComponent::loadProgress() {
+  if (options_.log_dir.empty()) return;
+  const std::filesystem::path file = std::filesystem::path(options_.log_dir) / "progress.yaml";
+  try {
+    std::optional<MissionProgress> progress = readProgress(file);
+    if (!progress || !progress->running()) return;
+    if (progress->launch_id.empty() || progress->launch_id != config::launchId()) {
+      AUV_INFO(node_->logger(), file.string() << ": mission '" << progress->mission_id
+                                              << "' of another launch, not resumed");
+      return;
+    }
+    resumable_ = std::move(progress);
+    missions_started_ = 1;  // resumed, not started again by autostart
+    AUV_WARN(node_->logger(), "restarted during mission '" << resumable_->mission_id << "' (query "
+                                                           << resumable_->query_index + 1 << "/"
+                                                           << resumable_->plan.queries.size()
+                                                           << "): resuming it when the clock runs");
+  } catch (const std::exception& error) {
+    AUV_ERROR(node_->logger(), "not resuming: " << error.what());
+  }
+}
+
+void MissionComponent::resumeMission() {
+  const MissionProgress progress = std::move(*resumable_);
+  resumable_.reset();
+  feedOdometry();
+  std::string why;
+  if (!executive_->resume(progress, now(), &why)) {
+    AUV_ERROR(node_->logger(), "mission '" << progress.mission_id << "' not resumed: " << why);
+    return;
+  }
+  plan_name_ = progress.plan.name;
+  try {
+    log_ = std::make_unique<MissionLog>(options_.log_dir, progress.plan, /*resume=*/true);
+  } catch (const std::exception& error) {
+    AUV_ERROR(node_->logger(), "mission log disabled: " << error.what());
+  }
+  flush("resume");
+}
+
+void MissionComponent::saveProgress() {
+  if (options_.log_dir.empty()) return;
+  MissionProgress progress = executive_->progress();
+  if (progress.mission_id.empty()) return;  // no mission yet
+  progress.launch_id = config::launchId();
+  progress.plan.name = plan_name_;
+  try {
+    writeProgress(std::filesystem::path(options_.log_dir) / "progress.yaml", progress);
+    progress_error_.clear();
+  } catch (const std::exception& error) {
+    if (progress_error_ != error.what()) {  // a full disk would log every status change
+      progress_error_ = error.what();
+      AUV_ERROR(node_->logger(),
+                "mission progress not saved (a restart could not resume): " << error.what());
+    }
+  }
 }
 
 void MissionComponent::activate() {
@@ -183,6 +245,7 @@ std::string MissionComponent::startMission(const std::string& requested_id, cons
   if (!executive_->start(mission_id, plan.queries, now(), &why)) {
     throw interfaces::ServiceError(msg::REPLY_CODE_REJECTED, why);
   }
+  plan_name_ = plan.name;
   if (!options_.log_dir.empty()) {
     try {
       log_ = std::make_unique<MissionLog>(options_.log_dir, plan);
@@ -252,6 +315,7 @@ void MissionComponent::feedOdometry() {
 
 void MissionComponent::tick() {
   if (!node_->clock().valid()) return;  // simulation time has not started
+  if (resumable_) resumeMission();
   if (options_.autostart && configured_plan_ && missions_started_ == 0) {
     try {
       startMission("", *configured_plan_, options_.mission_file);
@@ -291,6 +355,7 @@ void MissionComponent::flush(const std::string& event, const std::string& detail
   for (const auto& event : out.events)
     AUV_WARN(node_->logger(), event.name << ": " << event.detail);
   if (!out.status_changed) return;
+  saveProgress();
   const msg::MissionStatus& status = executive_->status();
   if (status.state() != logged_state_) {
     AUV_INFO(node_->logger(), toString(status.state()) << ": " << status.message());

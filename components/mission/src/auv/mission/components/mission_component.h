@@ -50,6 +50,13 @@ class MissionComponent : public interfaces::Component {
   const msg::MissionStatus& status() const { return executive_->status(); }
 
  private:
+  /// A mission this launch's handler had running before it restarted (progress.yaml), kept
+  /// for the first tick; a progress file that cannot be read is named in the log and ignored.
+  void loadProgress();
+  /// Resumes the kept mission once the clock runs.
+  void resumeMission();
+  /// Persists the executive's progress (after every status change); failures are logged.
+  void saveProgress();
   /// Validates and starts a mission; throws interfaces::ServiceError with the reason.
   std::string startMission(const std::string& requested_id, const MissionPlan& plan,
                            const std::string& source);
@@ -74,6 +81,9 @@ class MissionComponent : public interfaces::Component {
   std::unique_ptr<mapping::MapReplica> map_;
   std::unique_ptr<MissionLog> log_;
   std::optional<MissionPlan> configured_plan_;
+  std::optional<MissionProgress> resumable_;  // loaded at configure, resumed on the first tick
+  std::string plan_name_;                     // of the running mission (its progress)
+  std::string progress_error_;                // the last failed write, logged once
   uint64_t missions_started_ = 0;
   msg::MissionState logged_state_ = msg::MISSION_STATE_IDLE;
 

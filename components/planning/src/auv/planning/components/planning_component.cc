@@ -52,6 +52,8 @@ msg::CancelReason toMsg(CancelReason reason) {
       return msg::CANCEL_REASON_NO_SOLUTION;
     case CancelReason::PLANNER_ERROR:
       return msg::CANCEL_REASON_PLANNER_ERROR;
+    case CancelReason::UNKNOWN_QUERY:
+      return msg::CANCEL_REASON_UNKNOWN_QUERY;
   }
   return msg::CANCEL_REASON_UNKNOWN;
 }
@@ -219,7 +221,7 @@ void PlanningComponent::applyInbox() {
     WaypointRequest converted;
     converted.query_id = request.query_id();
     converted.reached_waypoint_id = request.reached_waypoint_id();
-    session_->onWaypointRequest(converted);
+    session_->onWaypointRequest(converted, now());
   }
 }
 
