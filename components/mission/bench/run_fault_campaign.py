@@ -5,8 +5,10 @@ For each world, seed and fault it runs the world's inspection mission as the mis
 does (`auv launch bringup/launch/vehicle.yaml auto_mission:=true`, navigation drift on) and,
 once the mission has started, waits a seeded random time (--after, simulated seconds) and
 kills one vehicle process with SIGKILL (`kill:controller`, `kill:mapping`, `kill:planning`,
-`kill:mission`). The launch restarts it (restart: on-failure) and the component resumes its
-state (docs/reliability.md). Each row says what was expected (the mission completes) and what
+`kill:mission`): the launch restarts it (restart: on-failure) and the component resumes its
+state (docs/reliability.md); or has the simulator inject a sensor fault at that time
+(`sonar_silent` 10-60 s, `navigation_silent` 3-20 s, `dvl_lost` 10-60 s, `navigation_jump`
+3-8 m in a random direction). Each row says what was expected (the mission completes) and what
 happened: the mission's end state, contacts, minimum true clearance, restarts, the time to
 recover, and whether every file of the run is whole.
 
@@ -20,13 +22,14 @@ Resumable and mergeable like run_mission_campaign.py: one JSON line per finished
 
   components/mission/bench/run_fault_campaign.py [--worlds canyon,breakwater,dead_end_bay]
       [--seeds 5] [--first-seed 1] [--faults kill:controller,kill:mapping,kill:planning,
-      kill:mission] [--after 40,400] [--real-time-factor 4] [--domain 46] [--results FILE]
+      kill:mission,sonar_silent,navigation_silent,dvl_lost,navigation_jump] [--after 40,400] [--real-time-factor 4] [--domain 46] [--results FILE]
   components/mission/bench/run_fault_campaign.py --report ROWS.jsonl...
 """
 import argparse
 import csv
 import datetime
 import json
+import math
 import os
 import random
 import signal
@@ -40,7 +43,12 @@ from run_mission_campaign import (LAUNCH, ROOT, append_row, find_program,  # noq
                                   git_commit)
 
 RESULTS = os.path.join(ROOT, "bench_results", "fault_campaign.jsonl")
-FAULTS = ("kill:controller", "kill:mapping", "kill:planning", "kill:mission")
+KILLS = ("kill:controller", "kill:mapping", "kill:planning", "kill:mission")
+# Sensor faults the simulator injects (its `faults` parameter, vehicle.yaml's sim_faults):
+# how long (s, simulated) a window lasts, drawn uniformly; a jump's size in m.
+SENSOR_FAULTS = {"sonar_silent": (10.0, 60.0), "navigation_silent": (3.0, 20.0),
+                 "dvl_lost": (10.0, 60.0), "navigation_jump": (3.0, 8.0)}
+FAULTS = KILLS + tuple(SENSOR_FAULTS)
 # Files a run must leave whole: the mission log (CSV rows of the header's width), the progress
 # and summary (parseable), the final map.
 CSV_FILES = ("events.csv", "waypoints.csv", "paths.csv")
@@ -122,55 +130,76 @@ def _load_yaml(text):
     return yaml.safe_load(text)
 
 
+def sensor_fault(fault, at, rng):
+    """The simulator's fault entry for `fault` at `at` s (sensors/sensor_faults.h)."""
+    low, high = SENSOR_FAULTS[fault]
+    if fault == "navigation_jump":
+        size, heading = rng.uniform(low, high), rng.uniform(-math.pi, math.pi)
+        return f"navigation_jump@{at:.1f}:{size * math.cos(heading):.2f}," \
+               f"{size * math.sin(heading):.2f}"
+    return f"{fault}@{at:.1f}+{rng.uniform(low, high):.1f}"
+
+
+def kill_during(launch, component, after_sim, args, run_dir, log_path, result):
+    """Kills `component` `after_sim` simulated seconds after the mission started and measures
+    the time until the mission (the mapping, for its own kill) is back (into `result`)."""
+    started = time.monotonic()
+    progress = os.path.join(run_dir, "mission", "progress.yaml")
+    while not os.path.exists(progress) and launch.poll() is None and \
+            time.monotonic() - started < 600:
+        time.sleep(0.2)
+    mission_started = time.monotonic()
+    deadline = mission_started + after_sim / args.real_time_factor
+    while launch.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.1)
+    pid = component_pid(launch.pid, component) if launch.poll() is None else None
+    if not pid:
+        result["not_injected_because"] = "the mission ended first" \
+            if launch.poll() is not None else f"no {component} process found"
+        return
+    before = newest_query(run_dir)
+    os.kill(pid, signal.SIGKILL)
+    killed = time.monotonic()
+    result.update(injected=True, killed_pid=pid,
+                  killed_at_wall_s=round(killed - mission_started, 1))
+    while launch.poll() is None and time.monotonic() - killed < args.timeout:
+        time.sleep(0.2)
+        if component == "mapping":
+            with open(log_path, errors="replace") as text:
+                back = "resumed the map from" in text.read()
+        else:
+            back = newest_query(run_dir) > before
+        if back:
+            result["recovery_wall_s"] = round(time.monotonic() - killed, 2)
+            result["recovery_sim_s"] = round((time.monotonic() - killed) *
+                                             args.real_time_factor, 1)
+            return
+
+
 def run_fault(world, seed, fault, args, out_dir):
     """One mission with one fault; returns the row's measured part."""
-    component = fault.split(":", 1)[1]
+    kill = fault in KILLS
+    component = fault.split(":", 1)[1] if kill else None
     rng = random.Random(f"{world}-{seed}-{fault}")
     after_sim = rng.uniform(*args.after)
-    run_dir = os.path.join(out_dir, f"{world}-{seed}-{component}")
+    run_dir = os.path.join(out_dir, f"{world}-{seed}-{component or fault}")
     subprocess.run(["rm", "-rf", run_dir], check=True)
-    log_path = os.path.join(out_dir, f"{world}-{seed}-{component}.log")
+    log_path = os.path.join(out_dir, f"{world}-{seed}-{component or fault}.log")
     command = [find_program("auv"), "launch", LAUNCH, f"world:={world}", f"seed:={seed}",
                "auto_mission:=true", f"real_time_factor:={args.real_time_factor}",
                f"domain:={args.domain}", f"run_dir:={run_dir}"]
     result = {"after_sim_s": round(after_sim, 1), "injected": False}
+    if not kill:
+        # Simulated time since the start: the mission begins within seconds of it.
+        result["sim_faults"] = sensor_fault(fault, after_sim, rng)
+        command.append(f"sim_faults:={result['sim_faults']}")
     started = time.monotonic()
     with open(log_path, "w") as log:
         launch = subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT,
                                   start_new_session=True)
         try:
-            progress = os.path.join(run_dir, "mission", "progress.yaml")
-            while not os.path.exists(progress) and launch.poll() is None and \
-                    time.monotonic() - started < 600:
-                time.sleep(0.2)
-            mission_started = time.monotonic()
-            deadline = mission_started + after_sim / args.real_time_factor
-            while launch.poll() is None and time.monotonic() < deadline:
-                time.sleep(0.1)
-            pid = component_pid(launch.pid, component) if launch.poll() is None else None
-            if pid:
-                before = newest_query(run_dir)
-                os.kill(pid, signal.SIGKILL)
-                killed = time.monotonic()
-                result.update(injected=True, killed_pid=pid,
-                              killed_at_wall_s=round(killed - mission_started, 1))
-                recovered = None
-                while launch.poll() is None and recovered is None and \
-                        time.monotonic() - killed < args.timeout:
-                    time.sleep(0.2)
-                    if component == "mapping":
-                        with open(log_path, errors="replace") as text:
-                            if "resumed the map from" in text.read():
-                                recovered = time.monotonic()
-                    elif newest_query(run_dir) > before:
-                        recovered = time.monotonic()
-                if recovered is not None:
-                    result["recovery_wall_s"] = round(recovered - killed, 2)
-                    result["recovery_sim_s"] = round((recovered - killed) *
-                                                     args.real_time_factor, 1)
-            else:
-                result["not_injected_because"] = "the mission ended first" \
-                    if launch.poll() is not None else f"no {component} process found"
+            if kill:
+                kill_during(launch, component, after_sim, args, run_dir, log_path, result)
             launch.wait(timeout=max(1.0, args.timeout - (time.monotonic() - started)))
         except subprocess.TimeoutExpired:
             os.killpg(launch.pid, signal.SIGINT)
@@ -181,7 +210,7 @@ def run_fault(world, seed, fault, args, out_dir):
     with open(log_path, errors="replace") as text:
         lines = text.read().splitlines()
     result["restarts"] = sum(1 for line in lines if line.startswith("[launch]") and
-                             f" {component} " in f" {line} " and "restarting in" in line)
+                             "restarting in" in line)
     result["events"] = {name: sum(1 for line in lines if name in line)
                         for name in ("RESUMED", "PLANNER_REISSUE", "RECOVERY_START",
                                      "RECOVERY_REISSUE")}
@@ -191,6 +220,8 @@ def run_fault(world, seed, fault, args, out_dir):
         result.update({k: summary.get(k) for k in ("state", "message", "duration_s",
                                                     "collisions", "min_true_clearance_m",
                                                     "recoveries")})
+        if not kill:  # the fault came while the mission ran (it starts within seconds)
+            result["injected"] = (summary.get("duration_s") or 0) > after_sim
     else:
         result["state"] = "NO REPORT"
     result["damaged_files"] = files_whole(run_dir)
@@ -225,7 +256,7 @@ def main():
     parser.add_argument("--worlds", default="canyon,breakwater,dead_end_bay")
     parser.add_argument("--seeds", type=int, default=5)
     parser.add_argument("--first-seed", type=int, default=1)
-    parser.add_argument("--faults", default=",".join(FAULTS),
+    parser.add_argument("--faults", default=",".join(KILLS),
                         help=f"comma-separated, of: {', '.join(FAULTS)}")
     parser.add_argument("--after", default="40,400",
                         help="simulated seconds after the mission's start: the kill comes at a "

@@ -264,7 +264,7 @@ void PrintTo(const Vendors& v, std::ostream* out) {
 
 class StaleNavigationTest : public ::testing::TestWithParam<Vendors> {};
 
-TEST_P(StaleNavigationTest, AbortsTheMissionToADepthHold) {
+TEST_P(StaleNavigationTest, HoldsDepthAndWaitsForNavigation) {
   MissionHarness harness(GetParam().mission, GetParam().player, GetParam().domain);
   ASSERT_TRUE(harness.discovered());
 
@@ -294,7 +294,7 @@ TEST_P(StaleNavigationTest, AbortsTheMissionToADepthHold) {
   })) << "no early waypoint request";
   harness.publish_odometry = false;
 
-  ASSERT_TRUE(harness.reachesState("stale", msg::MISSION_STATE_ABORTED))
+  ASSERT_TRUE(harness.reachesState("stale", msg::MISSION_STATE_RECOVERING))
       << "still " << toString(harness.statusOf("stale").value_or(msg::MissionStatus()).state());
   EXPECT_CONTAINS(harness.statusOf("stale")->message(), "navigation stale");
   ASSERT_TRUE(harness.spinUntil([&] {
@@ -305,7 +305,7 @@ TEST_P(StaleNavigationTest, AbortsTheMissionToADepthHold) {
   EXPECT_EQ(hold.surge_speed(), 0.0);
   EXPECT_EQ(hold.depth(), 6.0);  // the last depth navigation gave
   EXPECT_GT(hold.command_id(), command.command_id());
-  EXPECT_EQ(harness.mission.status().state(), msg::MISSION_STATE_ABORTED);
+  EXPECT_EQ(harness.mission.status().state(), msg::MISSION_STATE_RECOVERING);
 }
 
 INSTANTIATE_TEST_SUITE_P(Vendors, StaleNavigationTest,
@@ -358,7 +358,7 @@ TEST(MissionComponentTest, NavigationArrivingWhileTheExecutorIsBusyIsNotStale) {
       << harness.mission.status().message();
 
   // Without navigation it still goes stale: the freshness is the arrival's, not the tick's.
-  ASSERT_TRUE(harness.reachesState("busy", msg::MISSION_STATE_ABORTED));
+  ASSERT_TRUE(harness.reachesState("busy", msg::MISSION_STATE_RECOVERING));
   EXPECT_CONTAINS(harness.statusOf("busy")->message(), "navigation stale");
   blocker->cancel();
 }

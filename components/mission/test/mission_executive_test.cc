@@ -431,31 +431,48 @@ TEST_F(MissionExecutiveTest, QueryReplacedByAnotherClientFailsTheMission) {
 
 // ---- aborts -------------------------------------------------------------------------------
 
-TEST_F(MissionExecutiveTest, StaleNavigationWhileExecutingAbortsToADepthHold) {
+// A navigation dropout holds depth (safe without a position) and is recovered once navigation
+// returns: the query again from where the vehicle is.
+TEST_F(MissionExecutiveTest, StaleNavigationWhileExecutingHoldsDepthAndRecovers) {
   startReady({query({10, 0, 5})});
   follow(waypoint({4, 0, 5}));
   moveTo({2, 0, 5.5});  // the last navigation
   executive.takeOutbox();
   // The controller still reports; navigation does not.
   t += 0.9;
-  controller();
+  controller(false, active_command);
   executive.tick(t);
   EXPECT_EQ(state(), msg::MISSION_STATE_EXECUTING);
   EXPECT_TRUE(executive.takeOutbox().commands.empty());
   t += 0.2;
-  controller();
+  controller(false, active_command);
   executive.tick(t);
-  const auto out = executive.takeOutbox();
-  EXPECT_EQ(state(), msg::MISSION_STATE_ABORTED);
+  auto out = executive.takeOutbox();
+  EXPECT_EQ(state(), msg::MISSION_STATE_RECOVERING);
   EXPECT_CONTAINS(message(), "navigation stale");
   EXPECT_CONTAINS(message(), "holding depth");
   expectDepthHold(out, 5.5);
+  ASSERT_EQ(out.events.size(), 1u);
+  EXPECT_EQ(out.events[0].name, "RECOVERY_START");
 
-  // Navigation coming back does not resume the mission.
-  moveTo({2, 0, 5.5});
-  executive.tick(t);
-  EXPECT_EQ(state(), msg::MISSION_STATE_ABORTED);
-  EXPECT_TRUE(executive.takeOutbox().commands.empty());
+  // Still no navigation: nothing is re-issued.
+  for (int i = 0; i < 10; ++i) {
+    t += 1.0;
+    controller(false, active_command);
+    executive.tick(t);
+  }
+  EXPECT_EQ(state(), msg::MISSION_STATE_RECOVERING);
+  EXPECT_TRUE(executive.takeOutbox().queries.empty());
+  // Navigation back: HOLD, then the query from here.
+  advance(1.0);
+  out = executive.takeOutbox();
+  ASSERT_EQ(out.commands.size(), 1u);
+  EXPECT_EQ(out.commands[0].mode(), msg::CONTROL_MODE_HOLD);
+  advance(5.5);
+  out = executive.takeOutbox();
+  ASSERT_EQ(out.queries.size(), 1u);
+  EXPECT_EQ(vector(out.queries[0].start().position()), Eigen::Vector3d(2, 0, 5.5));
+  EXPECT_EQ(state(), msg::MISSION_STATE_WAITING_FOR_WAYPOINT);
 }
 
 // A silent controller may be a restarting one: the mission waits for it as for a manoeuvre,
@@ -517,13 +534,24 @@ TEST_F(MissionExecutiveTest, ControllerSilentPastRecoveryTimeoutAborts) {
   EXPECT_CONTAINS(message(), "recovery_timeout");
 }
 
-TEST_F(MissionExecutiveTest, StaleNavigationWhileWaitingAbortsToo) {
+TEST_F(MissionExecutiveTest, StaleNavigationWhileWaitingHoldsDepthToo) {
   startReady({query({10, 0, 5})});
   t += 1.5;
   controller();
   executive.tick(t);
-  EXPECT_EQ(state(), msg::MISSION_STATE_ABORTED);
+  EXPECT_EQ(state(), msg::MISSION_STATE_RECOVERING);
   expectDepthHold(executive.takeOutbox(), kStart.z());
+}
+
+TEST_F(MissionExecutiveTest, NavigationThatNeverReturnsAbortsAfterRecoveryTimeout) {
+  startReady({query({10, 0, 5})});
+  for (int i = 0; i < 400 && executive.running(); ++i) {
+    t += 1.0;
+    controller();
+    executive.tick(t);
+  }
+  EXPECT_EQ(state(), msg::MISSION_STATE_ABORTED);
+  EXPECT_CONTAINS(message(), "recovery given up: stale navigation");
 }
 
 TEST_F(MissionExecutiveTest, UnansweredRequestIsRepeatedEveryRequestPeriod) {

@@ -43,10 +43,13 @@ const config::OptionTable<ExecutiveOptions>& ExecutiveOptions::table() {
   using O = ExecutiveOptions;
   static const config::OptionTable<O> kTable = {
       {"odometry_timeout", &O::odometry_timeout,
-       "nav/odometry older than this is stale: not ready, or abort to hold while running", "s",
-       Range::above(0)},
+       "nav/odometry older than this is stale: not ready; while running a depth hold and a "
+       "recovery",
+       "s", Range::above(0)},
       {"controller_timeout", &O::controller_timeout,
-       "control/status older than this counts as no controller (not ready)", "s", Range::above(0)},
+       "control/status older than this counts as no controller (not ready; while running a "
+       "recovery)",
+       "s", Range::above(0)},
       {"readiness_timeout", &O::readiness_timeout,
        "a started mission that is not ready within this long fails", "s", Range::above(0)},
       {"no_solution_timeout", &O::no_solution_timeout,
@@ -181,8 +184,13 @@ void MissionExecutive::tick(double now) {
     return;
   }
   if (now - odometry_time_ > options_.odometry_timeout) {
-    abortToHold("navigation stale: last nav/odometry " + formatSeconds(now - odometry_time_) +
-                " ago (odometry_timeout " + formatSeconds(options_.odometry_timeout) + ")");
+    // Stop where we are on depth and heading alone (safe without navigation), then wait for
+    // navigation to return as in any recovery: a dropout that clears does not end the mission.
+    hold(false);
+    const std::string cause = "navigation stale: last nav/odometry " +
+                              formatSeconds(now - odometry_time_) + " ago (odometry_timeout " +
+                              formatSeconds(options_.odometry_timeout) + "); holding depth";
+    beginRecovery(cause, cause, now);
     return;
   }
   if (now - controller_time_ > options_.controller_timeout) {

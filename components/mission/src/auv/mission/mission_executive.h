@@ -6,14 +6,15 @@
 //
 //   IDLE --start--> CHECKING_READINESS --ready--> WAITING_FOR_WAYPOINT <--cancel-- EXECUTING
 //                                                  --waypoint--> EXECUTING --goal--> next query
-//   any active state --stale navigation / no waypoint for too long / abort--> ABORTED (hold)
+//   any active state --no waypoint for too long / abort--> ABORTED (hold)
 //   WAITING_FOR_WAYPOINT / EXECUTING --controller safety manoeuvre--> RECOVERING: wait for the
 //     manoeuvre to end (the controller keeps the vehicle safe), HOLD recovery_hold s (the map
 //     takes in what caused it), re-issue the query from where the vehicle is (new query id)
 //     --> WAITING_FOR_WAYPOINT. At most max_recoveries per query; ABORTED when they are used up,
 //     when the manoeuvre (or stale navigation after it) lasts past recovery_timeout, or on abort.
 //     Manoeuvres for OPERATOR, LEAK and LOW_BATTERY abort at once (nothing to retry). A
-//     controller silent past controller_timeout (its process restarting) is recovered alike.
+//     controller silent past controller_timeout (its process restarting), and navigation
+//     stale past odometry_timeout (after a depth hold), are recovered alike.
 //   WAITING_FOR_WAYPOINT / EXECUTING --cancel UNKNOWN_QUERY (the planner restarted)--> hold,
 //     re-issue the query from where the vehicle is --> WAITING_FOR_WAYPOINT.
 

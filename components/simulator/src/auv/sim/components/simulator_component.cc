@@ -92,6 +92,9 @@ const config::OptionTable<SimulatorComponent::Options>& SimulatorComponent::Opti
        "", Range::closed(1, 100)},
       {"camera_live_cameras", &O::camera_live_cameras,
        "cameras with live frames; empty = all of the scenario's"},
+      {"faults", &O::faults,
+       "injected sensor faults (fault campaign): sonar_silent@T+D, navigation_silent@T+D, "
+       "dvl_lost@T+D, navigation_jump@T:DX,DY (T, D in simulated s); empty = none"},
   };
   return kTable;
 }
@@ -120,6 +123,14 @@ void SimulatorComponent::configure(interfaces::Node& node) {
   hull_.length = vehicle.length;
   hull_.radius = vehicle.radius;
   dynamics_ = std::make_unique<VehicleDynamics>(vehicle);
+  try {
+    faults_ = SensorFaults::parse(options_.faults);
+  } catch (const std::invalid_argument& error) {
+    throw ConfigError(std::string("simulator: parameter ") + error.what());
+  }
+  if (!faults_.empty()) {
+    AUV_WARN(node.logger(), "injecting " << faults_.faults().size() << " sensor fault(s)");
+  }
   const uint64_t seed = static_cast<uint64_t>(options_.seed);
   navigation_ = std::make_unique<NavigationSimulator>(
       NavigationOptions::fromYaml(scenario_.root.child("navigation")), seed * 2654435761u + 1);
@@ -329,9 +340,14 @@ void SimulatorComponent::step(double dt) {
     roughness_ += (rate - roughness_) * std::min(1.0, dt / 2.0);
   }
   last_altitude_ = altitude;
-  if (navigation_->update(state, t, altitude, roughness_)) {
-    const NavigationEstimate& estimate = navigation_->estimate();
-    odometry_pub_->publish(toOdometry(estimate));
+  // A lost DVL: no bottom in range for the navigation (it dead-reckons, reports no altitude).
+  const bool dvl_lost = faults_.active(SensorFaultKind::DVL_LOST, t);
+  if (navigation_->update(state, t, dvl_lost ? -1.0 : altitude, roughness_)) {
+    NavigationEstimate estimate = navigation_->estimate();
+    estimate.position.head<2>() += faults_.navigationOffset(t);  // a jump keeps its offset
+    if (!faults_.active(SensorFaultKind::NAVIGATION_SILENT, t)) {
+      odometry_pub_->publish(toOdometry(estimate));
+    }
     log_->navigation(t, estimate.pose());
   }
   if (t + 1e-9 >= next_odometry_) {
@@ -348,19 +364,25 @@ void SimulatorComponent::step(double dt) {
     log_->clearance(
         t, hullClearance(*world_, scenario_.seabed_depth, hull_, state.pose(), kClearanceCap));
   }
+  const bool sonar_silent = faults_.active(SensorFaultKind::SONAR_SILENT, t);
   while (sonar_->due(t)) {
-    sonar_pub_->publish(toSonarBeam(sonar_->ping(state.pose(), t, *world_)));
+    const auto beam = toSonarBeam(sonar_->ping(state.pose(), t, *world_));
+    if (!sonar_silent) sonar_pub_->publish(beam);
   }
-  pingRangeSensors(t, state);
+  pingRangeSensors(t, state, sonar_silent, dvl_lost);
 }
 
-void SimulatorComponent::pingRangeSensors(double t, const VehicleState& state) {
+void SimulatorComponent::pingRangeSensors(double t, const VehicleState& state, bool sonar_silent,
+                                          bool dvl_lost) {
   const double seabed = scenario_.seabed_depth;
+  // A silent sensor still pings on schedule (its noise stream stays as without the fault).
   if (multibeam_ && multibeam_->due(t)) {
-    scan_pub_->publish(toPointCloud(multibeam_->ping(state.pose(), t, *world_, seabed)));
+    const auto scan = toPointCloud(multibeam_->ping(state.pose(), t, *world_, seabed));
+    if (!sonar_silent) scan_pub_->publish(scan);
   }
   if (dvl_beams_ && dvl_beams_->due(t)) {
-    dvl_beams_pub_->publish(toPointCloud(dvl_beams_->ping(state.pose(), t, *world_, seabed)));
+    const auto beams = toPointCloud(dvl_beams_->ping(state.pose(), t, *world_, seabed));
+    if (!dvl_lost) dvl_beams_pub_->publish(beams);
   }
 }
 

@@ -22,6 +22,7 @@
 #include "auv/sim/sensors/multibeam.h"
 #include "auv/sim/sensors/navigation.h"
 #include "auv/sim/sensors/profiling_sonar.h"
+#include "auv/sim/sensors/sensor_faults.h"
 #include "auv/sim/vehicle/vehicle.h"
 #include "auv/sim/world/hull_contact.h"
 #include "auv/sim/world/scenario.h"
@@ -52,6 +53,8 @@ class SimulatorComponent : public interfaces::Component {
     double camera_live_scale = 0.25;
     int camera_live_jpeg_quality = 80;
     std::vector<std::string> camera_live_cameras;
+    /// Injected sensor faults (sensors/sensor_faults.h): sonar_silent@T+D, ... (empty: none).
+    std::vector<std::string> faults;
     /// The fields with meaning, unit and range: the component's parameters come from it.
     static const config::OptionTable<Options>& table();
   };
@@ -75,7 +78,7 @@ class SimulatorComponent : public interfaces::Component {
   void checkCollision(double t, VehicleState& state);
   void publishClock(double t);
   /// Pings the multibeam and the DVL beams when due.
-  void pingRangeSensors(double t, const VehicleState& state);
+  void pingRangeSensors(double t, const VehicleState& state, bool sonar_silent, bool dvl_lost);
 
   interfaces::Node* node_ = nullptr;
   Options options_;
@@ -84,6 +87,7 @@ class SimulatorComponent : public interfaces::Component {
   std::unique_ptr<RayCaster> world_;
   std::unique_ptr<VehicleDynamics> dynamics_;
   std::unique_ptr<NavigationSimulator> navigation_;
+  SensorFaults faults_;
   std::unique_ptr<ProfilingSonar> sonar_;
   std::unique_ptr<Multibeam> multibeam_;  ///< null: the scenario has none
   std::unique_ptr<DvlBeams> dvl_beams_;   ///< null: no dvl_beams section
