@@ -191,7 +191,8 @@ Player::Player(PlayerOptions options) : options_(std::move(options)) {
     if (overrides.count(topic)) output->qos = interfaces::qosProfileByName(overrides[topic]);
     outputs_[id] = std::move(output);
   }
-  for (const auto& [topic, profile] : overrides) {
+  for (const auto& override_entry : overrides) {
+    const std::string& topic = override_entry.first;  // a lambda may not capture a binding (C++17)
     if (!outputs_.empty() && std::none_of(outputs_.begin(), outputs_.end(),
                                           [&](const auto& o) { return o.second->topic == topic; }))
       throw std::invalid_argument("qos_overrides: no channel '" + topic + "' is played from " +
