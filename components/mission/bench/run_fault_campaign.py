@@ -13,9 +13,10 @@ happened: the mission's end state, contacts, minimum true clearance, restarts, t
 recover, and whether every file of the run is whole.
 
 Time to recover (wall seconds, and simulated seconds at the real-time factor): from the kill
-to the first waypoint of a query issued after it (each way back re-issues the query in
-progress: the mission progressing again); for `kill:mapping`, which does not stop the mission,
-to the restarted mapping's "resumed the map" line.
+to the first waypoint of a query issued after it (the planner's and the mission handler's way
+back re-issues the query in progress); for `kill:controller`, to the restarted controller's
+first waypoint command (one back before the mission noticed is commanded without a re-issue);
+for `kill:mapping`, which does not stop the mission, to its "resumed the map" line.
 
 Resumable and mergeable like run_mission_campaign.py: one JSON line per finished run in
 --results (default bench_results/fault_campaign.jsonl); runs already there are skipped.
@@ -140,6 +141,20 @@ def sensor_fault(fault, at, rng):
     return f"{fault}@{at:.1f}+{rng.uniform(low, high):.1f}"
 
 
+def restarted_marker(log, component, pid):
+    """Whether the launch log shows `component`, killed as `pid`, doing its job again: the
+    mapping resumed its checkpoint; the controller accepted a waypoint command (a controller
+    back before the mission noticed is commanded without any re-issue)."""
+    killed = log.find(f"{component} (pid {pid}) killed")
+    if killed < 0:
+        return False
+    after = log[killed:]
+    if component == "mapping":
+        return "resumed the map from" in after
+    return any(line.startswith("[controller]") and " WAYPOINT (" in line
+               for line in after.splitlines())
+
+
 def kill_during(launch, component, after_sim, args, run_dir, log_path, result):
     """Kills `component` `after_sim` simulated seconds after the mission started and measures
     the time until the mission (the mapping, for its own kill) is back (into `result`)."""
@@ -164,9 +179,9 @@ def kill_during(launch, component, after_sim, args, run_dir, log_path, result):
                   killed_at_wall_s=round(killed - mission_started, 1))
     while launch.poll() is None and time.monotonic() - killed < args.timeout:
         time.sleep(0.2)
-        if component == "mapping":
+        if component in ("mapping", "controller"):
             with open(log_path, errors="replace") as text:
-                back = "resumed the map from" in text.read()
+                back = restarted_marker(text.read(), component, pid)
         else:
             back = newest_query(run_dir) > before
         if back:
