@@ -95,12 +95,7 @@ MissionExecutive::MissionExecutive(const ExecutiveOptions& options) : options_(o
   status_.message("no mission");
 }
 
-bool MissionExecutive::running() const {
-  const auto state = status_.state();
-  return state == msg::MISSION_STATE_CHECKING_READINESS ||
-         state == msg::MISSION_STATE_WAITING_FOR_WAYPOINT ||
-         state == msg::MISSION_STATE_EXECUTING || state == msg::MISSION_STATE_RECOVERING;
-}
+bool MissionExecutive::running() const { return isRunning(status_.state()); }
 
 void MissionExecutive::setState(msg::MissionState state, const std::string& message) {
   status_.state(state);

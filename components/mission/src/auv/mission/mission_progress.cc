@@ -10,11 +10,13 @@
 
 namespace auv::mission {
 
-bool MissionProgress::running() const {
+bool isRunning(msg::MissionState state) {
   return state == msg::MISSION_STATE_CHECKING_READINESS ||
          state == msg::MISSION_STATE_WAITING_FOR_WAYPOINT ||
          state == msg::MISSION_STATE_EXECUTING || state == msg::MISSION_STATE_RECOVERING;
 }
+
+bool MissionProgress::running() const { return isRunning(state); }
 
 std::optional<msg::MissionState> missionStateFromString(const std::string& name) {
   for (msg::MissionState state :

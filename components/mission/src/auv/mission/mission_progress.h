@@ -48,6 +48,9 @@ std::optional<MissionProgress> readProgress(const std::filesystem::path& file);
 /// Replaces `file` atomically; throws std::runtime_error naming it.
 void writeProgress(const std::filesystem::path& file, const MissionProgress& progress);
 
+/// Whether a mission in `state` is still going on (what the handler resumes).
+bool isRunning(msg::MissionState state);
+
 /// MissionState from its name (toString's); nothing for an unknown name.
 std::optional<msg::MissionState> missionStateFromString(const std::string& name);
 

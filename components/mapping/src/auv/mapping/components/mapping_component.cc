@@ -127,16 +127,14 @@ void MappingComponent::loadInitialMap() {
                          "holds only new sonar evidence until then");
 }
 
-std::filesystem::path MappingComponent::checkpointPath() const {
-  const std::string launch = config::launchId();
-  if (launch.empty() || options_.checkpoint_period <= 0.0) return {};
-  return std::filesystem::path(options_.map_directory) / ("checkpoint_" + launch + ".ot");
-}
-
 bool MappingComponent::loadCheckpoint() {
-  const std::filesystem::path path = checkpointPath();
+  const std::string launch = config::launchId();
+  if (launch.empty() || options_.checkpoint_period <= 0.0) return false;
+  checkpoint_path_ =
+      std::filesystem::path(options_.map_directory) / ("checkpoint_" + launch + ".ot");
+  const std::filesystem::path& path = checkpoint_path_;
   std::error_code error;
-  if (path.empty() || !std::filesystem::exists(path, error)) return false;
+  if (!std::filesystem::exists(path, error)) return false;
   try {
     builder_->load(path.string());
   } catch (const std::runtime_error& failure) {
@@ -151,7 +149,7 @@ bool MappingComponent::loadCheckpoint() {
 }
 
 void MappingComponent::checkpointIfDue(int64_t now_ns) {
-  const std::filesystem::path path = checkpointPath();
+  const std::filesystem::path& path = checkpoint_path_;
   if (path.empty() || builder_->version() == checkpoint_version_) return;
   if (1e-9 * static_cast<double>(now_ns - last_checkpoint_ns_) < options_.checkpoint_period) return;
   last_checkpoint_ns_ = now_ns;

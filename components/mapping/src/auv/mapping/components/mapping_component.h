@@ -114,9 +114,8 @@ class MappingComponent : public interfaces::Component {
   void tick();
   /// Loads initial_map: into the map, or aside for the alignment (align_initial_map).
   void loadInitialMap();
-  /// This launch's checkpoint (empty outside a launch: none is written or read).
-  std::filesystem::path checkpointPath() const;
-  /// Starts from this launch's checkpoint when there is one (a restart); true if it did.
+  /// Names this launch's checkpoint (none outside a launch) and starts from it when it exists
+  /// (a restart); true if it did.
   bool loadCheckpoint();
   /// Writes the checkpoint when due and the map changed; a failure is logged, never fatal.
   void checkpointIfDue(int64_t now_ns);
@@ -148,12 +147,13 @@ class MappingComponent : public interfaces::Component {
   std::shared_ptr<interfaces::Service<msg::TriggerRequest, msg::TriggerReply>> full_srv_;
   std::shared_ptr<interfaces::Timer> timer_;
   uint64_t sequence_number_ = 0;
-  int64_t newest_stamp_ns_ = 0;           // newest measurement in the map
-  int64_t last_full_ns_ = 0;              // node clock at the last FULL
-  int64_t last_checkpoint_ns_ = 0;        // node clock at the last checkpoint
-  uint64_t checkpoint_version_ = 0;       // builder version written in it
-  std::string checkpoint_error_;          // the last failure, logged once
-  int64_t hold_increments_until_ns_ = 0;  // node clock; see Options::late_joiner_hold
+  int64_t newest_stamp_ns_ = 0;            // newest measurement in the map
+  int64_t last_full_ns_ = 0;               // node clock at the last FULL
+  std::filesystem::path checkpoint_path_;  // this launch's (empty outside a launch: none)
+  int64_t last_checkpoint_ns_ = 0;         // node clock at the last checkpoint
+  uint64_t checkpoint_version_ = 0;        // builder version written in it
+  std::string checkpoint_error_;           // the last failure, logged once
+  int64_t hold_increments_until_ns_ = 0;   // node clock; see Options::late_joiner_hold
   bool full_due_ = true;          // FULL on the next tick (start, clear, request, new reader)
   int64_t version_stamp_ns_ = 0;  // newest data in the version published last (its stamp)
   bool map_replaced_ = true;      // no version published yet of the map as it is (start, clear)
