@@ -51,6 +51,11 @@ class Feeder {
     timer_ = node.createTimer(0.01, [this] { tick(); });
   }
   void stop() { timer_->cancel(); }
+  /// From now on the navigation estimate is off by `offset` (a jump); the world stays.
+  void jumpNavigation(const Eigen::Vector3d& offset) {
+    offset_x_ = offset.x();
+    offset_y_ = offset.y();
+  }
 
  private:
   void tick() {
@@ -58,8 +63,8 @@ class Feeder {
     msg::Odometry odometry;
     setStamp(odometry.header(), now);
     odometry.header().frame_id("world");
-    odometry.pose().pose().position().x(kVehicle.x());
-    odometry.pose().pose().position().y(kVehicle.y());
+    odometry.pose().pose().position().x(kVehicle.x() + offset_x_);
+    odometry.pose().pose().position().y(kVehicle.y() + offset_y_);
     odometry.pose().pose().position().z(kVehicle.z());
     odometry.pose().pose().orientation().w(1.0);
     odometry_->publish(odometry);
@@ -86,6 +91,7 @@ class Feeder {
   std::shared_ptr<interfaces::Timer> timer_;
   int64_t last_odometry_ns_ = 0;
   int count_ = 0;
+  std::atomic<double> offset_x_{0.0}, offset_y_{0.0};
 };
 
 /// A map reader like the planner's: FULL replaces, INCREMENTAL applies on an unbroken chain.
@@ -566,6 +572,48 @@ TEST(MappingComponentTest, ARepeatMissionAlignsThePriorMapBeforePublishingIt) {
   ASSERT_NE(x_at, std::string::npos) << json;
   EXPECT_NEAR(std::stod(json.substr(x_at + 5)), result.x_m, 1e-6) << json;
   std::filesystem::remove_all(directory);
+}
+
+// A reset of the navigation estimate by 3 m: the wall seen before and after it must stay one
+// wall, at its place in the new frame, in the map and in a reader's replica (a FULL follows).
+TEST(MappingComponentTest, ANavigationJumpMovesTheMapWithTheEstimate) {
+  constexpr int kDomain = 34;  // free inside the interop range (test/README.md)
+  Node mapping_node("mapping", nodeOptions(Vendor::FASTDDS, kDomain, {"update_rate:=20.0"}));
+  Node feeder_node("feeder", nodeOptions(Vendor::CYCLONEDDS, kDomain));
+  Node reader_node("reader", nodeOptions(Vendor::CYCLONEDDS, kDomain));
+  MappingComponent mapping;
+  mapping.configure(mapping_node);
+  Feeder feeder(feeder_node);
+  MapReader reader;
+  auto subscription = reader.subscribe(reader_node);
+  interfaces::Executor executor;
+  executor.add(mapping_node);
+  executor.add(feeder_node);
+  executor.add(reader_node);
+  mapping.activate();
+  const auto occupied = [](const octomap::OcTree& tree, double x, double y) {
+    const octomap::OcTreeNode* cell = tree.search(x, y, 0.25);
+    return cell != nullptr && tree.isNodeOccupied(cell);
+  };
+  ASSERT_TRUE(executor.spinUntil([&] { return mapping.beamsInserted() >= 40; }, 20s));
+  ASSERT_TRUE(occupied(mapping.builder().tree(), 8.25, 0.25));
+
+  feeder.jumpNavigation({0.0, 3.0, 0.0});
+  const uint64_t beams_at_jump = mapping.beamsInserted();
+  ASSERT_TRUE(executor.spinUntil(
+      [&] {
+        return mapping.navigationJumps() == 1 && mapping.beamsInserted() >= beams_at_jump + 40 &&
+               reader.tree && occupied(*reader.tree, 8.25, 3.25);
+      },
+      20s));
+  feeder.stop();
+  const octomap::OcTree& map = mapping.builder().tree();
+  // The wall is where the new estimate sees it, and nowhere else: no ghost at its old place.
+  EXPECT_TRUE(occupied(map, 8.25, 3.25));
+  EXPECT_FALSE(occupied(map, 8.25, 0.25));
+  EXPECT_FALSE(occupied(*reader.tree, 8.25, 0.25));
+  EXPECT_EQ(mapping.navigationJumps(), 1u);
+  mapping.deactivate();
 }
 
 TEST(MappingComponentTest, InconsistentProbabilitiesAreRefused) {

@@ -56,7 +56,10 @@ void MappingComponent::configure(interfaces::Node& node) {
   interfaces::declareOptions(p, "", Options::table(), options_, /*read_only=*/true);
   interfaces::declareOptions(p, "prior_", PriorMapAlignment::Options::table(), options_.prior,
                              /*read_only=*/true);
+  interfaces::declareOptions(p, "navigation_", NavigationJumpDetector::Options::table(),
+                             options_.navigation, /*read_only=*/true);
   options_.prior.check();
+  jumps_ = std::make_unique<NavigationJumpDetector>(options_.navigation);
 
   builder_ = std::make_unique<MapBuilder>(options_.map);  // checks cross-field constraints
   // A restart resumes this launch's map; a prior map to align is aligned again (its cells
@@ -290,7 +293,11 @@ void MappingComponent::cleanup() {
 }
 
 void MappingComponent::onOdometry(const msg::Odometry& odometry) {
-  poses_->add(toStampedPose(odometry));
+  const StampedPose pose = toStampedPose(odometry);
+  if (const auto jump = jumps_->add(pose.stamp_ns, pose.position)) {
+    followNavigationJump(*jump, pose.stamp_ns);
+  }
+  poses_->add(pose);
   // Beams that arrived before the odometry covering them.
   while (!waiting_beams_.empty() && tryInsertBeam(waiting_beams_.front())) {
     waiting_beams_.pop_front();
@@ -298,6 +305,31 @@ void MappingComponent::onOdometry(const msg::Odometry& odometry) {
   while (!waiting_clouds_.empty() && tryInsertCloud(waiting_clouds_.front())) {
     waiting_clouds_.pop_front();
   }
+}
+
+void MappingComponent::followNavigationJump(const Eigen::Vector3d& jump, int64_t stamp_ns) {
+  // The world did not move: the estimate did. What was seen before now lies `jump` away from
+  // where the same surfaces are seen from here on, so the map moves with the estimate. Poses
+  // before the jump must not be interpolated across it: measurements stamped before it that
+  // still wait for odometry are dropped (BEFORE_START).
+  const octomap::OcTree before(builder_->tree());
+  builder_->clear();
+  const InsertStats stats = builder_->insertPrior(
+      before, Eigen::Isometry3d(Eigen::Translation3d(jump)), options_.navigation.log_odds_scale);
+  poses_->clear();
+  ++navigation_jumps_;
+  full_due_ = true;  // an increment cannot express the move
+  map_replaced_ = true;
+  if (aligner_) {
+    // Returns collected for a prior map's alignment are in the frame before the jump.
+    aligner_ = std::make_unique<PriorMapAlignment>(
+        std::make_unique<octomap::OcTree>(aligner_->prior()), options_.prior);
+  }
+  AUV_WARN(node_->logger(), "navigation jumped by ("
+                                << jump.x() << ", " << jump.y() << ", " << jump.z() << ") m at "
+                                << 1e-9 * static_cast<double>(stamp_ns)
+                                << " s: the map moved with it (" << stats.occupied_cells
+                                << " occupied cells)");
 }
 
 void MappingComponent::onBeam(const msg::SonarBeam& message) {

@@ -12,6 +12,7 @@
 
 #include "auv/interfaces/component.h"
 #include "auv/mapping/map_builder.h"
+#include "auv/mapping/navigation_jump.h"
 #include "auv/mapping/pose_buffer.h"
 #include "auv/mapping/prior_map_alignment.h"
 
@@ -29,6 +30,9 @@ namespace auv::mapping {
 /// FULL is the version (sequence number and stamp) of the update before it, pending changes
 /// going out first as an increment, so readers that hold that version skip it (MapReplica);
 /// only a clear makes a FULL a new version.
+///
+/// A navigation jump (a reset of the estimate by more than the motion explains) moves the map
+/// with it, so the returns before and after it agree; a FULL follows (README "Navigation jumps").
 ///
 /// initial_map (align_initial_map): held aside until the vehicle's own returns align with it
 /// (PriorMapAlignment, README "Prior maps"); then moved into the map, at prior_log_odds_scale of
@@ -55,6 +59,8 @@ class MappingComponent : public interfaces::Component {
     bool align_initial_map = true;
     /// The alignment's settings, declared with the prefix "prior_".
     PriorMapAlignment::Options prior;
+    /// Navigation jumps (navigation_jump.h), declared with the prefix "navigation_".
+    NavigationJumpDetector::Options navigation;
     /// Beams newer than the latest odometry wait for it; at most this many.
     int64_t beam_queue_length = 500;
     /// Body-frame clouds newer than the latest odometry wait for it; at most this many.
@@ -79,6 +85,8 @@ class MappingComponent : public interfaces::Component {
   /// Clouds whose pose could not be looked up (not in world_frame, odometry not covering).
   uint64_t cloudsDropped() const { return clouds_dropped_; }
   uint64_t sequenceNumber() const { return sequence_number_; }
+  /// Navigation jumps the map was moved with.
+  uint64_t navigationJumps() const { return navigation_jumps_; }
   /// The prior map alignment's latest result; nullptr without one (no initial_map, or
   /// align_initial_map false).
   const AlignmentResult* priorAlignment() const {
@@ -112,6 +120,8 @@ class MappingComponent : public interfaces::Component {
   void insertWorldCloud(int64_t stamp_ns, const std::vector<Eigen::Vector3d>& points,
                         const Eigen::Vector3d& origin, double max_range);
   void tick();
+  /// Moves the map by `jump` (world frame) after the navigation jumped at `stamp_ns`.
+  void followNavigationJump(const Eigen::Vector3d& jump, int64_t stamp_ns);
   /// Loads initial_map: into the map, or aside for the alignment (align_initial_map).
   void loadInitialMap();
   /// Names this launch's checkpoint (none outside a launch) and starts from it when it exists
@@ -133,6 +143,7 @@ class MappingComponent : public interfaces::Component {
   Options options_;
   std::unique_ptr<MapBuilder> builder_;
   std::unique_ptr<PoseBuffer> poses_;
+  std::unique_ptr<NavigationJumpDetector> jumps_;
   std::unique_ptr<PriorMapAlignment> aligner_;  // while it may still align
   std::optional<AlignmentResult> prior_alignment_;
   std::deque<PendingBeam> waiting_beams_;
@@ -162,6 +173,7 @@ class MappingComponent : public interfaces::Component {
   uint64_t beams_dropped_ = 0;
   uint64_t clouds_inserted_ = 0;
   uint64_t clouds_dropped_ = 0;
+  uint64_t navigation_jumps_ = 0;
 };
 
 }  // namespace auv::mapping
