@@ -31,7 +31,7 @@ flags="-fsanitize=address,undefined -fno-sanitize=vptr -fsanitize=fuzzer-no-link
 cmake_args=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++
   "-DCMAKE_C_FLAGS=$flags" "-DCMAKE_CXX_FLAGS=$flags"
   "-DCMAKE_EXE_LINKER_FLAGS=-fsanitize=address,undefined"
-  "-DCMAKE_SHARED_LINKER_FLAGS=-fsanitize=address,undefined")
+  "-DCMAKE_SHARED_LINKER_FLAGS=-fsanitize=address,undefined" -DAUV_FUZZ=ON)
 if command -v ccache >/dev/null; then
   cmake_args+=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
 fi

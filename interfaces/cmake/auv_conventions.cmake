@@ -18,3 +18,44 @@ macro(auv_enable_gtest)
   include(GoogleTest)
   set(CMAKE_GTEST_DISCOVER_TESTS_DISCOVERY_MODE PRE_TEST)
 endmacro()
+
+# The replay main of every fuzz harness (auv_add_fuzzer), beside this file here and installed.
+set(AUV_FUZZ_REPLAY_MAIN ${CMAKE_CURRENT_LIST_DIR}/fuzz_replay_main.cc)
+
+# A fuzz harness (docs/reliability.md, "Fuzzing"): one LLVMFuzzerTestOneInput per parser
+# family, in the package's fuzz/<name>.cc. In every build with tests it is linked with a replay
+# main (fuzz_replay_main.cc) and ctest runs it over its seeds: the files named by SEEDS (globs,
+# relative to the package), the seeds it makes itself (auvFuzzSeeds()) and fuzz/regressions/<name>/
+# (inputs that once crashed it, kept as regression tests). With -DAUV_FUZZ=ON (clang,
+# scripts/fuzz.sh) it is also linked with libFuzzer; both binaries and the seeds are installed
+# into lib/auv_fuzz and share/auv_fuzz/<name>.
+#
+#   auv_add_fuzzer(yaml SOURCES fuzz/yaml.cc LIBRARIES auv_mission_core SEEDS "missions/*.yaml")
+function(auv_add_fuzzer name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;LIBRARIES;SEEDS" ${ARGN})
+  set(seeds)
+  foreach(pattern IN LISTS ARG_SEEDS)
+    file(GLOB_RECURSE matched CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/${pattern})
+    list(APPEND seeds ${matched})
+  endforeach()
+  set(regressions ${CMAKE_CURRENT_SOURCE_DIR}/fuzz/regressions/${name})
+  if(BUILD_TESTING)
+    add_executable(fuzz_${name}_replay ${ARG_SOURCES} ${AUV_FUZZ_REPLAY_MAIN})
+    target_link_libraries(fuzz_${name}_replay PRIVATE ${ARG_LIBRARIES})
+    add_test(NAME ${PROJECT_NAME}.fuzz_${name}
+             COMMAND fuzz_${name}_replay ${seeds} ${regressions})
+    set_tests_properties(${PROJECT_NAME}.fuzz_${name} PROPERTIES TIMEOUT 300 LABELS fuzz)
+  endif()
+  if(AUV_FUZZ)
+    add_executable(fuzz_${name} ${ARG_SOURCES})
+    target_link_libraries(fuzz_${name} PRIVATE ${ARG_LIBRARIES})
+    target_link_options(fuzz_${name} PRIVATE -fsanitize=fuzzer)
+    install(TARGETS fuzz_${name} fuzz_${name}_replay RUNTIME DESTINATION lib/auv_fuzz)
+    if(seeds)
+      install(FILES ${seeds} DESTINATION share/auv_fuzz/${name}/seeds)
+    endif()
+    if(EXISTS ${regressions})
+      install(DIRECTORY ${regressions}/ DESTINATION share/auv_fuzz/${name}/regressions)
+    endif()
+  endif()
+endfunction()
