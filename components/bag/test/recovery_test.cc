@@ -4,7 +4,12 @@
 // crash.
 #include <gtest/gtest.h>
 
+#include <sched.h>
+#include <sys/mount.h>
+
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <set>
 
 #include "auv/bag/bag_error.h"
@@ -237,6 +242,53 @@ TEST(Recovery, AWriterThatDiesLeavesItsCompleteChunks) {
   EXPECT_EQ(asWritten(reader.readMessages()), written);
   EXPECT_EQ(reader.channels().at(channel).metadata.at("qos"), "sensor_data");
   writer.close();
+}
+
+// A recording that fills its disk: the write that fails says so (BagError IO, the system's
+// reason), and the `.part` file keeps every chunk written before it, readable. The disk is a
+// 64 KiB tmpfs in a mount namespace of this process (needs CAP_SYS_ADMIN: root, as CI runs).
+TEST(Recovery, AFullDiskKeepsTheChunksWrittenBefore) {
+  TempDir dir("full");
+  if (::unshare(CLONE_NEWNS) != 0 ||
+      ::mount(nullptr, "/", nullptr, MS_REC | MS_PRIVATE, nullptr) != 0 ||
+      ::mount("tmpfs", dir.path().c_str(), "tmpfs", 0, "size=64k") != 0) {
+    GTEST_SKIP() << "a private tmpfs needs CAP_SYS_ADMIN (run as root): " << std::strerror(errno);
+  }
+  McapWriterOptions options;
+  options.chunk_size = 4096;
+  McapWriter writer(options);
+  writer.open(dir.path() / "live.mcap");
+  const uint16_t channel = writer.addChannel(0, "/sonar", "cdr", {{"qos", "sensor_data"}});
+  std::vector<Written> written;
+  std::size_t in_chunks = 0;
+  std::string failure;
+  for (uint32_t i = 0; i < 100000 && failure.empty(); ++i) {
+    written.push_back(Written{"/sonar", i, 5000 + i, 5000 + i, payload(300, i)});
+    const uint64_t chunks = writer.stats().chunks;
+    try {
+      writer.write(channel, i, 5000 + i, 5000 + i, written.back().data);
+    } catch (const BagError& error) {
+      EXPECT_EQ(error.kind(), BagError::Kind::IO);
+      failure = error.what();
+    }
+    if (failure.empty() && writer.stats().chunks > chunks) in_chunks = written.size();
+  }
+  ASSERT_FALSE(failure.empty()) << "64 KiB never filled";
+  EXPECT_NE(failure.find("No space left"), std::string::npos) << failure;
+  EXPECT_NE(failure.find("live.mcap.part"), std::string::npos) << failure;
+  ASSERT_GT(in_chunks, 0u);
+  McapReader reader;
+  reader.open(dir.path() / "live.mcap.part");
+  EXPECT_EQ(asWritten(reader.readMessages()),
+            std::vector<Written>(written.begin(), written.begin() + in_chunks));
+  // It ends with the last whole record, not with a torn part of the failed one.
+  EXPECT_EQ(damageText(reader).find("inside a"), std::string::npos) << damageText(reader);
+  // The writer closed the file when the write failed: it is never renamed to the final name.
+  EXPECT_FALSE(writer.isOpen());
+  EXPECT_NO_THROW(writer.close());
+  EXPECT_FALSE(fs::exists(dir.path() / "live.mcap"));
+  EXPECT_TRUE(fs::exists(dir.path() / "live.mcap.part"));
+  ::umount2(dir.path().c_str(), MNT_DETACH);
 }
 
 TEST(Recovery, NoDamageMakesItCrash) {

@@ -85,6 +85,7 @@ void McapWriter::open(const fs::path& path) {
                    "cannot create '" + part_path_.string() + "': " + std::strerror(error));
   }
   offset_ = 0;
+  whole_end_ = 0;
   data_crc_ = 0;
   schemas_.clear();
   channels_.clear();
@@ -114,7 +115,12 @@ void McapWriter::writeBytes(const uint8_t* data, size_t size, const uint32_t* cr
     if (n < 0 && errno == EINTR) continue;
     if (n <= 0) {
       const std::string why = n < 0 ? std::strerror(errno) : "nothing written";
-      closeFile();  // the `.part` file keeps every chunk written before this one
+      // The `.part` file keeps every record written before this one, and ends with the last
+      // of them, not with a torn part of this one (shrinking works on a full disk).
+      if (::ftruncate(fd_, static_cast<off_t>(whole_end_)) != 0) {
+        // Still readable: the reader stops at the torn record and reports it.
+      }
+      closeFile();
       throw BagError(BagError::Kind::IO, "cannot write '" + part_path_.string() + "': " + why);
     }
     data += n;
@@ -126,8 +132,9 @@ void McapWriter::writeBytes(const uint8_t* data, size_t size, const uint32_t* cr
   stats_.file_bytes = offset_;
 }
 
-void McapWriter::writeRecords(const RecordBuffer& records) {
+void McapWriter::writeRecords(const RecordBuffer& records, bool whole) {
   writeBytes(records.bytes().data(), records.size());
+  if (whole) whole_end_ = offset_;
 }
 
 uint16_t McapWriter::addSchema(const std::string& name, const std::string& encoding,
@@ -237,8 +244,9 @@ void McapWriter::writeChunk() {
   }
   index.message_index_length = indexes.size();
 
-  writeRecords(prefix);
+  writeRecords(prefix, /*whole=*/false);  // the Chunk record's start: whole with its payload
   writeBytes(payload.data(), payload.size(), stored ? &header.uncompressed_crc : nullptr);
+  whole_end_ = offset_;
   writeRecords(indexes);
   if (options_.fsync_chunks && ::fdatasync(fd_) != 0) {
     const std::string why = std::strerror(errno);

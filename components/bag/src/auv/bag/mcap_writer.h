@@ -90,7 +90,8 @@ class McapWriter {
   void requireOpen(const char* what) const;
   /// Writes `size` bytes; `crc`, when given, is theirs (the data CRC needs no pass over them).
   void writeBytes(const uint8_t* data, size_t size, const uint32_t* crc = nullptr);
-  void writeRecords(const RecordBuffer& records);
+  /// `whole`: the buffer ends with a whole record (a failed write later truncates to here).
+  void writeRecords(const RecordBuffer& records, bool whole = true);
   void writeChunk();
   void writeSummary();
   void closeFile() noexcept;
@@ -99,8 +100,9 @@ class McapWriter {
   std::filesystem::path path_;       // final
   std::filesystem::path part_path_;  // being written
   int fd_ = -1;
-  uint64_t offset_ = 0;    // bytes written so far
-  uint32_t data_crc_ = 0;  // of every byte up to the Data End record
+  uint64_t offset_ = 0;     // bytes written so far
+  uint64_t whole_end_ = 0;  // end of the last whole record written
+  uint32_t data_crc_ = 0;   // of every byte up to the Data End record
 
   std::vector<Schema> schemas_;    // by id - 1
   std::vector<Channel> channels_;  // by id - 1
