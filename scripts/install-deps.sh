@@ -37,6 +37,9 @@ PACKAGES=(
   # auv view: levels of detail that keep texture coordinates (meshoptimizer); headless Chromium
   # for the page's tests and benchmark (puppeteer-core drives it, js/README.md)
   libmeshoptimizer-dev chromium
+  # two-host tests: the link impairer (test/two_host/link_impair.cc) takes packets from an
+  # iptables NFQUEUE rule (libnetfilter_queue) to drop, delay and reorder them
+  iptables libnetfilter-queue-dev
 )
 
 echo "install-deps: apt-get update"

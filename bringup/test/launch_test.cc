@@ -278,6 +278,49 @@ processes:
   EXPECT_THAT(std::string(arg_default.what()), HasSubstr("takes no default"));
 }
 
+TEST(LaunchDescriptionTest, SubstitutionsInLongStringsAndSpacedDefaults) {
+  // The substitutions were found by std::regex, which recursed once per character: a 64 kB
+  // string (a long shell command) overflowed the stack.
+  const std::string words(65536, 'w');
+  const LaunchDescription launch = parseLaunchYaml(
+      "arguments: {x: \"1\"}\nprocesses:\n  - {name: a, command: [echo, \"" + words +
+          " $(arg x) $(env AUV_LAUNCH_TEST_NOPE  two  words  )" + words + "\"]}\n",
+      "long.yaml", "/");
+  EXPECT_EQ(launch.processes[0].command[1], words + " 1 two  words" + words);
+  const LaunchFileError malformed =
+      parseError("processes:\n  - {name: a, command: [echo, \"$(arg a " + words + "\"]}\n");
+  EXPECT_EQ(malformed.field(), "processes[0].command[1]");
+  EXPECT_THAT(std::string(malformed.what()), HasSubstr("malformed substitution"));
+  // Not substitutions, left for that error: no space before the name, a parenthesis in the
+  // default, an unknown kind; the next "$(" is still tried.
+  for (const std::string text : {"$(argx)", "$(env X a(b))", "$(var x)", "$($(arg"}) {
+    SCOPED_TRACE(text);
+    EXPECT_THAT(
+        std::string(
+            parseError("processes:\n  - {name: a, command: [echo, \"" + text + "\"]}\n").what()),
+        HasSubstr("malformed substitution"));
+  }
+  EXPECT_EQ(parseLaunchYaml("arguments: {x: \"1\"}\nprocesses:\n  - {name: a, command: [echo, "
+                            "\"$(arg\tx\t)$(env AUV_LAUNCH_TEST_NOPE d)\"]}\n",
+                            "tabs.yaml", "/")
+                .processes[0]
+                .command[1],
+            "1d");
+}
+
+TEST(LaunchDescriptionTest, AnAliasInsideWhatItRefersToIsMalformedYaml) {
+  // yaml-cpp makes such a node contain itself: the substitutions and the inline parameters'
+  // checks walked it until the stack overflowed.
+  for (const std::string yaml :
+       {"x: &a [*a]\nprocesses:\n  - {name: a, command: [ls]}\n",
+        "processes:\n  - {name: a, component: b, parameters: &p {x: *p}}\n"}) {
+    SCOPED_TRACE(yaml);
+    const LaunchFileError error = parseError(yaml);
+    EXPECT_THAT(std::string(error.what()), HasSubstr("malformed YAML: an alias inside"));
+    EXPECT_GT(error.line(), 0);
+  }
+}
+
 TEST(LaunchDescriptionTest, MinimalFileGetsDefaults) {
   const LaunchDescription launch =
       parseLaunchYaml("processes:\n  - {name: a, command: [true]}\n", "min.yaml", "/");

@@ -13,6 +13,7 @@
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <set>
 #include <sstream>
 #include <system_error>
 
@@ -109,9 +110,12 @@ std::string nodeKindText(const YAML::Node& node) {
   }
 }
 
+// Where each parameter of one file is set first, by rank and name (an index into the overrides).
+using FirstSet = std::map<std::pair<Rank, std::string>, size_t>;
+
 // Appends the leaves of map `node` as overrides, with nested keys joined by '.'.
 void flatten(const YAML::Node& node, const std::string& prefix, const std::string& source,
-             Rank rank, std::vector<Override>* out) {
+             Rank rank, std::vector<Override>* out, FirstSet* first) {
   for (const auto& entry : node) {
     const YAML::Node& key = entry.first;
     if (!key.IsScalar() || key.Scalar().empty()) {
@@ -121,14 +125,15 @@ void flatten(const YAML::Node& node, const std::string& prefix, const std::strin
     const std::string name = prefix.empty() ? key.Scalar() : prefix + "." + key.Scalar();
     const YAML::Node& value = entry.second;
     if (value.IsMap()) {
-      flatten(value, name, source, rank, out);
+      flatten(value, name, source, rank, out, first);
     } else {
-      for (const auto& previous : *out) {
-        if (previous.name == name && previous.rank == rank) {
-          throw ParameterError(source + markText(key.Mark()) + ": parameter '" + name +
-                               "' is set twice for the same node (first at line " +
-                               std::to_string(previous.mark.line + 1) + ")");
-        }
+      // A map, not a scan of the overrides so far: aliases can make a file of a few lines set
+      // tens of thousands of parameters.
+      const auto [previous, inserted] = first->emplace(std::make_pair(rank, name), out->size());
+      if (!inserted) {
+        throw ParameterError(source + markText(key.Mark()) + ": parameter '" + name +
+                             "' is set twice for the same node (first at line " +
+                             std::to_string((*out)[previous->second].mark.line + 1) + ")");
       }
       out->push_back(Override{name, value, source, rank, 0, key.Mark()});
     }
@@ -291,7 +296,7 @@ void Parameters::loadFile(const std::string& path) {
 void Parameters::loadYaml(const std::string& text, const std::string& source_name) {
   YAML::Node root;
   try {
-    root = YAML::Load(text);
+    root = config::loadYaml(text);
   } catch (const YAML::Exception& e) {
     throw ParameterError(source_name + markText(e.mark) + ": malformed YAML: " + e.msg);
   }
@@ -303,6 +308,7 @@ void Parameters::loadYaml(const std::string& text, const std::string& source_nam
   }
   const std::string own_name = stripLeadingSlash(impl_->node_name);
   std::vector<Override> incoming;
+  FirstSet first;
   for (const auto& section : root) {
     const YAML::Node& key = section.first;
     if (!key.IsScalar()) {
@@ -329,7 +335,7 @@ void Parameters::loadYaml(const std::string& text, const std::string& source_nam
         section_value.size() == 1 ? section_value["ros__parameters"] : YAML::Node();
     const bool ros_file = ros_parameters && ros_parameters.IsMap();
     const YAML::Node parameters = ros_file ? ros_parameters : section_value;
-    flatten(parameters, "", source_name, rank, &incoming);
+    flatten(parameters, "", source_name, rank, &incoming, &first);
   }
   std::lock_guard<std::mutex> lock(impl_->mutex);
   impl_->checkNotDeclared(incoming);
@@ -345,7 +351,7 @@ void Parameters::setOverride(const std::string& assignment, const std::string& s
   }
   YAML::Node value;
   try {
-    value = YAML::Load(assignment.substr(separator + 2));
+    value = config::loadYaml(assignment.substr(separator + 2));
   } catch (const YAML::Exception& e) {
     throw ParameterError(source_name + ": malformed value for parameter '" + name + "': " + e.msg);
   }
@@ -495,7 +501,7 @@ Parameters::SetResult Parameters::setFromYaml(const std::string& name,
   }
   YAML::Node node;
   try {
-    node = YAML::Load(yaml_value);
+    node = config::loadYaml(yaml_value);
   } catch (const YAML::Exception& e) {
     return {false, "parameter '" + name + "': malformed value '" + yaml_value + "': " + e.msg};
   }
@@ -515,13 +521,14 @@ void Parameters::onSet(Callback callback) {
 std::vector<std::string> Parameters::unusedOverrides() const {
   std::lock_guard<std::mutex> lock(impl_->mutex);
   std::vector<std::string> unused;
+  std::set<std::string> reported;  // not a scan of `unused`: there may be tens of thousands
   for (const auto& o : impl_->overrides) {
     if (o.rank == Rank::WILDCARD || impl_->declared.count(o.name) > 0) continue;
     std::string text = "'" + o.name + "' from " + o.source;
     if (const auto suggestion = closestName(o.name, impl_->order)) {
       text += " (did you mean '" + *suggestion + "'?)";
     }
-    if (std::find(unused.begin(), unused.end(), text) == unused.end()) unused.push_back(text);
+    if (reported.insert(text).second) unused.push_back(text);
   }
   return unused;
 }

@@ -208,6 +208,51 @@ TEST(YamlSectionTest, FileErrorsNameTheFileAndLine) {
   EXPECT_THROW(loadYamlFile(file.string()), ConfigError);  // missing: named, exit code 2
 }
 
+/// The message of the ConfigError loadYamlText throws for `text` ("" if none).
+std::string loadError(const std::string& text) {
+  try {
+    loadYamlText(text, "aliases.yaml");
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(LoadYamlTest, AliasesAreReadButNeverIntoACycleOrAnExplosion) {
+  // Aliases as YAML has them: shared scalars and collections.
+  const YAML::Node shared = loadYaml("a: &x [1, 2]\nb: *x\nc: &s text\nd: [*s, *x]\n");
+  EXPECT_EQ(shared["b"][1].as<int>(), 2);
+  EXPECT_EQ(shared["d"][0].as<std::string>(), "text");
+  EXPECT_EQ(shared["d"][1].size(), 2u);
+  // An alias inside the node it refers to: yaml-cpp makes a node that contains itself, and
+  // every walk of it (a message showing the value, a launch file's substitutions) overflowed
+  // the stack. Refused where the alias is, like a syntax error.
+  for (const std::string cycle : {"&a [*a]\n", "a: &a {b: *a}\n", "a: &a [1, {b: [*a]}]\n",
+                                  "&a {*a : 1}\n", "a: &a [&b [*a]]\n"}) {
+    SCOPED_TRACE(cycle);
+    EXPECT_THROW(loadYaml(cycle), YAML::ParserException);
+  }
+  const std::string cycle = loadError("x: 1\nname: &a [1, *a]\n");
+  EXPECT_NE(cycle.find("aliases.yaml:2:"), std::string::npos) << cycle;
+  EXPECT_NE(cycle.find("malformed YAML: an alias inside the node it refers to"), std::string::npos)
+      << cycle;
+  // Aliases of aliases: `lines` lines that stand for 10^lines nodes.
+  const auto laughs = [](int lines) {
+    std::string text = "l0: &l0 [x, x, x, x, x, x, x, x, x, x]\n";
+    for (int i = 1; i < lines; ++i) {
+      const std::string previous = "*l" + std::to_string(i - 1);
+      text += "l" + std::to_string(i) + ": &l" + std::to_string(i) + " [";
+      for (int j = 0; j < 10; ++j) text += (j ? ", " : "") + previous;
+      text += "]\n";
+    }
+    return text;
+  };
+  const std::string exploded = loadError(laughs(10));  // the end of any walk or message
+  EXPECT_NE(exploded.find("aliases.yaml:"), std::string::npos) << exploded;
+  EXPECT_NE(exploded.find("stand for more than 100000 nodes"), std::string::npos) << exploded;
+  EXPECT_EQ(loadYaml(laughs(4))["l3"][9][9][9][9].as<std::string>(), "x");  // 12330 nodes: fine
+}
+
 }  // namespace
 }  // namespace auv::config
 

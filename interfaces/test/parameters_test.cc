@@ -672,6 +672,33 @@ TEST(ParametersTest, ParameterSetTwiceInOneFileIsAnError) {
   EXPECT_EQ(p.declare<int>("a", 0), 1);
 }
 
+TEST(ParametersTest, AliasesSetParametersButNeverIntoACycle) {
+  Parameters p("planner");
+  // An alias inside the map it refers to made the file's flattening recurse until the stack
+  // overflowed; one inside a list, the message about a bad element.
+  EXPECT_TEXT(errorOf([&] { p.loadYaml("planner: &a {rate: 1, again: *a}\n", "f.yaml"); }),
+              StartsWith("f.yaml:1:"));
+  EXPECT_TEXT(errorOf([&] { p.loadYaml("planner:\n  ids: &a [1, *a]\n", "f.yaml"); }),
+              HasSubstr("f.yaml:2:"));
+  EXPECT_TEXT(errorOf([&] { p.loadYaml("planner:\n  ids: &a [1, *a]\n", "f.yaml"); }),
+              HasSubstr("malformed YAML: an alias inside the node it refers to"));
+  EXPECT_TEXT(errorOf([&] { p.setOverride("ids:=&a [1, *a]"); }), HasSubstr("an alias inside"));
+  // Aliases of a map with many parameters: each alias sets them all under its own name (and a
+  // repeated name is still found, quickly, among tens of thousands).
+  std::string many = "planner:\n  base: &base {";
+  for (int i = 0; i < 100; ++i)
+    many += (i ? ", k" : "k") + std::to_string(i) + ": " + std::to_string(i);
+  many += "}\n";
+  for (int i = 0; i < 400; ++i) many += "  copy" + std::to_string(i) + ": *base\n";
+  p.loadYaml(many, "many.yaml");
+  EXPECT_EQ(p.declare<int>("copy399.k99", 0), 99);
+  EXPECT_EQ(p.unusedOverrides().size(), 40099u);
+  // (first set where the aliased map writes it)
+  EXPECT_EQ(errorOf([&] { p.loadYaml(many + "  copy0: {k5: 1}\n", "many.yaml"); }),
+            "many.yaml:403:11: parameter 'copy0.k5' is set twice for the same node (first at "
+            "line 2)");
+}
+
 TEST(ParametersTest, MalformedOverridesThrow) {
   Parameters p("planner");
   EXPECT_EQ(errorOf([&] { p.setOverride("rate=5"); }),

@@ -63,6 +63,18 @@ void deleteNetns(const std::string& netns) {
   runCommand({"ip", "netns", "del", netns});
 }
 
+// Namespaces `<prefix><pid>...` of earlier runs killed before their cleanup (the pid is gone).
+void removeStaleNetns(const std::string& prefix) {
+  const CommandResult list = runCommand({"ip", "netns", "list"});
+  std::istringstream lines(list.out);
+  for (std::string line; std::getline(lines, line);) {
+    const std::string name = line.substr(0, line.find(' '));
+    if (name.rfind(prefix, 0) != 0) continue;
+    const pid_t owner = std::atoi(name.substr(prefix.size()).c_str());
+    if (owner > 0 && kill(owner, 0) != 0 && errno == ESRCH) deleteNetns(name);
+  }
+}
+
 }  // namespace
 
 CommandResult runCommand(const std::vector<std::string>& argv) {
@@ -98,15 +110,7 @@ CommandResult runCommand(const std::vector<std::string>& argv) {
 
 std::unique_ptr<TwoHosts> TwoHosts::create(const std::string& tag, std::string* error) {
   const std::string prefix = "auvtest-" + tag + "-";
-  // Namespaces of earlier runs killed before their cleanup (the pid is in the name).
-  const CommandResult list = runCommand({"ip", "netns", "list"});
-  std::istringstream lines(list.out);
-  for (std::string line; std::getline(lines, line);) {
-    const std::string name = line.substr(0, line.find(' '));
-    if (name.rfind(prefix, 0) != 0) continue;
-    const pid_t owner = std::atoi(name.substr(prefix.size()).c_str());
-    if (owner > 0 && kill(owner, 0) != 0 && errno == ESRCH) deleteNetns(name);
-  }
+  removeStaleNetns(prefix);  // of earlier runs killed before their cleanup
 
   std::unique_ptr<TwoHosts> hosts(new TwoHosts());
   const std::string pid = std::to_string(getpid());
@@ -155,6 +159,25 @@ bool TwoHosts::limitVehicleRate(const std::string& rate) const {
   // queue delays heartbeats by a few seconds at most, well inside the 10 s participant lease.
   return ok({"ip", "netns", "exec", vehicle_.netns, "tc", "qdisc", "replace", "dev", vehicle_.veth,
              "root", "tbf", "rate", rate, "burst", "16kb", "limit", "64kb"});
+}
+
+std::unique_ptr<OneHost> OneHost::create(const std::string& tag, std::string* error) {
+  const std::string prefix = "auvtest-" + tag + "-";
+  removeStaleNetns(prefix);
+  std::unique_ptr<OneHost> one(new OneHost());
+  one->host_ = {prefix + std::to_string(getpid()), "lo", "127.0.0.1"};
+  if (!ok({"ip", "netns", "add", one->host_.netns}, error)) return nullptr;
+  one->created_ = true;  // from here on the destructor cleans up
+  if (!ok({"ip", "-n", one->host_.netns, "link", "set", "lo", "up"}, error)) return nullptr;
+  return one;
+}
+
+OneHost::~OneHost() {
+  if (created_) deleteNetns(host_.netns);
+}
+
+CommandResult OneHost::run(const std::vector<std::string>& argv) const {
+  return runCommand(inNetns(host_.netns, {}, argv));
 }
 
 BackgroundProcess::BackgroundProcess(const TwoHosts::Host& host,

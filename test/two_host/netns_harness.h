@@ -67,6 +67,30 @@ class TwoHosts {
   bool created_ = false;
 };
 
+/// One namespace `auvtest-<tag>-<pid>` with only `lo` (up), for tests that need a network stack
+/// of their own (iptables rules, queues) on loopback. The destructor kills what still runs inside
+/// and deletes it.
+class OneHost {
+ public:
+  /// Creates the namespace; first removes namespaces `auvtest-<tag>-<pid>` left by processes that
+  /// no longer exist. Returns nullptr and sets `error` when the machine does not allow it.
+  static std::unique_ptr<OneHost> create(const std::string& tag, std::string* error);
+  ~OneHost();
+  OneHost(const OneHost&) = delete;
+  OneHost& operator=(const OneHost&) = delete;
+
+  /// netns as named above, veth "lo", address 127.0.0.1.
+  const TwoHosts::Host& host() const { return host_; }
+
+  /// `ip netns exec <netns> argv...`, waited for.
+  CommandResult run(const std::vector<std::string>& argv) const;
+
+ private:
+  OneHost() = default;
+  TwoHosts::Host host_;
+  bool created_ = false;
+};
+
 /// A program running in the background inside a namespace, its output appended to `log_path`.
 /// Stopped with SIGINT (then SIGKILL to its process group) when destroyed.
 class BackgroundProcess {

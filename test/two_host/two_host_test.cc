@@ -7,7 +7,9 @@
 // Scale (environment): AUV_TWO_HOST_RTF (simulator real-time factor, 4), AUV_TWO_HOST_RENDER_S
 // (simulated seconds of camera video, 20), AUV_TWO_HOST_EXTRA_MB (a long recording added so the
 // pull lasts long enough to be interrupted, 4), AUV_TWO_HOST_RATE (vehicle -> shore link rate,
-// tc syntax, 4mbit).
+// tc syntax, 4mbit), AUV_TWO_HOST_IMPAIR (auv_link_impair options, e.g. "--loss 0.05 --delay 40
+// --jitter 20 --seed 7": every UDP datagram on the veth pair, both ways, from the vehicle's
+// start to the end of the pull, goes through the impairer; empty: a clean link).
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <unistd.h>
@@ -15,6 +17,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <random>
 #include <regex>
 #include <sstream>
@@ -140,6 +143,26 @@ TEST_F(TwoHostTest, VehicleOnCycloneShoreOnFastDdsMissionAndPullAcrossACutLink) 
   const std::string recordings = run + "/vehicle/recordings";
   const std::string survey = work_ + "survey";
 
+  // 0. Optionally a lossy, delaying, reordering link (ctest's two_host_lossy_link).
+  std::unique_ptr<BackgroundProcess> impairer;
+  const std::string impair = setting("AUV_TWO_HOST_IMPAIR", "");
+  if (!impair.empty()) {
+    ASSERT_STRNE(LINK_IMPAIR_EXECUTABLE, "") << "AUV_TWO_HOST_IMPAIR needs auv_link_impair "
+                                                "(apt-get install libnetfilter-queue-dev)";
+    for (const char* chain : {"OUTPUT", "INPUT"}) {
+      const CommandResult rule = hosts_->run(
+          vehicle, {},
+          {"iptables", "-A", chain, std::string(chain) == "OUTPUT" ? "-o" : "-i", vehicle.veth,
+           "-p", "udp", "-j", "NFQUEUE", "--queue-num", "5", "--queue-bypass"});
+      ASSERT_EQ(rule.exit_code, 0) << rule.out;
+    }
+    std::vector<std::string> command = {LINK_IMPAIR_EXECUTABLE, "--queue", "5"};
+    std::istringstream words(impair);
+    for (std::string word; words >> word;) command.push_back(word);
+    impairer = std::make_unique<BackgroundProcess>(vehicle, std::map<std::string, std::string>{},
+                                                   command, work_ + "impair.log");
+  }
+
   // 1. The vehicle stack with its recorder, on Cyclone DDS bound to the veth interface.
   BackgroundProcess vehicle_launch(
       vehicle, vehicle_env,
@@ -243,6 +266,20 @@ TEST_F(TwoHostTest, VehicleOnCycloneShoreOnFastDdsMissionAndPullAcrossACutLink) 
     EXPECT_EQ(fileSha256(survey + "/recordings/" + file), expected) << file;
   }
   vehicle_launch.stop();
+  if (impairer) {
+    // The impairment happened: the tool's counters (printed when it stops) show drops.
+    ASSERT_TRUE(impairer->running()) << impairer->output();
+    impairer->stop();
+    const std::string counters = impairer->output();
+    std::cout << "link: " << counters << std::endl;
+    const std::smatch dropped = [&] {
+      std::smatch match;
+      std::regex_search(counters, match, std::regex("dropped ([0-9]+)"));
+      return match;
+    }();
+    ASSERT_FALSE(dropped.empty()) << counters;
+    EXPECT_GT(std::stoull(dropped[1]), 0u) << counters;
+  }
 }
 
 TEST_F(TwoHostTest, FastDdsDiscoveryServerAcrossVeth) {

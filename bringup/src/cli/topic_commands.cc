@@ -9,6 +9,7 @@
 #include <sstream>
 #include <thread>
 
+#include "auv/config/yaml_scalars.h"
 #include "auv/interfaces/backend.h"
 #include "auv/interfaces/executor.h"
 #include "auv/interfaces/graph.h"
@@ -378,7 +379,7 @@ int topicPub(const Args& args) {
   const std::string text = args.positional().size() > 3 ? args.positional()[3] : "{}";
   auto sample = type.create_sample();
   try {
-    type.from_yaml(YAML::Load(text), sample.get());
+    type.from_yaml(config::loadYaml(text), sample.get());
   } catch (const YAML::Exception& e) {
     throw CliError("malformed YAML message '" + text + "': " + e.msg);
   } catch (const std::invalid_argument& e) {

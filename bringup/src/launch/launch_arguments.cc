@@ -2,7 +2,6 @@
 
 #include <cstdlib>
 #include <optional>
-#include <regex>
 
 #include "auv/config/spelling.h"
 #include "launch_description.h"
@@ -33,23 +32,75 @@ std::string environmentValue(const std::string& name, const std::optional<std::s
                             "(export it, or give a default: $(env " + name + " <default>))");
 }
 
+/// One $(arg name) or $(env name [default]) in a string.
+struct Substitution {
+  std::string kind;  // "arg" or "env"
+  std::string name;
+  std::optional<std::string> fallback;  // the default: up to the ')', without trailing spaces
+  size_t end = 0;                       // just after the ')'
+};
+
+// ASCII only, whatever the locale.
+bool isSpace(char c) {
+  return c == ' ' || c == '\t' || c == '\n' || c == '\v' || c == '\f' || c == '\r';
+}
+bool isNameChar(char c, bool first) {
+  return c == '_' || (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') ||
+         (!first && c >= '0' && c <= '9');
+}
+
+/// The substitution `$((arg|env)\s+NAME(\s+DEFAULT)?\s*)` at `start` (where "$(" is), DEFAULT
+/// starting with neither a space nor a parenthesis and holding no parenthesis; nothing if the
+/// text there is not one. A scan, not std::regex: its matcher recurses once per character and
+/// overflows the stack on a long string (a 100 kB command line in a launch file).
+std::optional<Substitution> substitutionAt(const std::string& text, size_t start) {
+  const size_t n = text.size();
+  size_t i = start + 2;
+  Substitution s;
+  if (text.compare(i, 3, "arg") == 0 || text.compare(i, 3, "env") == 0) {
+    s.kind = text.substr(i, 3);
+  } else {
+    return std::nullopt;
+  }
+  i += 3;
+  if (i >= n || !isSpace(text[i])) return std::nullopt;
+  while (i < n && isSpace(text[i])) ++i;
+  if (i >= n || !isNameChar(text[i], true)) return std::nullopt;
+  const size_t name_start = i;
+  while (i < n && isNameChar(text[i], false)) ++i;
+  s.name = text.substr(name_start, i - name_start);
+  const size_t name_end = i;
+  while (i < n && isSpace(text[i])) ++i;
+  if (i >= n) return std::nullopt;
+  if (text[i] == ')') {
+    s.end = i + 1;
+    return s;
+  }
+  if (i == name_end || text[i] == '(') return std::nullopt;
+  const size_t close = text.find_first_of("()", i);
+  if (close == std::string::npos || text[close] == '(') return std::nullopt;
+  size_t fallback_end = close;
+  while (isSpace(text[fallback_end - 1])) --fallback_end;
+  s.fallback = text.substr(i, fallback_end - i);
+  s.end = close + 1;
+  return s;
+}
+
 /// `text` with every $(arg name) replaced by its value and every $(env name [default]) by the
 /// environment's; errors name `path`.
 std::string substituteText(const std::string& text,
                            const std::map<std::string, std::string>& values,
                            const std::vector<LaunchArgument>& declared, const std::string& source,
                            const std::string& path) {
-  static const std::regex pattern(
-      R"(\$\((arg|env)\s+([A-Za-z_][A-Za-z0-9_]*)(?:\s+([^()\s][^()]*?))?\s*\))");
   if (text.find("$(") == std::string::npos) return text;
   std::string out;
-  auto begin = std::sregex_iterator(text.begin(), text.end(), pattern);
   size_t last = 0;
-  for (auto it = begin; it != std::sregex_iterator(); ++it) {
-    const std::string kind = (*it)[1];
-    const std::string name = (*it)[2];
-    std::optional<std::string> fallback;
-    if ((*it)[3].matched) fallback = (*it)[3].str();
+  for (size_t at = text.find("$("); at != std::string::npos; at = text.find("$(", at + 1)) {
+    const std::optional<Substitution> match = substitutionAt(text, at);
+    if (!match) continue;  // left as it is: the check below names it
+    const std::string& kind = match->kind;
+    const std::string& name = match->name;
+    const std::optional<std::string>& fallback = match->fallback;
     std::string replacement;
     if (kind == "env") {
       replacement = environmentValue(name, fallback, source, path);
@@ -69,8 +120,9 @@ std::string substituteText(const std::string& text,
       }
       replacement = value->second;
     }
-    out += text.substr(last, it->position() - last) + replacement;
-    last = it->position() + it->length();
+    out += text.substr(last, at - last) + replacement;
+    last = match->end;
+    at = match->end - 1;
   }
   out += text.substr(last);
   if (out.find("$(") != std::string::npos) {

@@ -486,7 +486,7 @@ LaunchDescription parseLaunchYaml(const std::string& yaml, const std::string& so
   if (base.is_relative()) base = fs::absolute(base, error);
   YAML::Node root;
   try {
-    root = YAML::Load(yaml);
+    root = config::loadYaml(yaml);  // refuses aliases no walk ends on (yaml_scalars.h)
   } catch (const YAML::ParserException& e) {
     const bool known = !e.mark.is_null() && e.mark.line >= 0;
     throw LaunchFileError(source, "", "malformed YAML: " + e.msg, known ? e.mark.line + 1 : 0,

@@ -388,7 +388,7 @@ msg::OctomapUpdate fullMap(const octomap::OcTree& tree, uint64_t sequence) {
   return update;
 }
 
-TEST(MissionComponentTest, GoalInsideAKnownObstacleIsRefused) {
+TEST(MissionComponentTest, GoalInsideAKnownObstacleAndOverlongIdAreRefused) {
   MissionHarness harness(Vendor::FASTDDS, Vendor::CYCLONEDDS, 153);
   harness.publish_odometry = false;  // a start accepted before the map stays in readiness
   ASSERT_TRUE(harness.discovered());
@@ -418,6 +418,11 @@ TEST(MissionComponentTest, GoalInsideAKnownObstacleIsRefused) {
   // Refused means nothing started; a goal clear of the rock is accepted with the same map.
   EXPECT_NE(harness.mission.status().state(), msg::MISSION_STATE_CHECKING_READINESS);
   EXPECT_TRUE(harness.commands.empty());
+  // An id longer than a DDS key holds could not be published on mission/status.
+  const msg::StartMissionReply long_id =
+      harness.start(std::string(300, 'm'), {queryTo({14, 0, 5})});
+  EXPECT_EQ(long_id.status().code(), msg::REPLY_CODE_INVALID_ARGUMENT);
+  EXPECT_CONTAINS(long_id.status().error_text(), "mission_id: at most 255 bytes");
   const msg::StartMissionReply clear = harness.start("clear", {queryTo({14, 0, 5})});
   EXPECT_EQ(clear.status().code(), msg::REPLY_CODE_OK) << clear.status().error_text();
 }

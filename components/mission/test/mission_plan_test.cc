@@ -116,6 +116,23 @@ TEST(MissionPlanTest, RoundTripsThroughToYaml) {
   }
 }
 
+TEST(MissionPlanTest, RoundTripsEveryDigit) {
+  // toYaml wrote 10 significant digits: bounds 1e-11 m apart were written equal, a mission the
+  // handler accepted and then refused to resume from its progress.yaml.
+  const MissionPlan plan = parseMission(
+      "mission:\n  queries:\n    - {goal: [1.00000000001, 0.5, 0.5], bounds: {min: "
+      "[1.00000000001, 0, 0], max: [1.00000000002, 1, 1]}, goal_tolerance: 0.1234567890123, "
+      "depth: 0.30000000000000004, time_budget: 1e-7, min_altitude: -0.0}\n",
+      "thin.yaml");
+  const std::string yaml = toYaml(plan);
+  const MissionPlan again = parseMission(yaml, "round trip");
+  ASSERT_EQ(again.queries.size(), 1u);
+  expectSameQuery(again.queries[0], plan.queries[0]);
+  EXPECT_EQ(toYaml(again), yaml);
+  EXPECT_NE(yaml.find("max: [1.00000000002, 1, 1]"), std::string::npos) << yaml;
+  EXPECT_NE(yaml.find("time_budget: 1e-07\n"), std::string::npos) << yaml;  // shortest text
+}
+
 TEST(MissionPlanTest, NamesWithYamlSyntaxRoundTrip) {
   // Mission ids come from operators (StartMissionRequest.mission_id) and end up in the log's
   // mission.yaml: whatever they contain must read back as written.

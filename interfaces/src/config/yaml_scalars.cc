@@ -1,11 +1,19 @@
-// The YAML 1.2 core-schema scalar rule of every reader (see yaml_scalars.h).
+// The YAML 1.2 core-schema scalar rule of every reader, and the loading every reader shares
+// (see yaml_scalars.h).
 
 #include "auv/config/yaml_scalars.h"
 
 #include <cctype>
 #include <charconv>
 #include <limits>
+#include <sstream>
 #include <system_error>
+#include <unordered_map>
+#include <unordered_set>
+#include <vector>
+
+#include <yaml-cpp/anchor.h>
+#include <yaml-cpp/eventhandler.h>
 
 namespace auv::config {
 
@@ -119,6 +127,88 @@ std::string describeNode(const YAML::Node& node) {
 std::string markText(const YAML::Mark& mark) {
   if (mark.is_null() || mark.line < 0) return "";
   return ":" + std::to_string(mark.line + 1) + ":" + std::to_string(mark.column + 1);
+}
+
+namespace {
+
+/// Follows the parser's events of one document: which collections are open (an alias of one of
+/// them would make it contain itself) and how many nodes each anchor and the aliases stand for.
+class AliasCheck : public YAML::EventHandler {
+ public:
+  void OnDocumentStart(const YAML::Mark&) override {}
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark&, YAML::anchor_t anchor) override { leaf(anchor); }
+  void OnScalar(const YAML::Mark&, const std::string&, YAML::anchor_t anchor,
+                const std::string&) override {
+    leaf(anchor);
+  }
+  void OnAlias(const YAML::Mark& mark, YAML::anchor_t anchor) override {
+    if (open_anchors_.count(anchor) > 0) {
+      throw YAML::ParserException(
+          mark, "an alias inside the node it refers to (that node would contain itself)");
+    }
+    const std::size_t nodes = nodes_[anchor];
+    aliased_ += nodes;
+    if (aliased_ > kMaxAliasedNodes) {
+      throw YAML::ParserException(mark, "the aliases stand for more than " +
+                                            std::to_string(kMaxAliasedNodes) + " nodes in all");
+    }
+    add(nodes);
+  }
+  void OnSequenceStart(const YAML::Mark&, const std::string&, YAML::anchor_t anchor,
+                       YAML::EmitterStyle::value) override {
+    open(anchor);
+  }
+  void OnSequenceEnd() override { close(); }
+  void OnMapStart(const YAML::Mark&, const std::string&, YAML::anchor_t anchor,
+                  YAML::EmitterStyle::value) override {
+    open(anchor);
+  }
+  void OnMapEnd() override { close(); }
+
+ private:
+  struct Open {
+    YAML::anchor_t anchor;
+    std::size_t nodes;  // the collection and everything in it so far, aliases expanded
+  };
+
+  void leaf(YAML::anchor_t anchor) {
+    if (anchor != YAML::NullAnchor) nodes_[anchor] = 1;
+    add(1);
+  }
+  void add(std::size_t nodes) {
+    if (!open_.empty()) open_.back().nodes += nodes;
+  }
+  void open(YAML::anchor_t anchor) {
+    open_.push_back({anchor, 1});
+    if (anchor != YAML::NullAnchor) open_anchors_.insert(anchor);
+  }
+  void close() {
+    const Open done = open_.back();
+    open_.pop_back();
+    if (done.anchor != YAML::NullAnchor) {
+      open_anchors_.erase(done.anchor);
+      nodes_[done.anchor] = done.nodes;
+    }
+    add(done.nodes);
+  }
+
+  std::vector<Open> open_;
+  std::unordered_set<YAML::anchor_t> open_anchors_;
+  std::unordered_map<YAML::anchor_t, std::size_t> nodes_;  // of every closed anchor
+  std::size_t aliased_ = 0;
+};
+
+}  // namespace
+
+YAML::Node loadYaml(const std::string& text) {
+  {
+    std::istringstream stream(text);
+    YAML::Parser parser(stream);
+    AliasCheck check;
+    parser.HandleNextDocument(check);
+  }
+  return YAML::Load(text);
 }
 
 }  // namespace auv::config

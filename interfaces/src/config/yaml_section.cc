@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <limits>
 #include <sstream>
 
@@ -230,7 +231,7 @@ YamlSection rootSection(const YAML::Node& root, const std::string& source, bool 
 YamlSection loadYamlText(const std::string& text, const std::string& source, bool allow_empty) {
   YAML::Node root;
   try {
-    root = YAML::Load(text);
+    root = loadYaml(text);
   } catch (const YAML::Exception& e) {
     throw ConfigError(source + markText(e.mark) + ": malformed YAML: " + e.msg);
   }
@@ -238,11 +239,13 @@ YamlSection loadYamlText(const std::string& text, const std::string& source, boo
 }
 
 YamlSection loadYamlFile(const std::string& file, bool allow_empty) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw ConfigError(file + ": cannot open the file");
+  std::ostringstream text;
+  text << in.rdbuf();
   YAML::Node root;
   try {
-    root = YAML::LoadFile(file);
-  } catch (const YAML::BadFile&) {
-    throw ConfigError(file + ": cannot open the file");
+    root = loadYaml(text.str());
   } catch (const YAML::Exception& e) {
     throw ConfigError(file + markText(e.mark) + ": malformed YAML: " + e.msg);
   }

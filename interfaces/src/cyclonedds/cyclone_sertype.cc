@@ -94,19 +94,27 @@ void allocateZeroed(Serdata* d, size_t size) {
   d->size = static_cast<uint32_t>(size);
 }
 
-void computeKey(const ddsi_sertype* type, const void* sample, Serdata* d) {
+// False when the sample has no key to compute: fastddsgen's getKey throws for a key over its
+// bound (a @key string over 255 bytes, as malformed or foreign data may have), and nothing may
+// unwind into Cyclone's C code.
+bool computeKey(const ddsi_sertype* type, const void* sample, Serdata* d) {
   Sertype* st = mutableSertype(type);
   if (!st->support.keyed) {
     d->hash = type->serdata_basehash;
-    return;
+    return true;
   }
   std::lock_guard<std::mutex> lock(st->key_mutex);
   InstanceHandle_t handle;
-  st->topic_type->getKey(const_cast<void*>(sample), &handle, false);
-  std::memcpy(d->key.data(), handle.value, 16);
-  st->topic_type->getKey(const_cast<void*>(sample), &handle, true);
-  std::memcpy(d->key_md5.data(), handle.value, 16);
+  try {
+    st->topic_type->getKey(const_cast<void*>(sample), &handle, false);
+    std::memcpy(d->key.data(), handle.value, 16);
+    st->topic_type->getKey(const_cast<void*>(sample), &handle, true);
+    std::memcpy(d->key_md5.data(), handle.value, 16);
+  } catch (...) {
+    return false;
+  }
   d->hash = ddsrt_mh3(d->key.data(), d->key.size(), type->serdata_basehash);
+  return true;
 }
 
 // Received bytes: keep them; keyed types are deserialized once to find their key.
@@ -119,11 +127,11 @@ Serdata* finishFromSer(const ddsi_sertype* type, Serdata* d) {
       ok = sertypeOf(type)->topic_type->deserialize(&payload, sample.get());
     } catch (...) {
     }
-    if (!ok) {  // malformed: drop it rather than hand garbage to the application
+    // Malformed, or a key it cannot have: dropped rather than handed to the application.
+    if (!ok || !computeKey(type, sample.get(), d)) {
       delete d;
       return nullptr;
     }
-    computeKey(type, sample.get(), d);
   } else {
     d->hash = type->serdata_basehash;
   }
@@ -183,7 +191,11 @@ ddsi_serdata* fromSample(const ddsi_sertype* type, ddsi_serdata_kind kind, const
     return nullptr;
   }
   d->size = payload.length;  // normally exactly max_size; the rest stays zero
-  computeKey(type, sample, d);
+  // A key the type cannot compute: dds_write fails (the backend throws) instead.
+  if (!computeKey(type, sample, d)) {
+    delete d;
+    return nullptr;
+  }
   return d;
 }
 

@@ -1,6 +1,7 @@
 #include "fastdds_raw_type.h"
 
 #include <cstring>
+#include <exception>
 
 #include "serialized_sample.h"
 
@@ -53,7 +54,13 @@ bool RawPubSubType::getKey(void* data, InstanceHandle_t* handle, bool force_md5)
   std::lock_guard<std::mutex> lock(key_mutex_);
   const bool decoded = typed_->deserialize(&payload, scratch_.get());
   payload.data = nullptr;  // borrowed
-  return decoded && typed_->getKey(scratch_.get(), handle, force_md5);
+  // fastddsgen's getKey throws for a key over its bound (a @key string over 255 bytes), inside
+  // Fast DDS's reader or writer: such a sample has no key (a reader drops it).
+  try {
+    return decoded && typed_->getKey(scratch_.get(), handle, force_md5);
+  } catch (const std::exception&) {
+    return false;
+  }
 }
 
 }  // namespace auv::interfaces::detail

@@ -58,6 +58,16 @@ class GuardedPubSubType : public Inner {
       return false;
     }
   }
+  /// The generated key computation throws on a key field longer than the key allows (a string
+  /// over 255 bytes): such a sample is refused (Fast DDS drops it), not a crash of the reader.
+  bool getKey(void* data, eprosima::fastrtps::rtps::InstanceHandle_t* handle,
+              bool force_md5 = false) override {
+    try {
+      return Inner::getKey(data, handle, force_md5);
+    } catch (...) {
+      return false;
+    }
+  }
 };
 
 /// Builds the TypeSupport of a generated message type.

@@ -12,6 +12,7 @@
 // Only plain (unquoted, untagged) scalars are numbers or booleans: "5" and 'true' are strings.
 // Messages show the value as written: 'abc', "5" (a quoted string), null (empty value), a map.
 
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -37,5 +38,17 @@ std::string describeNode(const YAML::Node& node);
 
 /// ":line:column" (1-based) of a mark, "" for a null mark: "file.yaml:3:7: ..." in messages.
 std::string markText(const YAML::Mark& mark);
+
+/// Most nodes that the aliases of one document may stand for, in all (an alias counts the nodes
+/// of what it refers to).
+inline constexpr std::size_t kMaxAliasedNodes = 100000;
+
+/// YAML::Load of every reader: the first document of `text`, refusing two documents yaml-cpp
+/// composes but no reader can walk: an alias inside the node it refers to (`&a [*a]`, a node
+/// that contains itself: every walk of it is endless) and aliases standing for more than
+/// kMaxAliasedNodes nodes (aliases of aliases grow a few lines into billions of nodes). Both
+/// throw a YAML::ParserException at the alias, reported by the readers like a syntax error
+/// ("<file>:<line>:<column>: malformed YAML: ...").
+YAML::Node loadYaml(const std::string& text);
 
 }  // namespace auv::config

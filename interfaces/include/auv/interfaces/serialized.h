@@ -43,9 +43,9 @@ class SerializedWriter {
   virtual ~SerializedWriter() = default;
   /// Publishes `size` bytes (encapsulation header first) as one sample, unchanged. Throws
   /// std::invalid_argument when they do not start with an XCDR1 header (00 00 or 00 01) or,
-  /// for a keyed type, do not decode (its key could not be found), and std::runtime_error
-  /// when the middleware refuses the write. The body of an unkeyed type is not checked:
-  /// typed readers drop a sample they cannot decode.
+  /// for a keyed type, do not decode or hold a key longer than the type allows (its key could
+  /// not be found), and std::runtime_error when the middleware refuses the write. The body of
+  /// an unkeyed type is not checked: typed readers drop a sample they cannot decode.
   virtual void write(const uint8_t* cdr, size_t size) = 0;
   void write(const std::vector<uint8_t>& cdr) { write(cdr.data(), cdr.size()); }
   /// Number of currently matched readers (both vendors).

@@ -1,5 +1,6 @@
 #include "auv/mission/mission_plan.h"
 
+#include <charconv>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -127,11 +128,17 @@ std::string quoted(const std::string& text) {
   return out.c_str();
 }
 
+/// The shortest text that reads back as exactly `value` (10 significant digits did not: a
+/// mission whose bounds differ in the 12th digit was written as one with max == min, which the
+/// resumed handler refused in progress.yaml); -0 as 0, which it reads back as.
+std::string number(double value) {
+  char text[32];
+  const auto result = std::to_chars(text, text + sizeof(text), value == 0.0 ? 0.0 : value);
+  return std::string(text, result.ptr);
+}
+
 std::string vectorYaml(const Eigen::Vector3d& v) {
-  std::ostringstream out;
-  out.precision(10);
-  out << "[" << v.x() << ", " << v.y() << ", " << v.z() << "]";
-  return out.str();
+  return "[" + number(v.x()) + ", " + number(v.y()) + ", " + number(v.z()) + "]";
 }
 
 std::string metres(double value) {
@@ -231,23 +238,22 @@ MissionPlan loadMissionFile(const std::string& path) {
 
 std::string toYaml(const MissionPlan& plan) {
   std::ostringstream out;
-  out.precision(10);
   out << "mission:\n  name: " << quoted(plan.name) << "\n  queries:\n";
   for (const MissionQuery& q : plan.queries) {
     out << "    - name: " << quoted(q.name) << "\n"
         << "      goal: " << vectorYaml(q.goal) << "\n"
-        << "      goal_tolerance: " << q.goal_tolerance << "\n"
-        << "      time_budget: " << q.time_budget << "\n"
+        << "      goal_tolerance: " << number(q.goal_tolerance) << "\n"
+        << "      time_budget: " << number(q.time_budget) << "\n"
         << "      objective: " << (q.visibility_objective ? "visibility" : "path_length") << "\n"
-        << "      expected_distance: " << q.expected_distance << "\n"
-        << "      admissible_range: " << q.admissible_range << "\n"
+        << "      expected_distance: " << number(q.expected_distance) << "\n"
+        << "      admissible_range: " << number(q.admissible_range) << "\n"
         << "      bounds: {min: " << vectorYaml(q.bounds_min)
         << ", max: " << vectorYaml(q.bounds_max) << "}\n"
         << "      fixed_depth: " << (q.fixed_depth ? "true" : "false") << "\n";
-    if (q.depth) out << "      depth: " << *q.depth << "\n";
-    if (q.min_depth) out << "      min_depth: " << *q.min_depth << "\n";
-    if (q.max_depth) out << "      max_depth: " << *q.max_depth << "\n";
-    if (q.min_altitude != 0.0) out << "      min_altitude: " << q.min_altitude << "\n";
+    if (q.depth) out << "      depth: " << number(*q.depth) << "\n";
+    if (q.min_depth) out << "      min_depth: " << number(*q.min_depth) << "\n";
+    if (q.max_depth) out << "      max_depth: " << number(*q.max_depth) << "\n";
+    if (q.min_altitude != 0.0) out << "      min_altitude: " << number(q.min_altitude) << "\n";
   }
   return out.str();
 }

@@ -6,6 +6,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "auv/config/state_file.h"
+#include "auv/config/yaml_scalars.h"
 #include "auv/mission/mission_executive.h"
 
 namespace auv::mission {
@@ -56,7 +57,7 @@ std::string toYaml(const MissionProgress& p) {
 MissionProgress parseProgress(const std::string& yaml_text, const std::string& source) {
   YAML::Node root;
   try {
-    root = YAML::Load(yaml_text);
+    root = config::loadYaml(yaml_text);  // refuses alias cycles and alias bombs
   } catch (const YAML::Exception& error) {
     throw MissionError(source + ": not YAML: " + error.what());
   }

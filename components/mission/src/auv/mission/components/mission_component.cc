@@ -262,6 +262,14 @@ std::string MissionComponent::startMission(const std::string& requested_id, cons
 
 void MissionComponent::onStart(const msg::StartMissionRequest& request,
                                msg::StartMissionReply& reply) {
+  // mission/status is keyed by the id, and a DDS key string holds at most 255 bytes.
+  constexpr std::size_t kMaxIdBytes = 255;
+  if (request.mission_id().size() > kMaxIdBytes) {
+    throw interfaces::ServiceError(msg::REPLY_CODE_INVALID_ARGUMENT,
+                                   "mission_id: at most " + std::to_string(kMaxIdBytes) +
+                                       " bytes (it keys mission/status), got " +
+                                       std::to_string(request.mission_id().size()));
+  }
   MissionPlan plan;
   if (request.queries().empty()) {
     if (!configured_plan_) {
