@@ -313,6 +313,20 @@ TEST(FrameTimes, ReadsTheSidecarAndNamesTheBadLine) {
   const fs::path header = folder / "c.mp4.frames.csv";
   std::ofstream(header) << "t,x\n";
   EXPECT_THROW(readFrameTimes(header), StageError);
+  // Frame numbers outside size_t were cast to it (undefined; fuzz/regressions/frames/).
+  const fs::path order = folder / "d.mp4.frames.csv";
+  for (const char* frame : {"-1", "1e300", "-1e300"}) {
+    std::ofstream(order) << "frame,camera_time_s,sim_time_s\n0,1,\n" << frame << ",2,\n";
+    try {
+      readFrameTimes(order);
+      FAIL() << "frame " << frame << " was accepted";
+    } catch (const StageError& e) {
+      EXPECT_NE(std::string(e.what()).find("d.mp4.frames.csv:3: frame " + std::string(frame) +
+                                           " out of order (expected 1)"),
+                std::string::npos)
+          << e.what();
+    }
+  }
   fs::remove_all(folder);
 }
 

@@ -298,3 +298,65 @@ TEST(MeshStage, OptionsBindToFlagsAndTheConfigSection) {
   other.bind(set2);
   EXPECT_THROW(set2.parse({"--config", config.string()}), std::invalid_argument);
 }
+
+// Open3D's PLY and OBJ readers trust the file: these crashed them (a polygon's corner past the
+// vertices, a face without corners, a list of lists, a texture before the first newmtl of the
+// material library), exhausted the memory (a vertex count the file cannot hold) or never ended
+// (an element without properties). Each is now a StageError naming the file, and false from
+// readTriangleMesh / readPointCloud (inputs in fuzz/regressions/mesh/).
+TEST(MeshIo, FilesOpen3dCannotReadSafelyAreStageErrorsNamingTheFile) {
+  TempDir dir;
+  const std::string header =
+      "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+      "property float z\n";
+  const std::string vertices = "0 0 0\n1 0 0\n1 1 0\n0 1 0\n";
+  const std::string faces = "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {header + faces + vertices + "4 0 1 2 100000000\n", "refers to vertex 100000000 of 4"},
+      {header + faces + vertices + "3 0 1 7\n", "refers to vertex 7 of 4"},
+      {header + faces + vertices + "0\n", "face 0 has 0 corners"},
+      {header + "element face 1\nproperty list int list vertex_indices\nend_header\n" + vertices +
+           "3 0 1 2\n",
+       "list of lists"},
+      {"ply\nformat ascii 1.0\nelement vertex 99999999999\nproperty float x\nproperty float y\n"
+       "property float z\nend_header\n0 0 0\n",
+       "declares 99999999999 'vertex' elements"},
+      {header + "element junk 999999999999\nend_header\n" + vertices,
+       "element 'junk' has 999999999999 instances but no property"},
+  };
+  const fs::path ply = dir.path / "bad.ply";
+  for (const auto& [text, message] : cases) {
+    std::ofstream(ply, std::ios::trunc) << text;
+    try {
+      scene::readMesh(ply, "test");
+      ADD_FAILURE() << "read: " << text;
+    } catch (const StageError& e) {
+      EXPECT_NE(std::string(e.what()).find(ply.string() + ": cannot read the mesh: "),
+                std::string::npos)
+          << e.what();
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+    }
+    o3d::TriangleMesh mesh;
+    EXPECT_FALSE(scene::readTriangleMesh(ply, mesh));
+  }
+  std::ofstream(ply, std::ios::trunc) << cases[4].first;  // the cloud reader: the same count
+  EXPECT_THROW(scene::readCloud(ply, "test", "dense"), StageError);
+
+  const fs::path obj = dir.path / "bad.obj";
+  std::ofstream(obj) << "mtllib bad.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  std::ofstream(dir.path / "bad.mtl") << "# no newmtl\nmap_Kd bad.png\n";
+  try {
+    scene::readMesh(obj, "test");
+    ADD_FAILURE() << "read a material library without newmtl";
+  } catch (const StageError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.mtl: 'map_Kd' before the first newmtl"),
+              std::string::npos)
+        << e.what();
+  }
+  // A quad with its corners in range is still read, as two triangles; so is the OBJ once its
+  // material library starts with newmtl.
+  std::ofstream(ply, std::ios::trunc) << header + faces + vertices + "4 0 1 2 3\n";
+  EXPECT_EQ(scene::readMesh(ply, "test").triangles_.size(), 2u);
+  std::ofstream(dir.path / "bad.mtl", std::ios::trunc) << "newmtl a\nKd 1 1 1\n";
+  EXPECT_EQ(scene::readMesh(obj, "test").triangles_.size(), 1u);
+}

@@ -102,6 +102,61 @@ TEST_F(MeshTest, EmptyUnreadableAndUnsupportedFilesAreRejectedByName) {
             std::string::npos);
 }
 
+// Open3D's PLY reader trusts the file: these crashed it (a polygon's corner past the vertices,
+// a face without corners, a list of lists), exhausted the memory (a vertex count the file cannot
+// hold) or never ended (an element without properties). Each is now an error naming the file
+// (inputs in fuzz/regressions/mesh/), as are the OBJ files below.
+TEST_F(MeshTest, FilesOpen3dCannotReadSafelyAreRejectedByName) {
+  const std::string header =
+      "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+      "property float z\n";
+  const std::string vertices = "0 0 0\n1 0 0\n1 1 0\n0 1 0\n";
+  const std::string faces = "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {header + faces + vertices + "4 0 1 2 100000000\n", "refers to vertex 100000000 of 4"},
+      {header + faces + vertices + "4 0 1 2 -1\n", "refers to vertex -1 of 4"},
+      {header + faces + vertices + "0\n", "face 0 has 0 corners"},
+      {header + "element face 1\nproperty list list int vertex_indices\nend_header\n" + vertices +
+           "3 0 1 2\n",
+       "list of lists"},
+      {"ply\nformat ascii 1.0\nelement vertex 99999999999\nproperty float x\nproperty float y\n"
+       "property float z\nend_header\n0 0 0\n",
+       "declares 99999999999 'vertex' elements"},
+      {header + "element junk 999999999999\nend_header\n" + vertices,
+       "element 'junk' has 999999999999 instances but no property"},
+  };
+  for (const auto& [text, message] : cases) {
+    write("bad.ply", text);
+    const std::string error = errorOf([&] { loadMesh(path("bad.ply")); });
+    EXPECT_NE(error.find("bad.ply: cannot read the mesh: "), std::string::npos) << error;
+    EXPECT_NE(error.find(message), std::string::npos) << error;
+  }
+  // OBJ through ASSIMP: these crashed it or Open3D after it (a texture before the first newmtl
+  // of the material library, a face of one corner in a textured mesh, a corner of 4 indices).
+  write("bad.mtl", "# no newmtl yet\nmap_Kd bad.png\n");
+  const std::string obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n";
+  const std::vector<std::pair<std::string, std::string>> obj_cases = {
+      {"mtllib bad.mtl\n" + obj + "f 1/1 2/2 3/3\n", "bad.mtl: 'map_Kd' before the first newmtl"},
+      {obj + "f 1/\nf 1/1 2/2 3/3\n", "line 7: a face of 1 corners"},
+      {obj + "f 1 /2 /3\n", "line 7: a face of 1 corners"},
+      {obj + "f 1/1/1/1 2/2 3/3\n", "line 7: a face corner of more than 3 indices"},
+  };
+  for (const auto& [text, message] : obj_cases) {
+    write("bad.obj", text);
+    const std::string error = errorOf([&] { loadMesh(path("bad.obj")); });
+    EXPECT_NE(error.find("bad.obj: cannot read the mesh: "), std::string::npos) << error;
+    EXPECT_NE(error.find(message), std::string::npos) << error;
+  }
+  // A quad (the corners in range) is still read, as two triangles.
+  write("quad.ply",
+        "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+        "property float z\nproperty uchar red\nproperty uchar green\n"
+        "property uchar blue\n" +
+            faces + "0 0 0 9 9 9\n1 0 0 9 9 9\n1 1 0 9 9 9\n0 1 0 9 9 9\n4 0 1 2 3\n");
+  Mesh quad = loadMesh(path("quad.ply"));
+  EXPECT_EQ(validateMesh(quad).triangles, 2u);
+}
+
 TEST_F(MeshTest, ValidationDropsDegenerateTrianglesAndRejectsAllDegenerate) {
   Mesh m = test::wallAtX(1.0f, 1.0f);
   m.vertices.push_back({5, 5, 5});

@@ -86,6 +86,11 @@ TEST_F(ScenarioTest, ErrorsNameTheFileAndField) {
             std::string::npos);
   EXPECT_NE(errorOf("world: {mesh: missing.obj}\n").find("world.mesh: no such file"),
             std::string::npos);
+  // A name the file system refuses threw std::filesystem::filesystem_error.
+  EXPECT_NE(errorOf("world: {mesh: " + std::string(300, 'm') + ".obj}\n").find("world.mesh: "),
+            std::string::npos);
+  EXPECT_NE(errorOf("world: {mesh: block.ply/inside.obj}\n").find("world.mesh: no such file"),
+            std::string::npos);
   EXPECT_NE(errorOf("name: x\n").find("world.mesh: missing"), std::string::npos);
   EXPECT_NE(errorOf("world: {mesh: block.ply, up_axis: q}\n").find("world.up_axis"),
             std::string::npos);

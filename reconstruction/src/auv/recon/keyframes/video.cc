@@ -74,7 +74,7 @@ std::vector<FrameTime> readFrameTimes(const fs::path& sidecar) {
     if (!parseDouble(fields[0], frame) || frame != std::floor(frame)) {
       throw StageError(kStage, where + "frame '" + fields[0] + "' is not an integer");
     }
-    if (static_cast<size_t>(frame) != times.size()) {
+    if (frame != static_cast<double>(times.size())) {  // a negative or huge frame: no cast
       throw StageError(kStage, where + "frame " + fields[0] + " out of order (expected " +
                                    std::to_string(times.size()) + ")");
     }

@@ -25,7 +25,10 @@ bool readTriangleMesh(const std::filesystem::path& file, open3d::geometry::Trian
 open3d::geometry::PointCloud readCloud(const std::filesystem::path& file, const std::string& stage,
                                        const std::string& producer);
 /// A stage's input mesh: StageError(stage, ...) naming the file when it is missing (made by the
-/// `mesh` stage), unreadable or without triangles.
+/// `mesh` stage), unreadable or without triangles. A PLY or OBJ is checked before Open3D reads
+/// it (its readers trust the file): a face corner past the vertices, a count the file cannot
+/// hold, a material statement before the first newmtl and the like are such errors, as they
+/// are false for readTriangleMesh.
 open3d::geometry::TriangleMesh readMesh(const std::filesystem::path& file,
                                         const std::string& stage);
 

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <filesystem>
 #include <sstream>
+#include <system_error>
 
 namespace auv::sim {
 namespace {
@@ -107,7 +108,13 @@ Scenario loadScenario(const std::string& path) {
                                  ? fs::path(mesh)
                                  : fs::absolute(fs::path(path).parent_path() / mesh);
   s.mesh_path = mesh_path.lexically_normal().string();
-  if (!fs::is_regular_file(s.mesh_path)) world.fail("mesh", "no such file: " + s.mesh_path);
+  std::error_code error;  // a name the file system refuses (too long) is bad input too
+  if (!fs::is_regular_file(s.mesh_path, error)) {
+    const bool missing = !error || error == std::errc::no_such_file_or_directory ||
+                         error == std::errc::not_a_directory;
+    world.fail("mesh",
+               missing ? "no such file: " + s.mesh_path : s.mesh_path + ": " + error.message());
+  }
   world.read("up_axis", s.up_axis);
   if (s.up_axis != "z" && s.up_axis != "y")
     world.fail("up_axis", "expected z or y, got " + s.up_axis);
