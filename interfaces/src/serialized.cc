@@ -2,7 +2,6 @@
 // backends' raw readers and writers, header checks, type lookup.
 #include "auv/interfaces/serialized.h"
 
-#include <fastcdr/exceptions/Exception.h>
 #include <fastdds/dds/topic/TopicDataType.hpp>
 
 #include <chrono>
@@ -72,18 +71,15 @@ class SerializedWriterAdapter : public SerializedWriter {
  private:
   // A keyed sample's instance is its key, which both vendors find by decoding it: refuse what
   // does not decode here, alike for both (Fast DDS would write it under an undefined key), and
-  // what has a key the type cannot compute (fastddsgen's getKey throws for a @key string over
-  // its 255-byte bound: Fast DDS would let that out of write(), Cyclone's C code could not).
+  // what has a key the type cannot compute (a @key string over its 255-byte bound).
   void checkDecodes(const uint8_t* cdr, size_t size) {
     std::lock_guard<std::mutex> lock(mutex_);
     BorrowedPayload payload(cdr, size);
     if (!typed_->deserialize(&payload, scratch_.get()))
       throw std::invalid_argument("serialized " + type_name_ +
                                   ": bytes do not decode, so the sample's key is unknown");
-    try {
-      eprosima::fastrtps::rtps::InstanceHandle_t key;
-      typed_->getKey(scratch_.get(), &key, true);
-    } catch (const eprosima::fastcdr::exception::Exception&) {
+    eprosima::fastrtps::rtps::InstanceHandle_t key;
+    if (!typed_->getKey(scratch_.get(), &key, true)) {
       throw std::invalid_argument("serialized " + type_name_ +
                                   ": the sample's key is longer than the type allows (a key "
                                   "string over 255 bytes)");

@@ -94,9 +94,8 @@ void allocateZeroed(Serdata* d, size_t size) {
   d->size = static_cast<uint32_t>(size);
 }
 
-// False when the sample has no key to compute: fastddsgen's getKey throws for a key over its
-// bound (a @key string over 255 bytes, as malformed or foreign data may have), and nothing may
-// unwind into Cyclone's C code.
+// False when the sample has no key to compute (a @key string over its 255-byte bound, as
+// malformed or foreign data may have: GuardedPubSubType::getKey answers false).
 bool computeKey(const ddsi_sertype* type, const void* sample, Serdata* d) {
   Sertype* st = mutableSertype(type);
   if (!st->support.keyed) {
@@ -105,14 +104,10 @@ bool computeKey(const ddsi_sertype* type, const void* sample, Serdata* d) {
   }
   std::lock_guard<std::mutex> lock(st->key_mutex);
   InstanceHandle_t handle;
-  try {
-    st->topic_type->getKey(const_cast<void*>(sample), &handle, false);
-    std::memcpy(d->key.data(), handle.value, 16);
-    st->topic_type->getKey(const_cast<void*>(sample), &handle, true);
-    std::memcpy(d->key_md5.data(), handle.value, 16);
-  } catch (...) {
-    return false;
-  }
+  if (!st->topic_type->getKey(const_cast<void*>(sample), &handle, false)) return false;
+  std::memcpy(d->key.data(), handle.value, 16);
+  if (!st->topic_type->getKey(const_cast<void*>(sample), &handle, true)) return false;
+  std::memcpy(d->key_md5.data(), handle.value, 16);
   d->hash = ddsrt_mh3(d->key.data(), d->key.size(), type->serdata_basehash);
   return true;
 }

@@ -1,7 +1,6 @@
 #include "fastdds_raw_type.h"
 
 #include <cstring>
-#include <exception>
 
 #include "serialized_sample.h"
 
@@ -54,13 +53,8 @@ bool RawPubSubType::getKey(void* data, InstanceHandle_t* handle, bool force_md5)
   std::lock_guard<std::mutex> lock(key_mutex_);
   const bool decoded = typed_->deserialize(&payload, scratch_.get());
   payload.data = nullptr;  // borrowed
-  // fastddsgen's getKey throws for a key over its bound (a @key string over 255 bytes), inside
-  // Fast DDS's reader or writer: such a sample has no key (a reader drops it).
-  try {
-    return decoded && typed_->getKey(scratch_.get(), handle, force_md5);
-  } catch (const std::exception&) {
-    return false;
-  }
+  // A key over its bound (a @key string over 255 bytes): no key, and a reader drops the sample.
+  return decoded && typed_->getKey(scratch_.get(), handle, force_md5);
 }
 
 }  // namespace auv::interfaces::detail

@@ -59,7 +59,8 @@ class GuardedPubSubType : public Inner {
     }
   }
   /// The generated key computation throws on a key field longer than the key allows (a string
-  /// over 255 bytes): such a sample is refused (Fast DDS drops it), not a crash of the reader.
+  /// over 255 bytes): the answer is false instead, so such a sample is refused (Fast DDS drops
+  /// it; the Cyclone sertype and the serialized writer check the answer), not a crash.
   bool getKey(void* data, eprosima::fastrtps::rtps::InstanceHandle_t* handle,
               bool force_md5 = false) override {
     try {

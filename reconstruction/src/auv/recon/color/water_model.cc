@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <fstream>
 #include <iomanip>
 #include <map>
 #include <sstream>
@@ -13,7 +12,7 @@
 #include <yaml-cpp/yaml.h>
 #include <Eigen/Eigenvalues>
 
-#include "auv/config/yaml_scalars.h"
+#include "auv/config/yaml_section.h"
 #include "auv/recon/color/lalphabeta.h"
 #include "auv/recon/common/stage_error.h"
 #include "auv/recon/common/staged_output.h"
@@ -551,11 +550,7 @@ void writeWaterModel(const std::filesystem::path& file, const WaterModel& model,
 WaterModel readWaterModel(const std::filesystem::path& file) {
   YAML::Node root;
   try {
-    std::ifstream in(file);
-    if (!in) throw std::runtime_error("cannot open");
-    std::stringstream text;
-    text << in.rdbuf();
-    root = config::loadYaml(text.str());  // refuses alias cycles and alias bombs
+    root = config::loadYamlFile(file.string()).node();  // refuses alias cycles and bombs
   } catch (const std::exception& e) {
     throw std::runtime_error(file.string() + ": cannot read: " + e.what());
   }

@@ -10,7 +10,7 @@
 #include <open3d/geometry/TriangleMesh.h>
 #include <yaml-cpp/yaml.h>
 
-#include "auv/config/yaml_scalars.h"
+#include "auv/config/yaml_section.h"
 #include "auv/recon/common/stage_error.h"
 #include "auv/recon/scene/colmap_text.h"
 #include "auv/recon/scene/mesh_io.h"
@@ -112,11 +112,7 @@ GroundTruth GroundTruth::load(const fs::path& run) {
   // taken relative to the scenario file, as the simulator does).
   const fs::path scenario = run / "scenario.yaml";
   try {
-    std::ifstream scenario_file(scenario);
-    if (!scenario_file) throw std::runtime_error("cannot open");
-    std::stringstream scenario_text;
-    scenario_text << scenario_file.rdbuf();
-    const YAML::Node root = config::loadYaml(scenario_text.str());
+    const YAML::Node root = config::loadYamlFile(scenario.string()).node();
     const YAML::Node world = root["world"];
     if (!world || !world["mesh"]) throw std::runtime_error("world.mesh: missing");
     fs::path mesh = world["mesh"].as<std::string>();
