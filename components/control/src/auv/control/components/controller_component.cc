@@ -89,9 +89,20 @@ void ControllerComponent::configure(interfaces::Node& node) {
       fault_action == "stop" ? FaultAction::STOP : FaultAction::HOLD_DEPTH;
   controller_ = std::make_unique<LowLevelController>(options_.controller);  // check()s
   last_reported_ = controller_->status();
-  map_ = std::make_unique<mapping::MapReplica>(options_.map_id, options_.map_resolution);
+  map_ = std::make_unique<MapFollower>(
+      options_.map_id, options_.map_resolution,
+      [this](uint64_t sequence, const std::string& error) {
+        AUV_WARN(node_->logger(), "map update "
+                                      << sequence
+                                      << " not used for the water above the vehicle: " << error);
+      });
   controller_->setOverheadProbe([this](const Eigen::Vector3d& position) {
-    return overheadClearance(map_->tree(), position, options_.overhead_radius);
+    // While an update is being applied, the answer of the step before (50 ms and a few cm
+    // ago); NaN, which the controller counts as rock right above, before the first one.
+    map_->tryRead([&](const octomap::OcTree& tree) {
+      last_overhead_clearance_ = overheadClearance(tree, position, options_.overhead_radius);
+    });
+    return last_overhead_clearance_;
   });
 
   thrusters_pub_ = node.createPublisher<msg::ThrusterSetpoints>("control/thrusters",
@@ -108,16 +119,11 @@ void ControllerComponent::configure(interfaces::Node& node) {
       "nav/odometry", interfaces::sensorDataQos(),
       std::function<void(const msg::Odometry&)>([this](const msg::Odometry& m) { onOdometry(m); }),
       interfaces::SubscriptionOptions{interfaces::CallbackThread::MIDDLEWARE});
-  // Executor thread, as the control step that reads the replica.
+  // Taken on the executor (a copy), applied on the follower's thread: never in a control step.
   map_sub_ = node.createSubscription<msg::OctomapUpdate>(
       "map/update", interfaces::mapQos(),
-      std::function<void(const msg::OctomapUpdate&)>([this](const msg::OctomapUpdate& update) {
-        if (map_->apply(update) == mapping::MapReplica::Outcome::REJECTED) {
-          AUV_WARN(node_->logger(),
-                   "map update " << update.sequence_number()
-                                 << " not used for the water above the vehicle: " << map_->error());
-        }
-      }));
+      std::function<void(const msg::OctomapUpdate&)>(
+          [this](const msg::OctomapUpdate& update) { map_->push(update); }));
 }
 
 double ControllerComponent::overheadClearance(const octomap::OcTree& map,

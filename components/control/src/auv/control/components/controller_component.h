@@ -3,18 +3,20 @@
 // on DDS. Subscribes `control/waypoint` (ControllerCommand) and `nav/odometry` (Odometry);
 // publishes `control/thrusters` (ThrusterSetpoints) at control_rate and `control/status`
 // (ControllerStatus) at status_rate and on every change of state. Runs on the node clock, so
-// `use_sim_time` makes it follow the simulator. Keeps a replica of the map (`map/update`) to tell
-// the safety manoeuvres whether the water above the vehicle is open (overheadClearance).
+// `use_sim_time` makes it follow the simulator. Keeps a replica of the map (`map/update`), off
+// the control thread (MapFollower), to tell the safety manoeuvres whether the water above the
+// vehicle is open (overheadClearance).
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
 
+#include "auv/control/components/map_follower.h"
 #include "auv/control/controller.h"
 #include "auv/interfaces/component.h"
-#include "auv/mapping/map_replica.h"
 
 namespace auv::control {
 
@@ -81,7 +83,8 @@ class ControllerComponent : public interfaces::Component {
   std::shared_ptr<interfaces::Subscription<msg::ControllerCommand>> command_sub_;
   std::shared_ptr<interfaces::Subscription<msg::Odometry>> odometry_sub_;
   std::shared_ptr<interfaces::Subscription<msg::OctomapUpdate>> map_sub_;
-  std::unique_ptr<mapping::MapReplica> map_;  // executor thread only (as the control step)
+  std::unique_ptr<MapFollower> map_;
+  double last_overhead_clearance_ = std::numeric_limits<double>::quiet_NaN();  // probe's answer
   std::shared_ptr<interfaces::Publisher<msg::ThrusterSetpoints>> thrusters_pub_;
   std::shared_ptr<interfaces::Publisher<msg::ControllerStatus>> status_pub_;
   std::shared_ptr<interfaces::Timer> control_timer_;
