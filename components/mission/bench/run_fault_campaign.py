@@ -18,6 +18,10 @@ back re-issues the query in progress); for `kill:controller`, to the restarted c
 first waypoint command (one back before the mission noticed is commanded without a re-issue);
 for `kill:mapping`, which does not stop the mission, to its "resumed the map" line.
 
+Each row also says how starved the vehicle stack was: `cpu_wait_ratio`, the time its
+processes waited for a CPU while runnable per second they ran (CpuWait), with the load
+average at the start and `--note` (what else ran on the machine).
+
 Resumable and mergeable like run_mission_campaign.py: one JSON line per finished run in
 --results (default bench_results/fault_campaign.jsonl); runs already there are skipped.
 
@@ -36,6 +40,7 @@ import random
 import signal
 import subprocess
 import sys
+import threading
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -87,6 +92,42 @@ def component_pid(launch_pid, component):
         if b"run" in argv and wanted.encode() in argv:
             return pid
     return None
+
+
+class CpuWait:
+    """How long the launch's processes waited for a CPU while runnable, per second they ran
+    (/proc/<pid>/task/*/schedstat, sampled every 2 s; a process killed between samples loses its
+    last 2 s). The measure of a starved stack that a load average is not: work beside the
+    campaign at idle priority raises the load average but not this."""
+
+    def __init__(self, launch_pid):
+        self.launch_pid = launch_pid
+        self.last = {}  # (pid, tid) -> (run ns, wait ns)
+        self.done = threading.Event()
+        self.thread = threading.Thread(target=self._sample, daemon=True)
+        self.thread.start()
+
+    def _sample(self):
+        while not self.done.wait(2.0):
+            for pid in descendants(self.launch_pid):
+                try:
+                    tids = os.listdir(f"/proc/{pid}/task")
+                except OSError:
+                    continue
+                for tid in tids:
+                    try:
+                        with open(f"/proc/{pid}/task/{tid}/schedstat") as stat:
+                            run, wait = (int(v) for v in stat.read().split()[:2])
+                    except (OSError, ValueError):
+                        continue
+                    self.last[(pid, tid)] = (run, wait)
+
+    def ratio(self):
+        self.done.set()
+        self.thread.join()
+        run = sum(r for r, _ in self.last.values())
+        wait = sum(w for _, w in self.last.values())
+        return round(wait / run, 3) if run else None
 
 
 def newest_query(run_dir):
@@ -212,6 +253,7 @@ def run_fault(world, seed, fault, args, out_dir):
     with open(log_path, "w") as log:
         launch = subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT,
                                   start_new_session=True)
+        cpu_wait = CpuWait(launch.pid)
         try:
             if kill:
                 kill_during(launch, component, after_sim, args, run_dir, log_path, result)
@@ -220,6 +262,7 @@ def run_fault(world, seed, fault, args, out_dir):
             os.killpg(launch.pid, signal.SIGINT)
             launch.wait(timeout=30)
             result["timeout"] = True
+        result["cpu_wait_ratio"] = cpu_wait.ratio()
     result["exit"] = launch.returncode
     result["wall_s"] = round(time.monotonic() - started, 1)
     with open(log_path, errors="replace") as text:
@@ -280,6 +323,8 @@ def main():
     parser.add_argument("--domain", type=int, default=46)
     parser.add_argument("--timeout", type=float, default=3600.0, help="s of wall time per run")
     parser.add_argument("--results", default=RESULTS)
+    parser.add_argument("--note", default="",
+                        help="recorded in each row: what else ran on the machine, say")
     parser.add_argument("--report", nargs="+", metavar="ROWS",
                         help="only print the table of these rows files")
     args = parser.parse_args()
@@ -314,6 +359,8 @@ def main():
                        "expected": "mission completed", "commit": commit,
                        "started": datetime.datetime.now().isoformat(timespec="seconds"),
                        "load_average": round(os.getloadavg()[0], 2)}
+                if args.note:
+                    row["note"] = args.note
                 row.update(run_fault(world, seed, fault, args, out_dir))
                 append_row(args.results, row)
                 print(json.dumps(row), flush=True)
