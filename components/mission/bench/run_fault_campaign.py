@@ -306,6 +306,18 @@ def report(rows):
             f"{'; '.join(other) or '—'} | {sum(r.get('collisions') or 0 for r in mine)} | "
             f"{sum(len(r.get('damaged_files') or []) for r in mine)} | "
             f"{campaign_table.median_range(times, 1) if times else '—'} |")
+    kills = [r for r in rows if r.get("fault") in KILLS and r.get("injected")]
+    if kills:
+        done = sum(1 for r in kills if r.get("state") == "SUCCEEDED")
+        waits = [r["cpu_wait_ratio"] for r in rows if r.get("cpu_wait_ratio") is not None]
+        lines.append("")
+        lines.append(f"Process crashes: {done}/{len(kills)} missions completed "
+                     f"({100.0 * done / len(kills):.1f} %) on "
+                     f"{', '.join(sorted({r['world'] for r in kills}))}.")
+        if waits:
+            lines.append(f"CPU wait of the stack (s waiting per s running), median "
+                         f"[min–max] over {len(waits)} rows: "
+                         f"{campaign_table.median_range(waits, 3)}.")
     return "\n".join(lines)
 
 
