@@ -196,6 +196,20 @@ TEST_F(KeystoreTest, AddSignsANewIdentityWithTheSameCa) {
   EXPECT_EQ(runTool("list " + ks.string()).code, 0);
 }
 
+TEST_F(KeystoreTest, ASettingsFileWithAnAliasCycleIsRefusedAndKept) {
+  const fs::path ks = dir_ / "keys";
+  ASSERT_EQ(runTool("init " + ks.string()).code, 0);
+  // A node that contains itself: walking it never ends (yaml-cpp's own reader overflowed).
+  const std::string settings = "organization: &a [*a]\ndomain_id: 0\nnext_serial: 2\n";
+  std::ofstream(ks / "keystore.yaml") << settings;
+  const ToolRun add = runTool("add " + ks.string() + " camera_1");
+  EXPECT_EQ(add.code, 1) << add.output;
+  EXPECT_NE(add.output.find("keystore.yaml"), std::string::npos) << add.output;
+  EXPECT_NE(add.output.find("alias"), std::string::npos) << add.output;
+  EXPECT_FALSE(fs::exists(ks / "identities/camera_1"));
+  EXPECT_EQ(readFile(ks / "keystore.yaml"), settings);
+}
+
 TEST_F(KeystoreTest, CheckDiagnosesCrossVendorPairs) {
   const fs::path ks = dir_ / "keys";
   ASSERT_EQ(runTool("init " + ks.string()).code, 0);

@@ -9,8 +9,10 @@
 #include <ctime>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <stdexcept>
 
+#include "auv/config/yaml_scalars.h"
 #include "auv/interfaces/backend.h"
 #include "security/openssl_util.h"
 
@@ -25,6 +27,16 @@ constexpr const char* kCaKey = "private/ca.key.pem";
 constexpr const char* kGovernance = "governance.p7s";
 constexpr const char* kGovernanceXml = "governance.xml";
 constexpr const char* kSettings = "keystore.yaml";
+
+// keystore.yaml through config::loadYaml, as every reader of a file a user can edit: an alias
+// cycle or an alias bomb is a YAML::ParserException, not an endless walk.
+YAML::Node readSettings(const fs::path& file) {
+  std::ifstream in(file);
+  if (!in) throw YAML::BadFile(file.string());
+  std::ostringstream text;
+  text << in.rdbuf();
+  return config::loadYaml(text.str());
+}
 constexpr const char* kCaName = "auv-inspect CA";
 
 bool validIdentityName(const std::string& name) {
@@ -253,7 +265,7 @@ void addIdentity(const std::string& folder, const std::string& identity,
   settings.identities = {identity};
   long serial = 0;
   try {
-    const YAML::Node node = YAML::LoadFile((root / kSettings).string());
+    const YAML::Node node = readSettings(root / kSettings);
     settings.organization = node["organization"].as<std::string>();
     settings.domain_id = node["domain_id"].as<int>();
     serial = node["next_serial"].as<long>();
@@ -268,7 +280,7 @@ void addIdentity(const std::string& folder, const std::string& identity,
   X509Ptr ca = readCertificate((root / kCaCertificate).string());
   PkeyPtr ca_key = readPrivateKey((root / kCaKey).string());
   writeIdentity(root, identity, serial, ca.get(), ca_key.get(), settings);
-  YAML::Node node = YAML::LoadFile((root / kSettings).string());
+  YAML::Node node = readSettings(root / kSettings);
   node["next_serial"] = serial + 1;
   YAML::Emitter out;
   out << node;
@@ -306,7 +318,7 @@ std::string crossVendorProblem(const std::string& organization,
 std::string keystoreOrganization(const std::string& folder) {
   const fs::path settings = fs::absolute(folder).lexically_normal() / kSettings;
   try {
-    return YAML::LoadFile(settings.string())["organization"].as<std::string>();
+    return readSettings(settings)["organization"].as<std::string>();
   } catch (const YAML::Exception& e) {
     throw std::runtime_error(settings.string() + ": " + e.what());
   }
