@@ -16,6 +16,7 @@
 #include <octomap/OcTree.h>
 
 #include "auv/interfaces/executor.h"
+#include "full_map_update.h"
 
 namespace auv::control {
 namespace {
@@ -75,19 +76,7 @@ class Harness {
 
   /// Publishes `tree` as the mapping component's FULL map update `sequence` (OctoMap binary).
   void publishMap(const octomap::OcTree& tree, uint64_t sequence) {
-    std::ostringstream stream;
-    tree.writeBinaryConst(stream);
-    const std::string data = stream.str();
-    msg::OctomapUpdate update;
-    update.header().frame_id("world");
-    update.map_id("octomap");
-    update.sequence_number(sequence);
-    update.kind(msg::OCTOMAP_UPDATE_FULL);
-    update.encoding(msg::OCTOMAP_ENCODING_BINARY);
-    update.tree_type(tree.getTreeType());
-    update.resolution(tree.getResolution());
-    update.data(std::vector<uint8_t>(data.begin(), data.end()));
-    map_->publish(update);
+    map_->publish(test::fullMapUpdate(tree, sequence));
   }
 
   void send(uint64_t id, msg::ControlMode mode, const Eigen::Vector3d& target, double speed = 0.8,

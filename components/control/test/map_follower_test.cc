@@ -5,33 +5,21 @@
 
 #include <future>
 #include <mutex>
-#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include <octomap/OcTree.h>
 
+#include "full_map_update.h"
+
 namespace auv::control {
 namespace {
 
-msg::OctomapUpdate fullMap(const octomap::OcTree& tree, uint64_t sequence) {
-  std::ostringstream stream;
-  tree.writeBinaryConst(stream);
-  const std::string data = stream.str();
-  msg::OctomapUpdate update;
-  update.map_id("octomap");
-  update.sequence_number(sequence);
-  update.kind(msg::OCTOMAP_UPDATE_FULL);
-  update.encoding(msg::OCTOMAP_ENCODING_BINARY);
-  update.tree_type(tree.getTreeType());
-  update.resolution(tree.getResolution());
-  update.data(std::vector<uint8_t>(data.begin(), data.end()));
-  return update;
-}
+using test::fullMapUpdate;
 
 msg::OctomapUpdate unreadableMap(uint64_t sequence) {
-  msg::OctomapUpdate update = fullMap(octomap::OcTree(0.5), sequence);
+  msg::OctomapUpdate update = fullMapUpdate(octomap::OcTree(0.5), sequence);
   update.data({'n', 'o', 't', ' ', 'a', ' ', 'm', 'a', 'p'});
   return update;
 }
@@ -71,7 +59,7 @@ TEST(MapFollowerTest, UpdatesAreAppliedInOrderOffThePushingThread) {
     reports.add(sequence, error);
   });
   EXPECT_EQ(follower.sequence(), 0u);
-  follower.push(fullMap(rock(), 4));
+  follower.push(fullMapUpdate(rock(), 4));
   follower.push(unreadableMap(5));
   follower.waitIdle();
   // The unreadable one is reported and leaves the copy as the first made it.
@@ -102,7 +90,8 @@ TEST(MapFollowerTest, AnOverflowingQueueDropsTheOldestAndSaysSo) {
       /*max_queued=*/2);
   follower.push(unreadableMap(1));
   blocked.get_future().wait();
-  for (uint64_t sequence = 2; sequence <= 5; ++sequence) follower.push(fullMap(rock(), sequence));
+  for (uint64_t sequence = 2; sequence <= 5; ++sequence)
+    follower.push(fullMapUpdate(rock(), sequence));
   release.set_value();
   follower.waitIdle();
   // 2 and 3 were dropped; 4 and 5 applied.
@@ -119,10 +108,10 @@ TEST(MapFollowerTest, AnotherMapOrResolutionLeavesTheCopyAlone) {
   MapFollower follower("octomap", 0.5, [&](uint64_t sequence, const std::string& error) {
     reports.add(sequence, error);
   });
-  msg::OctomapUpdate other = fullMap(rock(), 1);
+  msg::OctomapUpdate other = fullMapUpdate(rock(), 1);
   other.map_id("another");
   follower.push(other);
-  follower.push(fullMap(octomap::OcTree(0.25), 2));
+  follower.push(fullMapUpdate(octomap::OcTree(0.25), 2));
   follower.waitIdle();
   EXPECT_EQ(follower.sequence(), 0u);
   ASSERT_EQ(reports.errors.size(), 1u);  // another map is not this reader's business
@@ -130,7 +119,7 @@ TEST(MapFollowerTest, AnotherMapOrResolutionLeavesTheCopyAlone) {
 }
 
 TEST(MapFollowerTest, DestroyedWithUpdatesStillQueued) {
-  const msg::OctomapUpdate update = fullMap(rock(), 1);
+  const msg::OctomapUpdate update = fullMapUpdate(rock(), 1);
   auto follower = std::make_unique<MapFollower>("octomap", 0.5, nullptr);
   for (int i = 0; i < 50; ++i) follower->push(update);
   follower.reset();  // returns: the thread stops without applying the rest
