@@ -5,7 +5,8 @@
 //   events.csv          t,event,query_index,query_id,waypoint_id,x,y,z,detail
 //   waypoints.csv       t,query_id,waypoint_id,x,y,z,is_final (every planner/waypoint received)
 //   paths.csv           t,query_id,path_seq,index,x,y,z   (every planner/path received)
-//   tree_<query>.csv    index,parent,x,y,z,cost           (the planner's last tree per query)
+//   tree_<query>.csv    index,parent,x,y,z,cost           (the planner's last tree per query,
+//                       written when a tree of another query arrives, and on finish())
 //   map.bt              the occupancy map when the mission ended (OctoMap binary)
 //   status.txt          the final MissionStatus, one "field: value" per line
 // Lines are flushed as written, so a crash loses at most the last one.
@@ -35,9 +36,9 @@ class MissionLog {
              const Eigen::Vector3d& position, const std::string& detail);
   void waypoint(double t, const msg::Waypoint& waypoint);
   void path(double t, const msg::Path& path);
-  /// Keeps the newest tree of its query; written on finish().
+  /// Keeps the newest tree of its query; writes (and forgets) those of other queries.
   void tree(const msg::PlannerTree& tree);
-  /// Writes the trees, the final status and the map (may be null).
+  /// Writes the tree held, the final status and the map (may be null).
   void finish(const msg::MissionStatus& status, const octomap::OcTree* map);
   const std::string& dir() const { return dir_; }
 
@@ -47,7 +48,9 @@ class MissionLog {
   std::ofstream waypoints_;
   std::ofstream paths_;
   uint64_t path_seq_ = 0;
-  std::map<uint64_t, msg::PlannerTree> trees_;
+  void writeTree(const msg::PlannerTree& tree) const;
+
+  std::map<uint64_t, msg::PlannerTree> trees_;  // of the newest query (a late one's too)
   bool finished_ = false;
 };
 
