@@ -56,7 +56,9 @@ set +u; source "install-$kind/setup.bash"; set -u
 # Reports from inside the uninstrumented vendor libraries are theirs; the suppression files
 # name those libraries only (docs/reliability.md, "Sanitizers").
 suppressions="$PWD/scripts/sanitizer-suppressions"
-export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1:suppressions=$suppressions/asan.txt"
+# new_delete_type_mismatch=0: Fast DDS 2.9.1 deletes a writer through the wrong type inside the
+# library (asan.txt), and ASan's suppressions cannot limit this check to one library.
+export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1:new_delete_type_mismatch=0:suppressions=$suppressions/asan.txt"
 export LSAN_OPTIONS="suppressions=$suppressions/lsan.txt:print_suppressions=0"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 export TSAN_OPTIONS="suppressions=$suppressions/tsan.txt:halt_on_error=1:second_deadlock_stack=1"

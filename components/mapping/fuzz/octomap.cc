@@ -1,6 +1,6 @@
 // Fuzz harness: OctoMap streams as the vehicle reads them from outside: `.ot` checkpoints and
 // the map/update data of other mappers (ot_stream::readTree, MapBuilder::applyDiff) and `.bt`
-// files given as initial_map (OcTree::readBinary, MapBuilder::load's path). A clear error is a
+// files given as initial_map and BINARY map/updates (ot_stream::readBinaryTree). A clear error is a
 // std::runtime_error; anything else (a crash, a sanitizer report, another exception) is a bug.
 #include <cstdint>
 #include <sstream>
@@ -25,9 +25,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     MapBuilder::applyDiff(input, replica);
   } catch (const std::runtime_error&) {
   }
-  std::istringstream stream(input);
-  octomap::OcTree tree(0.5);
-  tree.readBinary(stream);  // false on a bad header
+  try {
+    std::istringstream stream(input);
+    octomap::OcTree tree(0.5);
+    auv::mapping::ot_stream::readBinaryTree(stream, tree);
+  } catch (const std::runtime_error&) {
+  }
   return 0;
 }
 

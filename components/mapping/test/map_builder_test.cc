@@ -527,6 +527,43 @@ TEST(OtStreamTest, ReadTreeReadsWhatOctomapWritesAndPrintsNothing) {
   }
 }
 
+// OctoMap's readers recurse as deep as the child bits say (a fuzzed .ot overflowed the stack):
+// streams nested deeper than the tree, or that end early, are refused before OctoMap reads.
+TEST(OtStreamTest, NodeDataDeeperThanTheTreeOrCutShortIsRefused) {
+  // .ot: every node a float and one child: 17 levels fit a tree 16 deep, 18 do not.
+  const auto chain = [](int nodes) {
+    std::string data;
+    for (int i = 0; i < nodes; ++i) data += std::string(4, '\0') + (i + 1 < nodes ? '\1' : '\0');
+    return data;
+  };
+  EXPECT_EQ(ot_stream::otDataProblem(chain(17), 17), "");
+  EXPECT_NE(ot_stream::otDataProblem(chain(18), 18).find("has children"), std::string::npos);
+  const std::string deep = "# Octomap OcTree file\nid OcTree\nsize 100000\nres 0.5\ndata\n" +
+                           std::string(100000, '\1');  // each node's bits: one child, forever
+  std::istringstream deep_stream(deep);
+  EXPECT_THROW(ot_stream::readTree(deep_stream), std::runtime_error);
+  EXPECT_NE(ot_stream::otDataProblem(chain(5).substr(0, 12), 5).find("ends early"),
+            std::string::npos);
+  EXPECT_NE(ot_stream::otDataProblem(chain(5), 6).find("holds 5"), std::string::npos);
+
+  // .bt: what OctoMap writes reads back; a chain of inner nodes 16 deep does not.
+  MapBuilder builder;
+  addBeams(builder, 50);
+  const std::string binary = builder.fullBinary();
+  std::istringstream input(binary);
+  octomap::OcTree read(kResolution);
+  ot_stream::readBinaryTree(input, read);
+  EXPECT_EQ(read.size(), builder.tree().size());
+  std::string inner_chain;
+  for (int i = 0; i < 16; ++i) inner_chain += std::string("\3\0", 2);  // first child inner
+  EXPECT_EQ(ot_stream::btDataProblem(inner_chain.substr(0, 30) + std::string(2, '\0')), "");
+  EXPECT_NE(ot_stream::btDataProblem(inner_chain + std::string(2, '\0')).find("has children"),
+            std::string::npos);
+  std::istringstream cut(binary.substr(0, binary.size() - 3));
+  octomap::OcTree untouched(kResolution);
+  EXPECT_THROW(ot_stream::readBinaryTree(cut, untouched), std::runtime_error);
+}
+
 TEST(OtStreamTest, WriteCellsIsWhatAnOcTreeOfTheCellsWrites) {
   // The diff as it was built before: an OcTree set lazily, inner nodes updated, then written.
   MapBuilder builder;

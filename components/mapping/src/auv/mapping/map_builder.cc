@@ -395,8 +395,12 @@ void MapBuilder::load(const std::string& path) {
     }
     // Its cells keep their log-odds; new evidence is clamped by our settings.
     loaded.swapContent(*read);
-  } else if (!loaded.readBinary(file)) {
-    throw std::runtime_error(path + " is not an OctoMap binary (.bt) file");
+  } else {
+    try {
+      ot_stream::readBinaryTree(file, loaded);
+    } catch (const std::runtime_error& error) {
+      throw std::runtime_error(path + " is not an OctoMap binary (.bt) file: " + error.what());
+    }
   }
   if (std::abs(loaded.getResolution() - options_.resolution) > 1e-9) {
     throw std::runtime_error(path + " has resolution " + std::to_string(loaded.getResolution()) +

@@ -14,7 +14,7 @@ std::unique_ptr<octomap::OcTree> readFullMap(const msg::OctomapUpdate& update) {
   std::istringstream stream(std::string(update.data().begin(), update.data().end()));
   if (update.encoding() == msg::OCTOMAP_ENCODING_BINARY) {
     auto tree = std::make_unique<octomap::OcTree>(update.resolution());
-    if (!tree->readBinary(stream)) throw std::runtime_error("unreadable .bt map");
+    ot_stream::readBinaryTree(stream, *tree);
     return tree;
   }
   return ot_stream::readTree(stream);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <iterator>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -151,25 +152,116 @@ std::unique_ptr<octomap::OcTree> readTree(std::istream& stream) {
     throw std::runtime_error("not an OcTree .ot stream (id '" + id + "', resolution " +
                              std::to_string(resolution) + ")");
   }
-  // Each node is its float log-odds and a byte of child bits. OctoMap reads past the end of a
-  // short stream with child bits it never read, so a stream that cannot hold `size` nodes is
-  // refused before reading (streams that cannot seek are read as they come).
-  const std::streampos data_start = stream.tellg();
-  if (data_start != std::streampos(-1) && stream.seekg(0, std::ios::end)) {
-    const std::streamoff available = stream.tellg() - data_start;
-    stream.seekg(data_start);
-    if (available < static_cast<std::streamoff>(size * (sizeof(float) + 1))) {
-      throw std::runtime_error("OcTree .ot stream ends early (" + std::to_string(available) +
-                               " bytes for " + std::to_string(size) + " nodes)");
-    }
-  }
+  // OctoMap trusts the node data: it reads past the end of a short stream with child bits it
+  // never read, and recurses as deep as the child bits say (a fuzzed stream overflowed the
+  // stack). So the data is checked whole first.
+  std::string data{std::istreambuf_iterator<char>(stream), std::istreambuf_iterator<char>()};
+  const std::string problem = otDataProblem(data, size);
+  if (!problem.empty()) throw std::runtime_error("OcTree .ot stream: " + problem);
   auto tree = std::make_unique<octomap::OcTree>(resolution);
-  if (size > 0) tree->readData(stream);
-  if (!stream || tree->size() != size) {
+  std::istringstream nodes(std::move(data));
+  if (size > 0) tree->readData(nodes);
+  if (!nodes || tree->size() != size) {
     throw std::runtime_error("OcTree .ot stream ends early (" + std::to_string(tree->size()) +
                              " of " + std::to_string(size) + " nodes)");
   }
   return tree;
+}
+
+namespace {
+
+// Walks pre-order node data without recursion: `node_bytes` per node, `children(offset)` the
+// number of children of the node at `offset` (or -1: not a node). A node at `tree_depth` has
+// none; the walk must use the data up to its last byte.
+template <class Children>
+std::string nodeDataProblem(const std::string& data, std::size_t node_bytes, unsigned tree_depth,
+                            std::size_t* nodes_read, Children children) {
+  struct Level {
+    unsigned depth;
+    unsigned pending;  // nodes still to read at this depth under the same parent
+  };
+  std::vector<Level> stack{{0, 1}};
+  std::size_t offset = 0;
+  std::size_t nodes = 0;
+  while (!stack.empty()) {
+    if (stack.back().pending == 0) {
+      stack.pop_back();
+      continue;
+    }
+    --stack.back().pending;
+    const unsigned depth = stack.back().depth;
+    if (data.size() - offset < node_bytes) {
+      return "ends early (" + std::to_string(data.size()) + " bytes hold " + std::to_string(nodes) +
+             " whole nodes of the tree the data starts)";
+    }
+    const int count = children(offset);
+    offset += node_bytes;
+    ++nodes;
+    if (count < 0) return "node " + std::to_string(nodes) + " has an invalid child code";
+    if (count == 0) continue;
+    if (depth >= tree_depth) {
+      return "node " + std::to_string(nodes) + " at depth " + std::to_string(depth) +
+             " has children (the tree is " + std::to_string(tree_depth) + " deep)";
+    }
+    stack.push_back({depth + 1, static_cast<unsigned>(count)});
+  }
+  *nodes_read = nodes;
+  return "";
+}
+
+}  // namespace
+
+std::string otDataProblem(const std::string& data, std::size_t size, unsigned tree_depth) {
+  if (size == 0) return "";
+  std::size_t nodes = 0;
+  std::string problem =
+      nodeDataProblem(data, sizeof(float) + 1, tree_depth, &nodes, [&](std::size_t offset) {
+        const auto bits = static_cast<unsigned char>(data[offset + sizeof(float)]);
+        int count = 0;
+        for (int i = 0; i < 8; ++i) count += (bits >> i) & 1;
+        return count;
+      });
+  if (problem.empty() && nodes != size) {
+    problem = "the header says " + std::to_string(size) + " nodes, the data holds " +
+              std::to_string(nodes);
+  }
+  return problem;
+}
+
+std::string btDataProblem(const std::string& data, unsigned tree_depth) {
+  // Each node: two bytes of 2-bit child codes (00 none, 01 occupied leaf, 10 free leaf, 11
+  // inner node, whose own two bytes follow in pre-order).
+  std::size_t nodes = 0;
+  return nodeDataProblem(data, 2, tree_depth - 1, &nodes, [&](std::size_t offset) {
+    int inner = 0;
+    for (std::size_t byte = 0; byte < 2; ++byte) {
+      const auto bits = static_cast<unsigned char>(data[offset + byte]);
+      for (int child = 0; child < 4; ++child) inner += ((bits >> (2 * child)) & 3) == 3;
+    }
+    return inner;
+  });
+}
+
+void readBinaryTree(std::istream& stream, octomap::OcTree& tree) {
+  const std::string text{std::istreambuf_iterator<char>(stream), std::istreambuf_iterator<char>()};
+  // The header as OcTree::readBinary reads it: tokens up to "data", then the rest of its line.
+  std::istringstream header(text);
+  std::string token;
+  while (header >> token && token != "data") {
+    if (token[0] == '#' || (token != "id" && token != "res" && token != "size")) {
+      std::string rest;
+      std::getline(header, rest);
+    } else {
+      header >> token;
+    }
+  }
+  std::string rest;
+  std::getline(header, rest);
+  if (!header) throw std::runtime_error("not an OctoMap binary (.bt) stream: no data line");
+  const std::string problem = btDataProblem(text.substr(static_cast<std::size_t>(header.tellg())));
+  if (!problem.empty()) throw std::runtime_error("OctoMap binary (.bt) stream: " + problem);
+  std::istringstream whole(text);
+  if (!tree.readBinary(whole)) throw std::runtime_error("not an OctoMap binary (.bt) stream");
 }
 
 }  // namespace auv::mapping::ot_stream

@@ -40,4 +40,16 @@ std::string writeCells(std::vector<Cell>& cells, double resolution, unsigned tre
 /// Throws std::runtime_error when the stream is not an OcTree `.ot` stream or ends early.
 std::unique_ptr<octomap::OcTree> readTree(std::istream& stream);
 
+/// Reads a `.bt` stream into `tree` (OcTree::readBinary: the file's resolution, occupied cells
+/// at `tree`'s clamping bound), its node data checked first; throws std::runtime_error when
+/// it is not one, ends early or nests deeper than the tree.
+void readBinaryTree(std::istream& stream, octomap::OcTree& tree);
+
+/// Why `data`, the node data of an `.ot` stream (after its "data" line), is not `size` nodes
+/// of an OcTree `tree_depth` deep; "" when it is. OctoMap's readers check neither: they read
+/// past the end and recurse as deep as the child bits say.
+std::string otDataProblem(const std::string& data, std::size_t size, unsigned tree_depth = 16);
+/// The same for the node data of a `.bt` stream.
+std::string btDataProblem(const std::string& data, unsigned tree_depth = 16);
+
 }  // namespace auv::mapping::ot_stream
