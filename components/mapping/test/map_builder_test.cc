@@ -559,6 +559,11 @@ TEST(OtStreamTest, NodeDataDeeperThanTheTreeOrCutShortIsRefused) {
   EXPECT_EQ(ot_stream::btDataProblem(inner_chain.substr(0, 30) + std::string(2, '\0')), "");
   EXPECT_NE(ot_stream::btDataProblem(inner_chain + std::string(2, '\0')).find("has children"),
             std::string::npos);
+  for (const std::string& bad : {std::string("# Octomap OcTree binary file\nid OcTree\ndata"),
+                                 std::string("# Octomap OcTree binary file\nid OcTree\ndata\n")}) {
+    std::istringstream input(bad);  // a data line and no node
+    EXPECT_THROW(ot_stream::readBinaryTree(input, read), std::runtime_error);
+  }
   std::istringstream cut(binary.substr(0, binary.size() - 3));
   octomap::OcTree untouched(kResolution);
   EXPECT_THROW(ot_stream::readBinaryTree(cut, untouched), std::runtime_error);

@@ -258,7 +258,10 @@ void readBinaryTree(std::istream& stream, octomap::OcTree& tree) {
   std::string rest;
   std::getline(header, rest);
   if (!header) throw std::runtime_error("not an OctoMap binary (.bt) stream: no data line");
-  const std::string problem = btDataProblem(text.substr(static_cast<std::size_t>(header.tellg())));
+  // At the end of the text (a data line without a newline) tellg() is -1: no node data.
+  const std::streamoff data_start = header.tellg();
+  const std::string problem = btDataProblem(
+      data_start < 0 ? std::string() : text.substr(static_cast<std::size_t>(data_start)));
   if (!problem.empty()) throw std::runtime_error("OctoMap binary (.bt) stream: " + problem);
   std::istringstream whole(text);
   if (!tree.readBinary(whole)) throw std::runtime_error("not an OctoMap binary (.bt) stream");
