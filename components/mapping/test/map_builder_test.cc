@@ -318,6 +318,12 @@ TEST(MapBuilderTest, ApplyDiffRejectsOtherResolutionAndGarbage) {
   octomap::OcTree fine(0.1);
   EXPECT_THROW(MapBuilder::applyDiff(data, fine), std::runtime_error);
   EXPECT_THROW(MapBuilder::applyDiff("not a tree", fine), std::runtime_error);
+  // A diff whose root is a leaf stands for 2^48 cells: refused before anything is set.
+  const std::string root_leaf =
+      "# Octomap OcTree file\nid OcTree\nsize 1\nres 0.5\ndata\n" + std::string("\0\0\0\0\0", 5);
+  octomap::OcTree replica(0.5);
+  EXPECT_THROW(MapBuilder::applyDiff(root_leaf, replica), std::runtime_error);
+  EXPECT_EQ(replica.size(), 0u);
 }
 
 // A ring of returns 7-10.5 m around the origin, one beam every 10 degrees.

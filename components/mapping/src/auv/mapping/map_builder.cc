@@ -329,6 +329,17 @@ void MapBuilder::applyDiff(const std::string& data, octomap::OcTree& replica) {
                              std::to_string(replica.getResolution()));
   }
   const unsigned max_depth = changes->getTreeDepth();
+  // A coarser leaf stands for every finest cell below it: the root alone would be 2^48 cells
+  // (a fuzzed diff kept the replica busy for minutes). Our writer sends finest cells only.
+  uint64_t cells = 0;
+  for (auto it = changes->begin_leafs(), end = changes->end_leafs(); it != end; ++it) {
+    cells += uint64_t{1} << (3 * (max_depth - it.getDepth()));
+    if (cells > kMaxDiffCells) {
+      throw std::runtime_error("map diff covers more than " + std::to_string(kMaxDiffCells) +
+                               " cells (a leaf at depth " + std::to_string(it.getDepth()) + " of " +
+                               std::to_string(max_depth) + ")");
+    }
+  }
   for (auto it = changes->begin_leafs(), end = changes->end_leafs(); it != end; ++it) {
     const float log_odds = it->getLogOdds();
     const octomap::OcTreeKey key = it.getKey();

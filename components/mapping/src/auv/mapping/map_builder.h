@@ -140,8 +140,12 @@ class MapBuilder {
   };
   Diff takeDiff();
   /// Applies a diff written by takeDiff() to `replica` (same resolution). Throws
-  /// std::runtime_error when the data is not an OcTree stream or the resolution differs.
+  /// std::runtime_error, the replica unchanged, when the data is not an OcTree stream, the
+  /// resolution differs or its leaves cover more than kMaxDiffCells finest cells.
   static void applyDiff(const std::string& data, octomap::OcTree& replica);
+  /// Most finest cells one diff may set (a 50 m cube at 0.5 m; an update covers a few sonar
+  /// sweeps).
+  static constexpr uint64_t kMaxDiffCells = uint64_t{1} << 20;
 
   /// The whole map as OcTree::writeBinaryConst writes it (.bt: maximum-likelihood only).
   std::string fullBinary() const;
