@@ -244,24 +244,40 @@ std::string btDataProblem(const std::string& data, unsigned tree_depth) {
 
 void readBinaryTree(std::istream& stream, octomap::OcTree& tree) {
   const std::string text{std::istreambuf_iterator<char>(stream), std::istreambuf_iterator<char>()};
-  // The header as OcTree::readBinary reads it: tokens up to "data", then the rest of its line.
+  // The header exactly as OcTree::readBinary reads it (AbstractOcTree::readHeader), typed
+  // reads included: "res 0.5x" leaves "x" to be read as a keyword whose line is skipped.
   std::istringstream header(text);
   std::string token;
-  while (header >> token && token != "data") {
-    if (token[0] == '#' || (token != "id" && token != "res" && token != "size")) {
-      std::string rest;
-      std::getline(header, rest);
-    } else {
+  std::getline(header, token);  // "# Octomap OcTree binary file"
+  bool data_line = false;
+  unsigned size = 0;
+  while (header.good() && !data_line) {
+    header >> token;
+    if (token == "data") {
+      data_line = true;
+    } else if (token == "res") {
+      double resolution = 0.0;
+      header >> resolution;
+      continue;
+    } else if (token == "size") {
+      header >> size;
+      continue;
+    } else if (token == "id") {
       header >> token;
+      continue;
     }
+    char c = 0;
+    do {
+      c = static_cast<char>(header.get());
+    } while (header.good() && c != '\n');
   }
-  std::string rest;
-  std::getline(header, rest);
-  if (!header) throw std::runtime_error("not an OctoMap binary (.bt) stream: no data line");
+  if (!data_line) throw std::runtime_error("not an OctoMap binary (.bt) stream: no data line");
   // At the end of the text (a data line without a newline) tellg() is -1: no node data.
   const std::streamoff data_start = header.tellg();
-  const std::string problem = btDataProblem(
-      data_start < 0 ? std::string() : text.substr(static_cast<std::size_t>(data_start)));
+  const std::string problem =
+      size == 0 ? std::string()  // OctoMap reads no node then
+                : btDataProblem(data_start < 0 ? std::string()
+                                               : text.substr(static_cast<std::size_t>(data_start)));
   if (!problem.empty()) throw std::runtime_error("OctoMap binary (.bt) stream: " + problem);
   std::istringstream whole(text);
   if (!tree.readBinary(whole)) throw std::runtime_error("not an OctoMap binary (.bt) stream");
