@@ -126,32 +126,48 @@ std::string writeCells(std::vector<Cell>& cells, double resolution, unsigned tre
   return out;
 }
 
+namespace {
+
+struct Header {
+  std::string id;
+  std::size_t size = 0;
+  double resolution = 0.0;
+};
+
+// The header after the first line, as AbstractOcTree::readHeader reads it: keywords up to
+// "data", '#' comments; the stream is left at the node data. `what` names the format.
+Header readHeader(std::istream& stream, const char* what) {
+  Header header;
+  std::string token;
+  while (stream >> token && token != "data") {
+    if (token == "id") {
+      stream >> header.id;
+    } else if (token == "size") {
+      stream >> header.size;
+    } else if (token == "res") {
+      stream >> header.resolution;
+    } else {
+      std::getline(stream, token);  // a comment or a keyword OctoMap would skip
+    }
+  }
+  std::getline(stream, token);  // the rest of the "data" line
+  if (!stream || header.id != "OcTree" || !(header.resolution > 0.0)) {
+    throw std::runtime_error(std::string("not an OcTree ") + what + " stream (id '" + header.id +
+                             "', resolution " + std::to_string(header.resolution) + ")");
+  }
+  return header;
+}
+
+}  // namespace
+
 std::unique_ptr<octomap::OcTree> readTree(std::istream& stream) {
-  // The header as AbstractOcTree::readHeader reads it: keywords up to "data", '#' comments.
   std::string line;
   if (!std::getline(stream, line) || line.rfind("# Octomap OcTree file", 0) != 0) {
     throw std::runtime_error("not an OctoMap .ot stream");
   }
-  std::string id;
-  std::size_t size = 0;
-  double resolution = 0.0;
-  std::string token;
-  while (stream >> token && token != "data") {
-    if (token == "id") {
-      stream >> id;
-    } else if (token == "size") {
-      stream >> size;
-    } else if (token == "res") {
-      stream >> resolution;
-    } else {
-      std::getline(stream, line);  // a comment or a keyword OctoMap would skip
-    }
-  }
-  std::getline(stream, line);  // the rest of the "data" line
-  if (!stream || id != "OcTree" || !(resolution > 0.0)) {
-    throw std::runtime_error("not an OcTree .ot stream (id '" + id + "', resolution " +
-                             std::to_string(resolution) + ")");
-  }
+  const Header header = readHeader(stream, ".ot");
+  const std::size_t size = header.size;
+  const double resolution = header.resolution;
   // OctoMap trusts the node data: it reads past the end of a short stream with child bits it
   // never read, and recurses as deep as the child bits say (a fuzzed stream overflowed the
   // stack). So the data is checked whole first.
@@ -243,44 +259,25 @@ std::string btDataProblem(const std::string& data, unsigned tree_depth) {
 }
 
 void readBinaryTree(std::istream& stream, octomap::OcTree& tree) {
-  const std::string text{std::istreambuf_iterator<char>(stream), std::istreambuf_iterator<char>()};
-  // The header exactly as OcTree::readBinary reads it (AbstractOcTree::readHeader), typed
-  // reads included: "res 0.5x" leaves "x" to be read as a keyword whose line is skipped.
-  std::istringstream header(text);
-  std::string token;
-  std::getline(header, token);  // "# Octomap OcTree binary file"
-  bool data_line = false;
-  unsigned size = 0;
-  while (header.good() && !data_line) {
-    header >> token;
-    if (token == "data") {
-      data_line = true;
-    } else if (token == "res") {
-      double resolution = 0.0;
-      header >> resolution;
-      continue;
-    } else if (token == "size") {
-      header >> size;
-      continue;
-    } else if (token == "id") {
-      header >> token;
-      continue;
-    }
-    char c = 0;
-    do {
-      c = static_cast<char>(header.get());
-    } while (header.good() && c != '\n');
+  std::string line;
+  if (!std::getline(stream, line) || line.rfind("# Octomap OcTree binary file", 0) != 0) {
+    throw std::runtime_error("not an OctoMap binary (.bt) stream");
   }
-  if (!data_line) throw std::runtime_error("not an OctoMap binary (.bt) stream: no data line");
-  // At the end of the text (a data line without a newline) tellg() is -1: no node data.
-  const std::streamoff data_start = header.tellg();
-  const std::string problem =
-      size == 0 ? std::string()  // OctoMap reads no node then
-                : btDataProblem(data_start < 0 ? std::string()
-                                               : text.substr(static_cast<std::size_t>(data_start)));
-  if (!problem.empty()) throw std::runtime_error("OctoMap binary (.bt) stream: " + problem);
-  std::istringstream whole(text);
-  if (!tree.readBinary(whole)) throw std::runtime_error("not an OctoMap binary (.bt) stream");
+  const Header header = readHeader(stream, ".bt");
+  // OctoMap is handed exactly the node data checked (readBinaryData), as in readTree.
+  std::string data{std::istreambuf_iterator<char>(stream), std::istreambuf_iterator<char>()};
+  if (header.size > 0) {
+    const std::string problem = btDataProblem(data);
+    if (!problem.empty()) throw std::runtime_error("OctoMap binary (.bt) stream: " + problem);
+  }
+  tree.clear();
+  tree.setResolution(header.resolution);
+  std::istringstream nodes(std::move(data));
+  if (header.size > 0) tree.readBinaryData(nodes);
+  if (tree.size() != header.size) {
+    throw std::runtime_error("OctoMap binary (.bt) stream holds " + std::to_string(tree.size()) +
+                             " nodes, its header says " + std::to_string(header.size));
+  }
 }
 
 }  // namespace auv::mapping::ot_stream

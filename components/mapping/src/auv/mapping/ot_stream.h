@@ -40,9 +40,9 @@ std::string writeCells(std::vector<Cell>& cells, double resolution, unsigned tre
 /// Throws std::runtime_error when the stream is not an OcTree `.ot` stream or ends early.
 std::unique_ptr<octomap::OcTree> readTree(std::istream& stream);
 
-/// Reads a `.bt` stream into `tree` (OcTree::readBinary: the file's resolution, occupied cells
-/// at `tree`'s clamping bound), its node data checked first; throws std::runtime_error when
-/// it is not one, ends early or nests deeper than the tree.
+/// Reads a `.bt` stream into `tree` (as OcTree::readBinary: the file's resolution, occupied
+/// cells at `tree`'s clamping bound), its node data checked first and handed to OctoMap; throws
+/// std::runtime_error when it is not one, ends early or nests deeper than the tree.
 void readBinaryTree(std::istream& stream, octomap::OcTree& tree);
 
 /// Why `data`, the node data of an `.ot` stream (after its "data" line), is not `size` nodes
