@@ -139,6 +139,14 @@ std::string readHeader(std::streambuf& in, Storage& storage, std::vector<Element
   return "";
 }
 
+/// A value of type T from its little-endian bytes.
+template <class T>
+double load(const unsigned char* bytes) {
+  T value;
+  std::memcpy(&value, bytes, sizeof value);
+  return static_cast<double>(value);
+}
+
 /// One value as rply reads it; false where rply stops (end of file, not a number).
 bool readValue(std::streambuf& in, Storage storage, int type, double& value) {
   if (storage == Storage::kAscii) {
@@ -155,47 +163,29 @@ bool readValue(std::streambuf& in, Storage storage, int type, double& value) {
   if (storage == Storage::kBigEndian) std::reverse(bytes, bytes + size);  // x86/ARM: little
   switch (type) {
     case 0:
-      value = static_cast<int8_t>(bytes[0]);
+      value = load<int8_t>(bytes);
       break;
     case 1:
-      value = bytes[0];
+      value = load<uint8_t>(bytes);
       break;
-    case 2: {
-      int16_t v;
-      std::memcpy(&v, bytes, 2);
-      value = v;
+    case 2:
+      value = load<int16_t>(bytes);
       break;
-    }
-    case 3: {
-      uint16_t v;
-      std::memcpy(&v, bytes, 2);
-      value = v;
+    case 3:
+      value = load<uint16_t>(bytes);
       break;
-    }
-    case 4: {
-      int32_t v;
-      std::memcpy(&v, bytes, 4);
-      value = v;
+    case 4:
+      value = load<int32_t>(bytes);
       break;
-    }
-    case 5: {
-      uint32_t v;
-      std::memcpy(&v, bytes, 4);
-      value = v;
+    case 5:
+      value = load<uint32_t>(bytes);
       break;
-    }
-    case 6: {
-      float v;
-      std::memcpy(&v, bytes, 4);
-      value = v;
+    case 6:
+      value = load<float>(bytes);
       break;
-    }
-    default: {
-      double v;
-      std::memcpy(&v, bytes, 8);
-      value = v;
+    default:
+      value = load<double>(bytes);
       break;
-    }
   }
   return true;
 }
