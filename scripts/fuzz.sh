@@ -3,9 +3,10 @@
 # "Fuzzing"). The harnesses are built by the sanitizer build (scripts/sanitize.sh, clang,
 # ASan + UBSan, -DAUV_FUZZ=ON) into install-asan/lib/auv_fuzz.
 #
-#   scripts/fuzz.sh [--seconds N] [--only NAME[,NAME...]] [--no-build]
+#   scripts/fuzz.sh [--seconds N] [--runs N] [--only NAME[,NAME...]] [--no-build]
 #
 #   --seconds N   per harness (default 30; a nightly run gives e.g. 3600)
+#   --runs N      per harness, stop after N executions if that comes first (default: no limit)
 #   --only        these harnesses only (names: install-asan/lib/auv_fuzz/fuzz_<name>)
 #   --no-build    use install-asan as it is
 #
@@ -18,18 +19,21 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=30
+runs=-1
 only=""
 build=true
 while [ $# -gt 0 ]; do
   case "$1" in
     --seconds) seconds="${2:?--seconds needs a number}"; shift ;;
+    --runs) runs="${2:?--runs needs a number}"; shift ;;
     --only) only="${2:?--only needs names}"; shift ;;
     --no-build) build=false ;;
-    *) echo "fuzz: unknown argument '$1' (--seconds N, --only NAMES, --no-build)" >&2; exit 2 ;;
+    *) echo "fuzz: unknown argument '$1' (--seconds N, --runs N, --only NAMES, --no-build)" >&2; exit 2 ;;
   esac
   shift
 done
 [[ "$seconds" =~ ^[0-9]+$ ]] || { echo "fuzz: --seconds '$seconds' is not a whole number" >&2; exit 2; }
+[[ "$runs" =~ ^(-1|[0-9]+)$ ]] || { echo "fuzz: --runs '$runs' is not a whole number" >&2; exit 2; }
 $build && ./scripts/sanitize.sh --build-only
 fuzzers=install-asan/lib/auv_fuzz
 [ -d "$fuzzers" ] || { echo "fuzz: no $fuzzers (run without --no-build)" >&2; exit 1; }
@@ -60,9 +64,10 @@ for name in "${names[@]}"; do
   "$fuzzers/fuzz_${name}_replay" --write-seeds "$corpus" >/dev/null
   log="fuzz-crashes/$name.log"
   status=0
+  started=$SECONDS
   # -timeout: an input the normal build reads in 0.2 s (a parameter file whose aliases stand
   # for 18 000 parameters) takes ~25 s with ASan and the coverage instrumentation.
-  "$fuzzers/fuzz_$name" -max_total_time="$seconds" -timeout=60 -rss_limit_mb=3072 \
+  "$fuzzers/fuzz_$name" -max_total_time="$seconds" -runs="$runs" -timeout=60 -rss_limit_mb=3072 \
     -print_final_stats=1 -artifact_prefix="$crashes/" "$corpus" >"$log" 2>&1 || status=$?
   execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
   rate=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log" | tail -1)
@@ -70,7 +75,7 @@ for name in "${names[@]}"; do
   size=$(find "$corpus" -type f | wc -l)
   result=ok
   if [ $status -ne 0 ]; then result="FAILED (exit $status, $log)"; failed+=("$name"); fi
-  printf "%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n" "$(date -u +%FT%TZ)" "$name" "$seconds" "${execs:-0}" \
+  printf "%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n" "$(date -u +%FT%TZ)" "$name" "$((SECONDS - started))" "${execs:-0}" \
     "${rate:-0}" "${coverage:-0}" "$size" "$result" >> "$results"
   printf "fuzz: %-18s %8s execs %6s/s  cov %6s  corpus %5s  %s\n" "$name" "${execs:-0}" \
     "${rate:-0}" "${coverage:-0}" "$size" "$result"
@@ -79,4 +84,4 @@ if [ ${#failed[@]} -gt 0 ]; then
   echo "fuzz: FAILED: ${failed[*]} (inputs in fuzz-crashes/, logs beside them)" >&2
   exit 1
 fi
-echo "fuzz: ${#names[@]} harnesses, ${seconds} s each, no failure (figures in $results)"
+echo "fuzz: ${#names[@]} harnesses, at most ${seconds} s each, no failure (figures in $results)"

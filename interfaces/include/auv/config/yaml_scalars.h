@@ -40,8 +40,9 @@ std::string describeNode(const YAML::Node& node);
 std::string markText(const YAML::Mark& mark);
 
 /// Most nodes that the aliases of one document may stand for, in all (an alias counts the nodes
-/// of what it refers to).
-inline constexpr std::size_t kMaxAliasedNodes = 100000;
+/// of what it refers to). Ample for a settings file that shares a few lists and maps; each
+/// aliased node may become a parameter with a long dotted name, so the bound is kept low.
+inline constexpr std::size_t kMaxAliasedNodes = 10000;
 
 /// YAML::Load of every reader: the first document of `text`, refusing two documents yaml-cpp
 /// composes but no reader can walk: an alias inside the node it refers to (`&a [*a]`, a node
