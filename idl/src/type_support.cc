@@ -1,5 +1,7 @@
 #include "auv/msg/type_support.h"
 
+#include <fastcdr/exceptions/NotEnoughMemoryException.h>
+
 #include "auv/msg/yaml_convert.h"
 
 namespace auv::msg {
@@ -15,6 +17,13 @@ const TypeSupport* findType(const std::string& name) {
 }
 
 namespace detail {
+
+void skipCdr(eprosima::fastcdr::Cdr& cdr, size_t bytes) {
+  if (!cdr.jump(bytes)) {
+    throw eprosima::fastcdr::exception::NotEnoughMemoryException(
+        eprosima::fastcdr::exception::NotEnoughMemoryException::NOT_ENOUGH_MEMORY_MESSAGE_DEFAULT);
+  }
+}
 
 void checkFields(const YAML::Node& node, const std::string& path,
                  std::initializer_list<const char*> fields) {

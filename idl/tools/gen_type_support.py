@@ -3,9 +3,14 @@
 
 fastddsgen gives the C++ types and their CDR code; this script adds what neither
 vendor generator gives: a MessageTraits<T> specialisation per struct (topic type
-name, Fast DDS TopicDataType and the self-contained OMG IDL schema of
-idl_schema.py), YAML conversion in both directions (for `auv topic echo|pub` and
-for tests), and a registry of every type by name.
+name, Fast DDS TopicDataType, the self-contained OMG IDL schema of idl_schema.py
+and a CDR walker), YAML conversion in both directions (for `auv topic echo|pub`
+and for tests), and a registry of every type by name.
+
+The walker reads a payload as fastddsgen's code decodes it but allocates nothing
+per element: it proves that every element a sequence claims is present before
+the decoder sizes a std::vector for them (fastcdr checks a length only against
+the bytes left, so each received byte could cost an element's in-memory size).
 
 Only the IDL subset the message set uses is understood: modules, @final structs
 with @key members, enums, typedefs, sequences, fixed arrays and #include lines.
@@ -204,6 +209,36 @@ def cpp_type(t, typedefs):
     return t[1]
 
 
+def walk_statements(t, typedefs, enum_names, depth=0):
+    """C++ statements reading one value of type `t` from `cdr` as fastddsgen's code does."""
+    kind = t[0]
+    if kind == "named" and t[1] in typedefs:
+        return walk_statements(typedefs[t[1]], typedefs, enum_names, depth)
+    if kind == "prim":
+        return [f"{{ {PRIMITIVES[t[1]]} value; cdr >> value; }}"]
+    if kind == "named":
+        if t[1] in enum_names:  # fastddsgen: (uint32_t&)
+            return ["{ uint32_t value; cdr >> value; }"]
+        return [f"MessageTraits<{t[1]}>::walkCdr(cdr);"]
+    i = f"i{depth}"
+    if kind == "array":
+        inner = walk_statements(t[1], typedefs, enum_names, depth + 1)
+        return [f"for (int {i} = 0; {i} < {t[2]}; ++{i}) {{"] + ["  " + s for s in inner] + ["}"]
+    elem = t[1]
+    while elem[0] == "named" and elem[1] in typedefs:
+        elem = typedefs[elem[1]]
+    n = f"n{depth}"
+    if elem[0] == "prim" and elem[1] != "string":
+        # Contiguous and aligned once: the first element aligns, the rest is skipped.
+        c = PRIMITIVES[elem[1]]
+        return [f"{{ uint32_t {n} = 0; cdr >> {n};",
+                f"  if ({n} > 0) {{ {c} first; cdr >> first; "
+                f"detail::skipCdr(cdr, (size_t({n}) - 1) * sizeof({c})); }} }}"]
+    inner = walk_statements(elem, typedefs, enum_names, depth + 1)
+    return ([f"{{ uint32_t {n} = 0; cdr >> {n};", f"  for (uint32_t {i} = 0; {i} < {n}; ++{i}) {{"]
+            + ["    " + s for s in inner] + ["  }", "}"])
+
+
 def main():
     if len(sys.argv) < 5:
         sys.exit("usage: gen_type_support.py OUT_HEADER OUT_SOURCE IDLC_DIR FILE.idl...")
@@ -250,6 +285,9 @@ def main():
         h.append(f'  static constexpr const char* kTypeName = "{name}";')
         h.append(f"  static constexpr bool kKeyed = {'true' if keyed else 'false'};")
         h.append("  static const char* omgIdl();  // the schema text, see TypeSupport::omg_idl")
+        h.append("  /// Reads one sample as the decoder does, allocating nothing per element; throws")
+        h.append("  /// fastcdr's NotEnoughMemoryException where the bytes end (GuardedPubSubType).")
+        h.append("  static void walkCdr(eprosima::fastcdr::Cdr& cdr);")
         h.append("};")
         h.append("")
     h += ["}  // namespace auv::msg", ""]
@@ -270,6 +308,12 @@ def main():
         cc.append(f"  detail::checkFields(node, path, {{{fields}}});")
         for m, t, _ in members:
             cc.append(f'  if (node["{m}"]) detail::decode(node["{m}"], msg.{m}(), detail::join(path, "{m}"));')
+        cc.append("}")
+        cc.append("")
+    for name, members, _ in structs:
+        cc.append(f"void MessageTraits<{name}>::walkCdr(eprosima::fastcdr::Cdr& cdr) {{")
+        for m, t, _ in members:
+            cc += ["  " + s for s in walk_statements(t, typedefs, enum_names)]
         cc.append("}")
         cc.append("")
     for name, _, _ in structs:

@@ -22,7 +22,6 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
-#include <variant>
 #include <vector>
 
 #include <dds/ddsi/ddsi_serdata.h>
@@ -180,73 +179,6 @@ constexpr Endpoint kEndpoints[4] = {fastDdsTyped, cycloneTyped, fastDdsSerialize
 
 // ---- seeds
 
-// A path into a sample's YAML tree: map keys and sequence indices.
-using YamlPath = std::vector<std::variant<std::string, size_t>>;
-
-YAML::Node at(YAML::Node root, const YamlPath& path) {
-  YAML::Node node = root;
-  for (const auto& step : path) {
-    YAML::Node next = std::holds_alternative<std::string>(step) ? node[std::get<std::string>(step)]
-                                                                : node[std::get<size_t>(step)];
-    node.reset(next);
-  }
-  return node;
-}
-
-// Empty strings (scalars "") and empty sequences of `node`, found from the type's to_yaml.
-void emptyLeaves(const YAML::Node& node, YamlPath& path, std::vector<YamlPath>& found) {
-  if (node.IsMap()) {
-    for (const auto& entry : node) {
-      path.push_back(entry.first.Scalar());
-      emptyLeaves(entry.second, path, found);
-      path.pop_back();
-    }
-  } else if (node.IsSequence()) {
-    if (node.size() == 0) found.push_back(path);
-    for (size_t i = 0; i < node.size(); ++i) {
-      path.push_back(i);
-      emptyLeaves(node[i], path, found);
-      path.pop_back();
-    }
-  } else if (node.IsScalar() && node.Scalar().empty()) {
-    found.push_back(path);
-  }
-}
-
-// A sample of `type` with text in its strings and an element in its sequences (nested ones
-// included), through the type's own from_yaml: what a field takes is learnt by trying, as
-// from_yaml refuses what does not fit (an enum is never "", a bool never "1").
-std::shared_ptr<void> filledSample(const TypeSupport& type) {
-  auto sample = type.create_sample();
-  for (int round = 0; round < 3; ++round) {  // new struct elements bring empty fields of their own
-    const YAML::Node current = type.to_yaml(sample.get());
-    YamlPath path;
-    std::vector<YamlPath> leaves;
-    emptyLeaves(current, path, leaves);
-    if (leaves.empty()) break;
-    for (const YamlPath& leaf : leaves) {
-      for (const char* candidate : {"text", "3", "true", "{}"}) {
-        const YAML::Node trial = type.to_yaml(sample.get());
-        YAML::Node node = at(trial, leaf);
-        if (node.IsSequence()) {
-          node.push_back(YAML::Load(candidate));
-        } else {
-          node = candidate;
-        }
-        auto grown = type.create_sample();
-        try {
-          type.from_yaml(trial, grown.get());
-        } catch (const std::invalid_argument&) {
-          continue;
-        }
-        sample = grown;
-        break;
-      }
-    }
-  }
-  return sample;
-}
-
 // `sample` as a Fast DDS writer serializes it.
 std::string fastDdsBytes(TypeEndpoints& t, void* sample) {
   SerializedPayload_t payload(t.typed->getSerializedSizeProvider(sample)());
@@ -281,7 +213,7 @@ std::vector<std::string> auvFuzzSeeds() {
   std::vector<TypeEndpoints>& all = endpoints();
   for (size_t i = 0; i < all.size(); ++i) {
     TypeEndpoints& t = all[i];
-    for (const auto& sample : {t.type->create_sample(), filledSample(*t.type)}) {
+    for (const auto& sample : {t.type->create_sample(), auv::msg::filledSample(*t.type)}) {
       const std::string bytes[2] = {fastDdsBytes(t, sample.get()), cycloneBytes(t, sample.get())};
       for (uint8_t endpoint = 0; endpoint < 4; ++endpoint) {
         const std::string& cdr = bytes[endpoint % 2];  // the vendor of the endpoint

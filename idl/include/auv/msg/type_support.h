@@ -8,6 +8,9 @@
 #include <string>
 #include <vector>
 
+#include <fastcdr/Cdr.h>
+#include <fastcdr/FastBuffer.h>
+#include <fastcdr/exceptions/Exception.h>
 #include <yaml-cpp/yaml.h>
 #include <fastdds/dds/topic/TopicDataType.hpp>
 
@@ -45,15 +48,47 @@ const std::vector<TypeSupport>& allTypes();
 /// The type called `name` ("auv::msg::X", "auv/msg/X" or just "X"), or nullptr.
 const TypeSupport* findType(const std::string& name);
 
-/// A generated TopicDataType that turns any exception of a malformed payload (fastddsgen's
-/// code only catches NotEnoughMemoryException) into a failed deserialize, so bad data from
-/// the wire is dropped by both vendors instead of taking the process down.
-template <class Inner>
-class GuardedPubSubType : public Inner {
+/// A sample of `type` with text in its strings and an element in each of its sequences (nested
+/// ones too), as its from_yaml takes them: for tests and fuzz seeds, which need more than
+/// default-constructed samples.
+std::shared_ptr<void> filledSample(const TypeSupport& type);
+
+namespace detail {
+/// Moves `cdr` `bytes` ahead; throws fastcdr's NotEnoughMemoryException past the end.
+void skipCdr(eprosima::fastcdr::Cdr& cdr, size_t bytes);
+}  // namespace detail
+
+/// True when `payload` holds a whole sample of T: every element its sequences claim is there
+/// (walked with MessageTraits<T>::walkCdr, in the payload's encapsulation).
+template <class T>
+bool holdsWholeSample(const eprosima::fastrtps::rtps::SerializedPayload_t& payload) {
+  eprosima::fastcdr::FastBuffer buffer(reinterpret_cast<char*>(payload.data), payload.length);
+  eprosima::fastcdr::Cdr cdr(buffer, eprosima::fastcdr::Cdr::DEFAULT_ENDIAN,
+                             eprosima::fastcdr::Cdr::DDS_CDR);
+  try {
+    cdr.read_encapsulation();
+    MessageTraits<T>::walkCdr(cdr);
+  } catch (const eprosima::fastcdr::exception::Exception&) {
+    return false;
+  }
+  return true;
+}
+
+/// fastddsgen's TopicDataType of T, hardened for bytes from outside (the wire, a bag, a
+/// viewer), so both vendors drop bad data instead of taking the process down:
+///  * a payload is walked before it is decoded: fastcdr sizes a sequence from its length
+///    field, checked only against the bytes left, so a 1 MB sample claiming a million
+///    structs cost ~560 MB; a sample whose elements are not all there is refused first;
+///  * any exception of a malformed payload is a failed deserialize (fastddsgen's code only
+///    catches NotEnoughMemoryException).
+template <class T>
+class GuardedPubSubType : public MessageTraits<T>::PubSubType {
+  using Generated = typename MessageTraits<T>::PubSubType;
+
  public:
   bool deserialize(eprosima::fastrtps::rtps::SerializedPayload_t* payload, void* data) override {
     try {
-      return Inner::deserialize(payload, data);
+      return holdsWholeSample<T>(*payload) && Generated::deserialize(payload, data);
     } catch (...) {
       return false;
     }
@@ -64,7 +99,7 @@ class GuardedPubSubType : public Inner {
   bool getKey(void* data, eprosima::fastrtps::rtps::InstanceHandle_t* handle,
               bool force_md5 = false) override {
     try {
-      return Inner::getKey(data, handle, force_md5);
+      return Generated::getKey(data, handle, force_md5);
     } catch (...) {
       return false;
     }
@@ -79,7 +114,7 @@ TypeSupport makeTypeSupport() {
   ts.name = Traits::kTypeName;
   ts.keyed = Traits::kKeyed;
   ts.omg_idl = Traits::omgIdl();
-  ts.make_topic_data_type = [] { return new GuardedPubSubType<typename Traits::PubSubType>(); };
+  ts.make_topic_data_type = [] { return new GuardedPubSubType<T>(); };
   ts.create_sample = [] { return std::shared_ptr<void>(std::make_shared<T>()); };
   ts.to_yaml = [](const void* sample) { return toYaml(*static_cast<const T*>(sample)); };
   ts.from_yaml = [](const YAML::Node& node, void* sample) {
