@@ -71,7 +71,8 @@ for name in "${names[@]}"; do
     -print_final_stats=1 -artifact_prefix="$crashes/" "$corpus" >"$log" 2>&1 || status=$?
   execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
   rate=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log" | tail -1)
-  coverage=$(grep -o 'cov: [0-9]*' "$log" | tail -1 | cut -d' ' -f2)
+  # -a: a parser's own messages may put binary bytes in the log (OctoMap prints what it read).
+  coverage=$(grep -ao 'cov: [0-9]*' "$log" | tail -1 | cut -d' ' -f2)
   size=$(find "$corpus" -type f | wc -l)
   result=ok
   if [ $status -ne 0 ]; then result="FAILED (exit $status, $log)"; failed+=("$name"); fi
