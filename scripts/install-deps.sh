@@ -40,6 +40,9 @@ PACKAGES=(
   # two-host tests: the link impairer (test/two_host/link_impair.cc) takes packets from an
   # iptables NFQUEUE rule (libnetfilter_queue) to drop, delay and reorder them
   iptables libnetfilter-queue-dev
+  # the reconstruction on a cluster: Slurm and munge (scripts/slurm-cluster.sh runs a private
+  # cluster for the tests)
+  slurmctld slurmd slurm-client munge
 )
 
 echo "install-deps: apt-get update"
