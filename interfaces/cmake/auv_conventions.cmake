@@ -30,7 +30,10 @@ set(AUV_FUZZ_REPLAY_MAIN ${CMAKE_CURRENT_LIST_DIR}/fuzz_replay_main.cc)
 # scripts/fuzz.sh) it is also linked with libFuzzer; both binaries and the seeds are installed
 # into lib/auv_fuzz and share/auv_fuzz/<name>.
 #
-#   auv_add_fuzzer(yaml SOURCES fuzz/yaml.cc LIBRARIES auv_mission_core SEEDS "missions/*.yaml")
+#   auv_add_fuzzer(mission_yaml SOURCES fuzz/mission_yaml.cc LIBRARIES auv_mission_core
+#                  SEEDS "missions/*.yaml")
+#
+# NAME must be unique in the workspace: every package installs its harnesses into lib/auv_fuzz.
 function(auv_add_fuzzer name)
   cmake_parse_arguments(ARG "" "" "SOURCES;LIBRARIES;SEEDS" ${ARGN})
   set(seeds)
@@ -50,6 +53,17 @@ function(auv_add_fuzzer name)
     add_executable(fuzz_${name} ${ARG_SOURCES})
     target_link_libraries(fuzz_${name} PRIVATE ${ARG_LIBRARIES})
     target_link_options(fuzz_${name} PRIVATE -fsanitize=fuzzer)
+    # Refused at install time, before anything is copied: another package's harness of this
+    # name (its binary would be overwritten and never fuzzed).
+    install(CODE "
+      set(owner \"\${CMAKE_INSTALL_PREFIX}/share/auv_fuzz/${name}/package\")
+      if(EXISTS \"\${owner}\")
+        file(READ \"\${owner}\" other)
+        if(NOT other STREQUAL \"${PROJECT_NAME}\")
+          message(FATAL_ERROR \"fuzz harness '${name}' of ${PROJECT_NAME} is also one of \${other}: harness names must be unique in the workspace\")
+        endif()
+      endif()
+      file(WRITE \"\${owner}\" \"${PROJECT_NAME}\")")
     install(TARGETS fuzz_${name} fuzz_${name}_replay RUNTIME DESTINATION lib/auv_fuzz)
     if(seeds)
       install(FILES ${seeds} DESTINATION share/auv_fuzz/${name}/seeds)

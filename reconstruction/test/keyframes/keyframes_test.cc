@@ -313,7 +313,7 @@ TEST(FrameTimes, ReadsTheSidecarAndNamesTheBadLine) {
   const fs::path header = folder / "c.mp4.frames.csv";
   std::ofstream(header) << "t,x\n";
   EXPECT_THROW(readFrameTimes(header), StageError);
-  // Frame numbers outside size_t were cast to it (undefined; fuzz/regressions/frames/).
+  // Frame numbers outside size_t were cast to it (undefined; fuzz/regressions/recon_frames/).
   const fs::path order = folder / "d.mp4.frames.csv";
   for (const char* frame : {"-1", "1e300", "-1e300"}) {
     std::ofstream(order) << "frame,camera_time_s,sim_time_s\n0,1,\n" << frame << ",2,\n";

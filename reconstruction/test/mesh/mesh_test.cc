@@ -303,7 +303,7 @@ TEST(MeshStage, OptionsBindToFlagsAndTheConfigSection) {
 // vertices, a face without corners, a list of lists, a texture before the first newmtl of the
 // material library), exhausted the memory (a vertex count the file cannot hold) or never ended
 // (an element without properties). Each is now a StageError naming the file, and false from
-// readTriangleMesh / readPointCloud (inputs in fuzz/regressions/mesh/).
+// readTriangleMesh / readPointCloud (inputs in fuzz/regressions/recon_mesh/).
 TEST(MeshIo, FilesOpen3dCannotReadSafelyAreStageErrorsNamingTheFile) {
   TempDir dir;
   const std::string header =

@@ -105,7 +105,7 @@ TEST_F(MeshTest, EmptyUnreadableAndUnsupportedFilesAreRejectedByName) {
 // Open3D's PLY reader trusts the file: these crashed it (a polygon's corner past the vertices,
 // a face without corners, a list of lists), exhausted the memory (a vertex count the file cannot
 // hold) or never ended (an element without properties). Each is now an error naming the file
-// (inputs in fuzz/regressions/mesh/), as are the OBJ files below.
+// (inputs in fuzz/regressions/world_mesh/), as are the OBJ files below.
 TEST_F(MeshTest, FilesOpen3dCannotReadSafelyAreRejectedByName) {
   const std::string header =
       "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"

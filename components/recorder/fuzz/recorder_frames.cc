@@ -3,7 +3,7 @@
 // closed and while being written (readSidecarSummary), and the recording with its sidecar as a
 // scan finds it (Catalogue::scan: the sidecar's summary, the video's and sidecar's digests).
 // The recorder opens no video container: it only hashes the bytes (the MP4 is parsed by the
-// reconstruction, reconstruction/fuzz/frames.cc, with the same input layout). A clear error is
+// reconstruction, reconstruction/fuzz/recon_frames.cc, with the same input layout). A clear error is
 // a std::runtime_error naming the file (readSidecarSummary; a scan reports problems and never
 // throws); anything else (a crash, a sanitizer report, another exception) is a bug.
 //
