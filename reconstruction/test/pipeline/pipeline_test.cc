@@ -8,10 +8,8 @@
 #include <sstream>
 
 #include <gtest/gtest.h>
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 
+#include "../support/quarter_sceaux.h"
 #include "auv/recon/common/stage_error.h"
 #include "auv/recon/pipeline/pipeline.h"
 #include "auv/recon/scene/colmap_text.h"
@@ -215,30 +213,10 @@ TEST(Pipeline, BadConfigSectionsAreRefusedBeforeAnyStageRuns) {
   fs::remove_all(root);
 }
 
-/// Sceaux castle at quarter resolution as corrected/castle/ (+ castle.yaml); false if absent.
-bool quarterSceaux(const Survey& survey) {
-  const fs::path data = fs::path(AUV_RECON_SHARED_DATA) / "sceaux_castle" / "images";
-  if (!fs::exists(data / "K.txt")) return false;
-  fs::create_directories(survey.corrected() / "castle");
-  for (const auto& entry : fs::directory_iterator(data)) {
-    if (entry.path().extension() != ".JPG") continue;
-    cv::Mat full = cv::imread(entry.path().string(), cv::IMREAD_COLOR), small;
-    cv::resize(full, small, cv::Size(708, 532), 0, 0, cv::INTER_AREA);
-    cv::imwrite((survey.corrected() / "castle" / (entry.path().stem().string() + ".png")).string(),
-                small);
-  }
-  cv::FileStorage storage((survey.corrected() / "castle.yaml").string(), cv::FileStorage::WRITE);
-  const double f = 2905.88 / 4, cx = (1416 + 0.5) / 4 - 0.5, cy = (1064 + 0.5) / 4 - 0.5;
-  storage << "image_width" << 708 << "image_height" << 532;
-  storage << "camera_matrix" << (cv::Mat_<double>(3, 3) << f, 0, cx, 0, f, cy, 0, 0, 1);
-  storage << "distortion_coefficients" << cv::Mat::zeros(1, 5, CV_64F);
-  return true;
-}
-
 TEST(Pipeline, ChainsFeaturesMatchAndSfmThenSkipsWhatIsUpToDate) {
   const fs::path root = freshFolder("chain");
   const Survey survey(root);
-  if (!quarterSceaux(survey)) GTEST_SKIP() << "Sceaux castle data absent";
+  if (!test_support::quarterSceaux(survey)) GTEST_SKIP() << "Sceaux castle data absent";
   {
     std::ofstream config(root / "recon.yaml");
     config << "features:\n  threads: 2\nmatch:\n  threads: 2\nsfm:\n  threads: 2\n";

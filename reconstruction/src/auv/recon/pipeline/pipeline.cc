@@ -172,19 +172,26 @@ void checkConfigSections(const std::string& config) {
   }
 }
 
-}  // namespace
-
-PipelineResult runPipeline(const Survey& survey, const PipelineOptions& options,
-                           std::ostream& log) {
+/// Every chained stage with its options. Every stage's options are read first, so that a bad
+/// value in any section is an error before the first stage runs, not after hours of work.
+std::vector<ConfiguredStage> configuredChain(const PipelineOptions& options) {
   options.check();
-  const auto start = std::chrono::steady_clock::now();
   checkConfigSections(options.config);
-  // Every stage's options first, so that a bad value in any section is an error before the
-  // first stage runs, not after hours of work.
   std::vector<ConfiguredStage> chain;
   for (const Stage* stage : chainedStages()) {
     chain.push_back(configured(*stage, options.config, options.accept_partial));
   }
+  return chain;
+}
+
+}  // namespace
+
+void checkPipeline(const PipelineOptions& options) { configuredChain(options); }
+
+PipelineResult runPipeline(const Survey& survey, const PipelineOptions& options,
+                           std::ostream& log) {
+  const auto start = std::chrono::steady_clock::now();
+  const std::vector<ConfiguredStage> chain = configuredChain(options);
   PipelineResult result;
   for (size_t i = stageIndex(options.from); i <= stageIndex(options.to); ++i) {
     const Stage& stage = *chain[i].stage;

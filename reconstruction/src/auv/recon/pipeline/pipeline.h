@@ -54,6 +54,10 @@ struct PipelineResult {
   double seconds = 0;
 };
 
+/// What runPipeline checks before its first stage: the options, the config file's sections and
+/// every stage's values in it. Throws std::invalid_argument naming the file, section and key.
+void checkPipeline(const PipelineOptions& options);
+
 /// Runs the stages from `options.from` to `options.to`; `log` gets one line per stage. The
 /// config file is read before any stage runs: a section that names no stage (nor `run`,
 /// `calibrate`, `evaluate`, `figures`), an unknown key or a bad value throws
