@@ -9,7 +9,7 @@
 # (scripts/install-deps.sh). Needs root (namespaces, daemons).
 #
 #   scripts/slurm-cluster.sh up [--dir DIR] [--nodes N] [--cpus-per-node C] [--mem-per-node MB]
-#                               [--subnet A.B.C] [--port P]
+#                               [--subnet A.B.C] [--port P] [--hide DIR]
 #   scripts/slurm-cluster.sh down [--dir DIR]
 #   scripts/slurm-cluster.sh status [--dir DIR]
 #
@@ -20,6 +20,8 @@
 #   --subnet         the bridge's /24 (default 10.213.0): this namespace .1, host i .(i+1),
 #                    the controller .254
 #   --port           slurmctld's port, slurmd's is the next (default 16817)
+#   --hide           the hosts see an empty DIR (a tmpfs over it, as a node's local disk sees
+#                    none of the submitting machine's files): for tests of what they cannot see
 #
 # After `up`: `source DIR/env.sh` points sbatch, squeue, scancel, sinfo at the cluster.
 set -euo pipefail
@@ -29,7 +31,7 @@ die() { echo "slurm-cluster: $*" >&2; exit 1; }
 command=${1:-}
 [ -n "$command" ] || die "expected up, down or status (see the file's comment)"
 shift
-dir=/tmp/auv-slurm nodes=2 cpus=1 mem=2048 subnet=10.213.0 port=16817
+dir=/tmp/auv-slurm nodes=2 cpus=1 mem=2048 subnet=10.213.0 port=16817 hide=""
 while [ $# -gt 0 ]; do
   case "$1" in
     --dir) dir="${2:?--dir needs a folder}"; shift ;;
@@ -38,6 +40,7 @@ while [ $# -gt 0 ]; do
     --mem-per-node) mem="${2:?--mem-per-node needs MB}"; shift ;;
     --subnet) subnet="${2:?--subnet needs A.B.C}"; shift ;;
     --port) port="${2:?--port needs a number}"; shift ;;
+    --hide) hide="${2:?--hide needs a folder}"; shift ;;
     *) die "unknown argument '$1'" ;;
   esac
   shift
@@ -176,7 +179,13 @@ up() {
   for i in $(seq "$nodes"); do
     mkdir -p "$dir/n$i/spool"
     host_namespace "n$i" "$subnet.$((i + 1))"
-    run_in "n$i" slurmd -f "$conf" -N "n$i"
+    if [ -n "$hide" ]; then
+      mkdir -p "$hide"
+      run_in "n$i" unshare --mount --propagation private sh -c \
+        'mount -t tmpfs tmpfs "$1" && shift && exec "$@"' sh "$hide" slurmd -f "$conf" -N "n$i"
+    else
+      run_in "n$i" slurmd -f "$conf" -N "n$i"
+    fi
   done
   echo "export SLURM_CONF=$conf" > "$dir/env.sh"
   # Ready when every host is idle.
