@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cstring>
@@ -179,15 +180,32 @@ JobInfo job(const std::string& id) {
   info.id = id;
   const CommandOutput result = runCommand({"scontrol", "--oneliner", "show", "job", id}, 60);
   if (result.exit_code != 0) return info;  // Slurm forgot it: UNKNOWN
-  const std::string line = result.out.substr(0, result.out.find('\n'));
-  info.state = field(line, "JobState");
-  if (info.state.empty()) info.state = "UNKNOWN";
-  info.reason = field(line, "Reason");
+  // One line per task of an array job (pending tasks may share one): the job is as far as its
+  // least advanced task, and failed if any task failed.
+  auto rank = [](const std::string& state) {
+    if (state == "COMPLETED") return 0;
+    if (state == "PENDING") return 2;
+    if (state == "RUNNING" || state == "COMPLETING" || state == "CONFIGURING") return 1;
+    return 3;  // FAILED, CANCELLED, TIMEOUT, OUT_OF_MEMORY, NODE_FAIL, ...
+  };
+  std::istringstream lines(result.out);
+  bool first = true;
+  for (std::string line; std::getline(lines, line);) {
+    const std::string state = field(line, "JobState");
+    if (state.empty()) continue;
+    if (first || rank(state) > rank(info.state)) {
+      info.state = state;
+      info.reason = field(line, "Reason");
+      info.exit_code = field(line, "ExitCode");
+    }
+    const std::string nodes = field(line, "NodeList");
+    if (!nodes.empty() && nodes != "(null)" && info.nodes.find(nodes) == std::string::npos) {
+      info.nodes += (info.nodes.empty() ? "" : ",") + nodes;
+    }
+    info.elapsed = std::max(info.elapsed, field(line, "RunTime"));  // same width: text order
+    first = false;
+  }
   if (info.reason == "None") info.reason.clear();
-  info.nodes = field(line, "NodeList");
-  if (info.nodes == "(null)") info.nodes.clear();
-  info.elapsed = field(line, "RunTime");
-  info.exit_code = field(line, "ExitCode");
   return info;
 }
 

@@ -13,6 +13,7 @@
 #include "auv/recon/common/report.h"
 #include "auv/recon/common/stage_error.h"
 #include "auv/recon/common/staged_output.h"
+#include "auv/recon/pipeline/stages.h"
 
 namespace fs = std::filesystem;
 
@@ -31,13 +32,16 @@ std::string quoted(const std::string& word) {
   return out + "'";
 }
 
-/// Minutes for `stage`'s job: the option, else from the stage's seconds in report.json.
-int timeLimitMinutes(const Survey& survey, const std::string& stage, const SlurmOptions& slurm) {
+/// Minutes for a job of `stage` (one of slurm.shards shards when `shard`): the option, else
+/// three times its share of the stage's seconds in report.json.
+int timeLimitMinutes(const Survey& survey, const std::string& stage, const SlurmOptions& slurm,
+                     bool shard) {
   if (slurm.time_limit_min > 0) return slurm.time_limit_min;
   const nlohmann::json section = readReportSection(survey.report(), stage);
   const auto seconds = section.find("seconds");
   if (seconds == section.end() || !seconds->is_number()) return 0;
-  return std::max(10, static_cast<int>(std::ceil(3 * seconds->get<double>() / 60)));
+  const double share = seconds->get<double>() / (shard ? slurm.shards : 1);
+  return std::max(10, static_cast<int>(std::ceil(3 * share / 60)));
 }
 
 std::string joined(const std::vector<std::string>& names) {
@@ -143,6 +147,7 @@ void SlurmOptions::check() const {
   AUV_RECON_CHECK_OPTION(time_limit_min >= 0, time_limit_min,
                          "must be >= 0 min (0: from report.json)");
   AUV_RECON_CHECK_OPTION(probe_timeout_s >= 0, probe_timeout_s, "must be >= 0 s (0: no probe)");
+  AUV_RECON_CHECK_OPTION(shards >= 1 && shards <= 10000, shards, "must be in [1, 10000]");
 }
 
 void SlurmOptions::bind(OptionSet& set) {
@@ -153,6 +158,8 @@ void SlurmOptions::bind(OptionSet& set) {
           "minutes per job (0: 3x the stage's seconds in report.json, at least 10)");
   set.add("probe_timeout_s", &probe_timeout_s,
           "s a probe job may take to show the nodes see the survey (0: no probe)");
+  set.add("shards", &shards,
+          "a shardable stage (features) runs as an array of this many jobs, then a merge job");
 }
 
 std::vector<SubmittedJob> submitPipeline(const Survey& survey,
@@ -192,28 +199,36 @@ std::vector<SubmittedJob> submitPipeline(const Survey& survey,
   std::vector<SubmittedJob> jobs;
   nlohmann::json record = {
       {"format", kFormat}, {"submitted", nowUtc()}, {"jobs", nlohmann::json::array()}};
-  for (auto stage = first; stage <= last; ++stage) {
+  // One job: `part` "" (the whole stage), "shards" (an array of slurm.shards tasks) or "merge".
+  auto submitJob = [&](const std::string& stage, const std::string& part) {
     SubmittedJob job;
-    job.stage = *stage;
-    job.script = fs::path("slurm") / (*stage + ".sbatch");
+    job.stage = stage;
+    job.part = part;
+    const std::string base = stage + (part.empty() ? "" : "." + part);
+    job.script = fs::path("slurm") / (base + ".sbatch");
     std::string command = quoted(auv_recon.string()) + " run " + quoted(survey.root().string()) +
-                          " --from " + *stage + " --to " + *stage;
+                          " --from " + stage + " --to " + stage;
     if (!options.config.empty()) {
       command += " --config " + quoted(fs::absolute(options.config).string());
     }
     if (options.force) command += " --force";
     if (options.accept_partial) command += " --accept-partial";
+    const std::string count = std::to_string(slurm.shards);
+    if (part == "shards") command += " --shard \"$SLURM_ARRAY_TASK_ID\"/" + count;
+    if (part == "merge") command += " --merge-shards " + count;
     writeFileAtomically(
         survey.root() / job.script,
-        "#!/bin/sh\n# " + std::string(kFormat) + ": stage " + *stage + "\nexec " + command + "\n");
+        "#!/bin/sh\n# " + std::string(kFormat) + ": stage " + base + "\nexec " + command + "\n");
     std::vector<std::string> args = commonArgs(partition, slurm);
-    args.push_back("--job-name=auv-recon-" + *stage);
-    args.push_back("--output=" + (survey.root() / "slurm" / (*stage + "-%j.log")).string());
-    if (const int minutes = timeLimitMinutes(survey, *stage, slurm); minutes > 0) {
-      args.push_back("--time=" + std::to_string(minutes));
-    }
+    args.push_back("--job-name=auv-recon-" + base);
+    const std::string output_name = base + (part == "shards" ? "-%A_%a.log" : "-%j.log");
+    args.push_back("--output=" + (survey.root() / "slurm" / output_name).string());
+    if (part == "shards") args.push_back("--array=0-" + std::to_string(slurm.shards - 1));
+    const int minutes = timeLimitMinutes(survey, stage, slurm, part == "shards");
+    if (minutes > 0) args.push_back("--time=" + std::to_string(minutes));
     if (!jobs.empty()) {
-      // afterok: a failed stage leaves the later ones pending, never running on its output.
+      // afterok: a failed stage (or any shard of it) removes the later jobs, which never run on
+      // its missing output.
       args.push_back("--dependency=afterok:" + jobs.back().id);
       args.push_back("--kill-on-invalid-dep=yes");
     }
@@ -227,14 +242,25 @@ std::vector<SubmittedJob> submitPipeline(const Survey& survey,
       throw ClusterError(std::string(e.what()) + " (the " + std::to_string(ids.size()) +
                          " jobs submitted before it were cancelled)");
     }
-    job.log = fs::path("slurm") / (*stage + "-" + job.id + ".log");
-    log << "run: " << *stage << ": submitted as job " << job.id << std::endl;
+    job.log =
+        fs::path("slurm") / (base + "-" + job.id + (part == "shards" ? "_<task>.log" : ".log"));
+    log << "run: " << base << ": submitted as job " << job.id
+        << (part == "shards" ? " (" + count + " array tasks)" : "") << std::endl;
     record["jobs"].push_back({{"stage", job.stage},
+                              {"part", job.part},
                               {"id", job.id},
                               {"script", job.script.string()},
                               {"log", job.log.string()}});
     jobs.push_back(job);
     writeFileAtomically(jobsFile(survey), record.dump(2) + "\n");
+  };
+  for (auto stage = first; stage <= last; ++stage) {
+    if (slurm.shards > 1 && pipeline::findStage(*stage)->shardable()) {
+      submitJob(*stage, "shards");
+      submitJob(*stage, "merge");
+    } else {
+      submitJob(*stage, "");
+    }
   }
   return jobs;
 }
@@ -248,6 +274,7 @@ std::vector<SurveyJob> surveyJobs(const Survey& survey) {
     }
     SurveyJob job;
     job.job.stage = entry["stage"];
+    job.job.part = entry.value("part", "");
     job.job.id = entry["id"];
     job.job.script = entry.value("script", "");
     job.job.log = entry.value("log", "");

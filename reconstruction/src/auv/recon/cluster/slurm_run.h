@@ -8,8 +8,11 @@
 // What was submitted is kept in <survey>/slurm/jobs.json (replaced whole):
 //
 //   {"format": "auv-recon-slurm 1", "submitted": "2026-11-29T21:00:00Z",
-//    "jobs": [{"stage": "features", "id": "12", "script": "slurm/features.sbatch",
-//              "log": "slurm/features-12.log"}, ...]}
+//    "jobs": [{"stage": "features", "part": "shards", "id": "12",
+//              "script": "slurm/features.shards.sbatch", "log":
+//              "slurm/features.shards-12_<task>.log"},
+//             {"stage": "features", "part": "merge", "id": "13", ...},
+//             {"stage": "match", "part": "", "id": "14", ...}, ...]}
 
 #include <filesystem>
 #include <iosfwd>
@@ -33,6 +36,9 @@ struct SlurmOptions {
   /// Minutes per job; 0: three times the stage's seconds in the survey's report.json (at least
   /// 10 min), the partition's limit for a stage that never ran.
   int time_limit_min = 0;
+  /// Shardable stages (Stage::shardable: features) run as a job array of this many tasks, each
+  /// one shard, then a merge job; 1: one job per stage.
+  int shards = 1;
   /// Before submitting, one short job checks that the compute nodes see the survey folder
   /// (writable) and can run this auv-recon; seconds it may wait for a node.
   double probe_timeout_s = 300;
@@ -43,7 +49,9 @@ struct SlurmOptions {
 };
 
 struct SubmittedJob {
-  std::string stage, id;
+  std::string stage;
+  std::string part;  ///< "" (the whole stage), "shards" (a job array) or "merge"
+  std::string id;
   std::filesystem::path script, log;  ///< relative to the survey folder
 };
 

@@ -46,6 +46,16 @@ struct StageReport {
   std::vector<std::string> warnings;
 };
 
+/// One piece of a sharded run: `index` (0-based) of `count`.
+struct Shard {
+  int index = 0;
+  int count = 1;
+};
+
+/// `<survey>/.shards/<stage>/<index>-of-<count>/`: where a shard writes (hidden, so that the
+/// up-to-date rule of the stage's own outputs never sees it).
+std::filesystem::path shardFolder(const Survey& survey, const std::string& stage, Shard shard);
+
 class Stage {
  public:
   virtual ~Stage() = default;
@@ -70,11 +80,15 @@ class Stage {
   virtual std::vector<std::filesystem::path> inputs(const Survey& survey) const = 0;
   virtual std::vector<std::filesystem::path> outputs(const Survey& survey) const = 0;
 
-  /// Hook for sharded runs (not implemented yet): the independent units the stage's work can
-  /// be split into on this survey (cameras, images, ...), each run on its own machine through
-  /// the stage's subset option (`--camera` for keyframes and correct) and merged after.
-  /// Empty: the stage runs whole.
-  virtual std::vector<std::string> shards(const Survey& /*survey*/) const { return {}; }
+  /// Sharded runs (cluster/README.md): a stage whose work splits into independent pieces runs
+  /// piece `shard` into shardFolder(survey, name(), shard), each maybe on another machine, and
+  /// mergeShards then writes the stage's outputs as a whole run would have (the same files).
+  /// False: the stage runs whole, and the two below throw std::logic_error.
+  virtual bool shardable() const { return false; }
+  virtual StageReport runShard(const Survey& survey, const StageOptions& options,
+                               Shard shard) const;
+  virtual StageReport mergeShards(const Survey& survey, const StageOptions& options,
+                                  int count) const;
 
   /// The stage's options at their defaults.
   virtual std::unique_ptr<StageOptions> defaultOptions() const = 0;
@@ -94,6 +108,25 @@ class StageWith : public Stage {
     return runWith(survey, dynamic_cast<const StageOptionsOf<Options>&>(options).value);
   }
   virtual StageReport runWith(const Survey& survey, const Options& options) const = 0;
+
+  StageReport runShard(const Survey& survey, const StageOptions& options,
+                       Shard shard) const override {
+    return runShardWith(survey, dynamic_cast<const StageOptionsOf<Options>&>(options).value, shard);
+  }
+  StageReport mergeShards(const Survey& survey, const StageOptions& options,
+                          int count) const override {
+    return mergeShardsWith(survey, dynamic_cast<const StageOptionsOf<Options>&>(options).value,
+                           count);
+  }
+  /// For shardable() stages.
+  virtual StageReport runShardWith(const Survey& survey, const Options& /*options*/,
+                                   Shard shard) const {
+    return Stage::runShard(survey, StageOptionsOf<Options>(), shard);  // throws
+  }
+  virtual StageReport mergeShardsWith(const Survey& survey, const Options& /*options*/,
+                                      int count) const {
+    return Stage::mergeShards(survey, StageOptionsOf<Options>(), count);  // throws
+  }
 };
 
 }  // namespace auv::recon

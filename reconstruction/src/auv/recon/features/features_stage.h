@@ -42,6 +42,17 @@ struct FeaturesStageResult {
 /// missing corrected/ folder or the unreadable image.
 FeaturesStageResult runFeaturesStage(const Survey& survey, const FeaturesStageOptions& options);
 
+/// Shard `shard` of a sharded run (cluster/README.md): every shard.count-th image from
+/// shard.index on, into shardFolder(survey, "features", shard) (its own index.csv and
+/// shard.json). Returns the images extracted.
+size_t runFeaturesShard(const Survey& survey, const FeaturesStageOptions& options, Shard shard);
+
+/// features/ from the `count` shards' folders, the same files as runFeaturesStage writes; the
+/// shards' folders are removed after. Throws StageError naming a shard that has not run or an
+/// image no shard holds.
+FeaturesStageResult mergeFeaturesShards(const Survey& survey, const FeaturesStageOptions& options,
+                                        int count);
+
 /// The `features` stage (common/stage.h): `auv recon features` and a step of `auv recon run`.
 class FeaturesStage final : public StageWith<FeaturesStageOptions> {
  public:
@@ -57,6 +68,11 @@ class FeaturesStage final : public StageWith<FeaturesStageOptions> {
     return {survey.root() / "features" / "index.csv"};
   }
   StageReport runWith(const Survey& survey, const FeaturesStageOptions& options) const override;
+  bool shardable() const override { return true; }
+  StageReport runShardWith(const Survey& survey, const FeaturesStageOptions& options,
+                           Shard shard) const override;
+  StageReport mergeShardsWith(const Survey& survey, const FeaturesStageOptions& options,
+                              int count) const override;
 };
 
 }  // namespace auv::recon::features

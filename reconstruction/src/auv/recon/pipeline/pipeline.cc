@@ -6,6 +6,7 @@
 #include <chrono>
 #include <memory>
 #include <ostream>
+#include <sstream>
 
 #include "auv/config/spelling.h"
 #include "auv/config/yaml_section.h"
@@ -101,6 +102,26 @@ void PipelineOptions::check() const {
   AUV_RECON_CHECK_OPTION(stageIndex(to) < stageNames().size(), to, one_of.c_str());
   AUV_RECON_CHECK_OPTION(stageIndex(from) <= stageIndex(to), from, "must not come after `to`");
   AUV_RECON_CHECK_OPTION(config.empty() || fs::is_regular_file(config), config, "no such file");
+  AUV_RECON_CHECK_OPTION(merge_shards >= 0, merge_shards, "must be >= 0 (0: no merge)");
+  if (shard.empty() && merge_shards == 0) return;
+  AUV_RECON_CHECK_OPTION(shard.empty() || merge_shards == 0, shard,
+                         "a run is a shard or a merge, not both");
+  AUV_RECON_CHECK_OPTION(from == to, from, "a shard or a merge runs one stage: from == to");
+  AUV_RECON_CHECK_OPTION(
+      stageIndex(from) < stageNames().size() && chainedStages()[stageIndex(from)]->shardable(),
+      from, "this stage is not sharded");
+  if (!shard.empty()) parseShard(shard);
+}
+
+Shard parseShard(const std::string& text) {
+  Shard shard;
+  char slash = 0;
+  std::istringstream in(text);
+  if (!(in >> shard.index >> slash >> shard.count) || slash != '/' || !in.eof() ||
+      shard.count < 1 || shard.index < 0 || shard.index >= shard.count) {
+    throw OptionError("shard = " + text + ": expected I/N with 0 <= I < N");
+  }
+  return shard;
 }
 
 void PipelineOptions::bind(OptionSet& set) {
@@ -109,6 +130,11 @@ void PipelineOptions::bind(OptionSet& set) {
   set.add("force", &force, "run stages even when their output is newer than their input");
   set.add("accept_partial", &accept_partial,
           "go on after a partial result (sfm: fewer images registered than asked for)");
+  set.add("shard", &shard,
+          "I/N: only shard I (0-based) of N of one shardable stage (--from = --to), into "
+          ".shards/ (the Slurm executor's jobs; cluster/README.md)");
+  set.add("merge_shards", &merge_shards,
+          "N: write the stage's output from its N shards (0: no merge)");
 }
 
 namespace {
@@ -198,12 +224,21 @@ PipelineResult runPipeline(const Survey& survey, const PipelineOptions& options,
     PipelineStep step;
     step.stage = stage.name();
     const auto stage_start = std::chrono::steady_clock::now();
-    if (!options.force && upToDate(stage.inputs(survey), stage.outputs(survey))) {
+    const bool whole_up_to_date =
+        !options.force && upToDate(stage.inputs(survey), stage.outputs(survey));
+    const Shard shard = options.shard.empty() ? Shard{} : parseShard(options.shard);
+    if (whole_up_to_date ||
+        (!options.shard.empty() && !options.force &&
+         upToDate(stage.inputs(survey), {shardFolder(survey, step.stage, shard)}))) {
       step.outcome = StageOutcome::UP_TO_DATE;
       step.note = "output newer than its input: skipped (--force to run it)";
     } else {
       log << "run: " << step.stage << " ..." << std::endl;
-      const StageReport report = stage.run(survey, *chain[i].options);
+      const StageReport report =
+          !options.shard.empty() ? stage.runShard(survey, *chain[i].options, shard)
+          : options.merge_shards
+              ? stage.mergeShards(survey, *chain[i].options, options.merge_shards)
+              : stage.run(survey, *chain[i].options);
       step.note = report.summary;
       for (const std::string& warning : report.warnings) {
         log << "run: " << step.stage << ": warning: " << warning << std::endl;

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "auv/recon/common/stage.h"
 #include "auv/recon/common/survey.h"
 
 namespace auv::recon {
@@ -32,6 +33,11 @@ struct PipelineOptions {
   /// recon.yaml: one section per stage (`sfm:`, `dense:`, ...), the same keys as the stages'
   /// flags (each stage's Options::bind). Empty: defaults.
   std::string config;
+  /// Sharded runs (cluster/README.md), for one shardable stage (from == to): "i/N" runs shard
+  /// i (0-based) of N into its own folder; merge_shards = N writes the stage's output from
+  /// them. The Slurm executor's jobs use them; by hand they serve a re-run of one shard.
+  std::string shard;
+  int merge_shards = 0;
 
   /// Throws OptionError naming the field: unknown stage, `from` after `to`, missing config.
   void check() const;
@@ -53,6 +59,9 @@ struct PipelineResult {
   std::vector<PipelineStep> stages;
   double seconds = 0;
 };
+
+/// "I/N" -> Shard; throws OptionError.
+Shard parseShard(const std::string& text);
 
 /// What runPipeline checks before its first stage: the options, the config file's sections and
 /// every stage's values in it. Throws std::invalid_argument naming the file, section and key.

@@ -23,7 +23,7 @@ int statusMain(const std::vector<std::string>& args) {
     std::string survey;
     if (!parseSurvey("status", args, survey)) return tools::kExitOk;
     const auto jobs = cluster::surveyJobs(Survey(survey));
-    std::cout << std::left << std::setw(11) << "stage" << std::setw(10) << "job" << std::setw(14)
+    std::cout << std::left << std::setw(17) << "stage" << std::setw(10) << "job" << std::setw(14)
               << "state" << std::setw(12) << "elapsed" << std::setw(10) << "node"
               << "reason / log\n";
     size_t done = 0, failed = 0;
@@ -32,7 +32,8 @@ int statusMain(const std::vector<std::string>& args) {
       const bool bad = cluster::slurm::finished(j.info.state) && j.info.state != "COMPLETED" &&
                        j.info.state != "UNKNOWN";
       failed += bad;
-      std::cout << std::setw(11) << j.job.stage << std::setw(10) << j.job.id << std::setw(14)
+      const std::string name = j.job.stage + (j.job.part.empty() ? "" : "." + j.job.part);
+      std::cout << std::setw(17) << name << std::setw(10) << j.job.id << std::setw(14)
                 << j.info.state << std::setw(12) << j.info.elapsed << std::setw(10) << j.info.nodes
                 << (bad ? (Survey(survey).root() / j.job.log).string() : j.info.reason) << "\n";
     }

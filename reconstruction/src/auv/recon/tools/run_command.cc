@@ -45,7 +45,7 @@ int runMain(const std::vector<std::string>& args) {
       const auto jobs =
           cluster::submitPipeline(Survey(survey), options, slurm,
                                   std::filesystem::read_symlink("/proc/self/exe"), std::cerr);
-      std::cout << "run: " << jobs.size() << " stages submitted to Slurm (jobs " << jobs.front().id
+      std::cout << "run: " << jobs.size() << " jobs submitted to Slurm (" << jobs.front().id
                 << ".." << jobs.back().id << "); `auv recon status " << survey << "` follows them"
                 << std::endl;
       return tools::kExitOk;

@@ -1,0 +1,91 @@
+// Sharded features (cluster/README.md): the shards' merge writes the same files as the whole
+// run, on any number of shards, and refuses to merge when a shard is missing.
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <map>
+
+#include <gtest/gtest.h>
+
+#include "../support/quarter_sceaux.h"
+#include "auv/recon/common/stage_error.h"
+#include "auv/recon/features/features_stage.h"
+
+namespace auv::recon::features {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path freshFolder(const std::string& name) {
+  const fs::path folder =
+      fs::temp_directory_path() / ("auv_shards_test_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(folder);
+  fs::create_directories(folder);
+  return folder;
+}
+
+/// Every file under `folder`, by relative path, with its bytes.
+std::map<std::string, std::string> filesOf(const fs::path& folder) {
+  std::map<std::string, std::string> files;
+  for (const auto& entry : fs::recursive_directory_iterator(folder)) {
+    if (!entry.is_regular_file()) continue;
+    std::ifstream in(entry.path(), std::ios::binary);
+    files[fs::relative(entry.path(), folder).string()] =
+        std::string(std::istreambuf_iterator<char>(in), {});
+  }
+  return files;
+}
+
+TEST(FeatureShards, MergedShardsEqualTheWholeRunOnAnyNumberOfShards) {
+  const fs::path root = freshFolder("equal");
+  const Survey survey(root);
+  if (!test_support::quarterSceaux(survey)) GTEST_SKIP() << "Sceaux castle data absent";
+  FeaturesStageOptions options;
+  options.threads = 1;
+  const FeaturesStageResult whole = runFeaturesStage(survey, options);
+  const auto expected = filesOf(root / "features");
+  ASSERT_EQ(expected.size(), whole.images + 1);  // a .sift per image and index.csv
+
+  for (int count : {1, 3, static_cast<int>(whole.images) + 2}) {  // more shards than images too
+    SCOPED_TRACE(count);
+    fs::remove_all(root / "features");
+    size_t images = 0;
+    for (int index = 0; index < count; ++index) {
+      images += runFeaturesShard(survey, options, {index, count});
+    }
+    EXPECT_EQ(images, whole.images);
+    EXPECT_FALSE(fs::exists(root / "features"));  // shards write only their own folders
+    const FeaturesStageResult merged = mergeFeaturesShards(survey, options, count);
+    EXPECT_EQ(merged.features, whole.features);
+    EXPECT_EQ(filesOf(root / "features"), expected);
+    EXPECT_FALSE(fs::exists(root / ".shards" / "features"));  // cleaned up after the merge
+  }
+  fs::remove_all(root);
+}
+
+TEST(FeatureShards, AMissingShardIsNamedAndTheEarlierOutputStays) {
+  const fs::path root = freshFolder("missing");
+  const Survey survey(root);
+  if (!test_support::quarterSceaux(survey)) GTEST_SKIP() << "Sceaux castle data absent";
+  FeaturesStageOptions options;
+  options.threads = 1;
+  runFeaturesStage(survey, options);
+  const auto before = filesOf(root / "features");
+  runFeaturesShard(survey, options, {0, 2});
+  try {
+    mergeFeaturesShards(survey, options, 2);
+    FAIL() << "merged without shard 1";
+  } catch (const StageError& e) {
+    EXPECT_NE(std::string(e.what()).find("shard 1 of 2 has not run"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("--shard 1/2"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(filesOf(root / "features"), before);
+  EXPECT_THROW(runFeaturesShard(survey, options, {2, 2}), std::invalid_argument);
+  fs::remove_all(root);
+}
+
+}  // namespace
+}  // namespace auv::recon::features
