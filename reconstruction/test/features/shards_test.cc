@@ -1,5 +1,5 @@
-// Sharded features (cluster/README.md): the shards' merge writes the same files as the whole
-// run, on any number of shards, and refuses to merge when a shard is missing.
+// Sharded features and matching (cluster/README.md): the shards' merge writes the same files as
+// the whole run, on any number of shards, and refuses to merge when a shard is missing.
 #include <unistd.h>
 
 #include <filesystem>
@@ -12,6 +12,7 @@
 #include "../support/quarter_sceaux.h"
 #include "auv/recon/common/stage_error.h"
 #include "auv/recon/features/features_stage.h"
+#include "auv/recon/features/match_stage.h"
 
 namespace auv::recon::features {
 namespace {
@@ -84,6 +85,52 @@ TEST(FeatureShards, AMissingShardIsNamedAndTheEarlierOutputStays) {
   }
   EXPECT_EQ(filesOf(root / "features"), before);
   EXPECT_THROW(runFeaturesShard(survey, options, {2, 2}), std::invalid_argument);
+  fs::remove_all(root);
+}
+
+TEST(MatchShards, MergedShardsEqualTheWholeRunOnAnyNumberOfShards) {
+  const fs::path root = freshFolder("match");
+  const Survey survey(root);
+  if (!test_support::quarterSceaux(survey)) GTEST_SKIP() << "Sceaux castle data absent";
+  FeaturesStageOptions features;
+  features.threads = 1;
+  runFeaturesStage(survey, features);
+  MatchStageOptions options;
+  options.threads = 1;
+  const MatchStageResult whole = runMatchStage(survey, options);
+  const fs::path matches = root / "features" / "matches";
+  const auto expected = filesOf(matches);
+  ASSERT_EQ(expected.size(), 2u);  // pairs.bin, pairs.csv
+  const int pairs = static_cast<int>(whole.candidate_pairs);
+  for (int count : {3, pairs + 3}) {  // more shards than pairs too
+    SCOPED_TRACE(count);
+    fs::remove_all(matches);
+    size_t matched = 0;
+    for (int index = 0; index < count; ++index) {
+      matched += runMatchShard(survey, options, {index, count});
+    }
+    EXPECT_EQ(matched, whole.candidate_pairs);
+    const MatchStageResult merged = mergeMatchShards(survey, options, count);
+    EXPECT_EQ(merged.verified_pairs, whole.verified_pairs);
+    EXPECT_EQ(merged.verified_matches, whole.verified_matches);
+    EXPECT_EQ(filesOf(matches), expected);
+    EXPECT_FALSE(fs::exists(root / ".shards" / "match"));
+  }
+  // A shard of another plan (here: of other options) is refused, naming it.
+  MatchStageOptions other = options;
+  other.pairs.exhaustive_max_images = 2;  // sequential pairs: fewer candidates
+  other.pairs.sequential_window = 1;
+  runMatchShard(survey, other, {0, 2});
+  runMatchShard(survey, options, {1, 2});
+  try {
+    mergeMatchShards(survey, options, 2);
+    FAIL() << "merged a shard of another plan";
+  } catch (const StageError& e) {
+    EXPECT_NE(std::string(e.what()).find("shard 0 of 2 matched another set of candidate pairs"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(filesOf(matches), expected);
   fs::remove_all(root);
 }
 

@@ -28,6 +28,10 @@ DescriptorIndex::DescriptorIndex(const cv::Mat& descriptors, const MatchingOptio
     descriptors.convertTo(descriptors_, CV_32F);
   }
   if (descriptors_.rows > options.flann_above) {
+    // The forest's trees are random (FLANN draws from this thread's cv::theRNG()): one seed per
+    // build makes an image's index, and so its matches, the same in every run and every shard
+    // of a sharded match, whichever thread builds it after whatever else.
+    cv::theRNG() = cv::RNG(0x5eed);
     forest_ = std::make_shared<cv::flann::Index>(
         descriptors_, cv::flann::KDTreeIndexParams(options.flann_trees), cvflann::FLANN_DIST_L2);
   }

@@ -29,7 +29,7 @@
 #include "auv/recon/estimators/essential.h"
 #include "auv/recon/estimators/fundamental.h"
 #include "auv/recon/estimators/homography.h"
-#include "auv/recon/features/vocabulary.h"
+#include "auv/recon/features/match_plan.h"
 
 namespace fs = std::filesystem;
 
@@ -38,48 +38,6 @@ namespace {
 
 constexpr const char* kStage = "match";
 
-int threadCount(int requested) {
-  if (requested > 0) return requested;
-  return std::max(1u, std::thread::hardware_concurrency());
-}
-
-std::vector<std::string> splitCsv(const std::string& line) {
-  std::vector<std::string> fields;
-  std::string field;
-  std::istringstream in(line);
-  while (std::getline(in, field, ',')) fields.push_back(field);
-  if (!line.empty() && line.back() == ',') fields.emplace_back();
-  return fields;
-}
-
-// sim_time_s of each keyframe file of keyframes/<camera>/index.csv (the simulator's common
-// clock; camera_time_s is per camera and not synchronised, so it is not used across cameras).
-// Missing index or column: no times.
-std::map<std::string, double> keyframeTimes(const fs::path& index_csv) {
-  std::map<std::string, double> times;
-  std::ifstream in(index_csv);
-  std::string line;
-  if (!in || !std::getline(in, line)) return times;
-  const std::vector<std::string> header = splitCsv(line);
-  const auto column = [&](const std::string& name) {
-    const auto it = std::find(header.begin(), header.end(), name);
-    return it == header.end() ? -1 : static_cast<int>(it - header.begin());
-  };
-  const int file = column("file"), sim = column("sim_time_s");
-  if (file < 0 || sim < 0) return times;
-  while (std::getline(in, line)) {
-    const std::vector<std::string> f = splitCsv(line);
-    if (static_cast<int>(f.size()) <= std::max(file, sim) || f[sim].empty()) continue;
-    try {
-      times[f[file]] = std::stod(f[sim]);
-    } catch (const std::exception&) {
-      // An unreadable time is an unknown time.
-    }
-  }
-  return times;
-}
-
-// An image's features with their nearest-neighbour index, built once for all its pairs.
 struct IndexedFeatures {
   IndexedFeatures(ImageFeatures f, const MatchingOptions& options)
       : features(std::move(f)), index(features.descriptors, options) {}
@@ -237,105 +195,6 @@ VerifiedPair verifyPair(const PairGeometryInput& input, const VerificationOption
 
 namespace {
 
-/// The vehicle's navigation: the option, else the survey's navigation.tum when it has one;
-/// `path` is set to the file read (empty: none).
-std::vector<TimedPosition> readNavigation(const Survey& survey, const MatchStageOptions& options,
-                                          fs::path& path) {
-  path = options.navigation;
-  if (path.empty() && fs::exists(survey.root() / "navigation.tum")) {
-    path = survey.root() / "navigation.tum";
-  }
-  if (path.empty()) return {};
-  try {
-    return readTumTrajectory(path);
-  } catch (const std::exception& e) {
-    throw StageError(kStage, std::string("navigation: ") + e.what());
-  }
-}
-
-/// The images with their camera order, times and navigation positions, and the cameras with
-/// their calibration.
-struct PlacedImages {
-  std::vector<PairImage> images;
-  std::map<std::string, std::unique_ptr<scene::Camera>> cameras;
-  size_t placed = 0;  // images with a navigation position
-};
-
-PlacedImages placeImages(const Survey& survey, const std::vector<FeatureIndexEntry>& entries,
-                         const std::vector<TimedPosition>& trajectory) {
-  PlacedImages out;
-  out.images.resize(entries.size());
-  std::map<std::string, std::map<std::string, double>> times;
-  std::map<std::string, int> next_sequence;
-  for (size_t i = 0; i < entries.size(); ++i) {
-    const FeatureIndexEntry& e = entries[i];
-    if (!out.cameras.count(e.camera)) {
-      // Without corrected/<camera>.yaml (uncalibrated images) the pair takes a fundamental
-      // matrix instead of an essential one.
-      const fs::path yaml = survey.corrected() / (e.camera + ".yaml");
-      std::error_code error;
-      out.cameras[e.camera] =
-          fs::exists(yaml, error)
-              ? std::make_unique<scene::Camera>(calibration::readUndistortedCamera(
-                    yaml, static_cast<uint32_t>(out.cameras.size() + 1), kStage))
-              : nullptr;
-      times[e.camera] = keyframeTimes(survey.keyframes() / e.camera / "index.csv");
-    }
-    PairImage& image = out.images[i];
-    image.name = e.image;
-    image.camera = e.camera;
-    image.sequence = next_sequence[e.camera]++;
-    const std::string file = fs::path(e.image).filename().string();
-    const auto t = times[e.camera].find(file);
-    if (t != times[e.camera].end()) image.time_s = t->second;
-    if (!trajectory.empty() && !std::isnan(image.time_s)) {
-      image.has_position = positionAt(trajectory, image.time_s, image.position);
-      if (image.has_position) ++out.placed;
-    }
-  }
-  return out;
-}
-
-/// Appearance similarity of the images for loop candidates: tf-idf histograms over a
-/// vocabulary trained on a sample of the descriptors. Empty when there are too few of them.
-cv::Mat appearanceSimilarity(const FeatureStore& store,
-                             const std::vector<FeatureIndexEntry>& entries,
-                             const MatchStageOptions& options) {
-  constexpr int kTrainingRows = 30000;
-  const int per_image = std::max(1, kTrainingRows / static_cast<int>(entries.size()));
-  std::mt19937_64 random(7);
-  cv::Mat training;
-  {
-    Progress progress("match: vocabulary sample", "images", entries.size());
-    for (const FeatureIndexEntry& e : entries) {
-      const ImageFeatures f = store.read(e.image);
-      std::vector<int> rows(f.size());
-      std::iota(rows.begin(), rows.end(), 0);
-      std::shuffle(rows.begin(), rows.end(), random);
-      for (int r = 0; r < std::min<int>(per_image, static_cast<int>(rows.size())); ++r) {
-        training.push_back(f.descriptors.row(rows[r]));
-      }
-      progress.advance();
-    }
-  }
-  if (training.rows < options.pairs.vocabulary_words) return cv::Mat();
-  const Vocabulary vocabulary = Vocabulary::train(training, options.pairs.vocabulary_words);
-  std::vector<cv::Mat> histograms(entries.size());
-  Progress progress("match: global descriptors", "images", entries.size());
-  std::atomic<size_t> next{0};
-  auto worker = [&] {
-    for (size_t i = next++; i < entries.size(); i = next++) {
-      histograms[i] = vocabulary.histogram(store.read(entries[i].image).descriptors);
-      progress.advance();
-    }
-  };
-  std::vector<std::thread> pool;
-  for (int t = 1; t < threadCount(options.threads); ++t) pool.emplace_back(worker);
-  worker();
-  for (std::thread& t : pool) t.join();
-  return Vocabulary::similarity(Vocabulary::tfIdf(histograms));
-}
-
 /// Matches and verifies every candidate pair on `threads` threads; the first error ends the
 /// stage.
 std::vector<PairOutcome> matchCandidates(const FeatureStore& store, const PlacedImages& placed,
@@ -395,103 +254,198 @@ std::vector<PairOutcome> matchCandidates(const FeatureStore& store, const Placed
 
 }  // namespace
 
-MatchStageResult runMatchStage(const Survey& survey, const MatchStageOptions& options) {
-  options.check();
-  const auto start = std::chrono::steady_clock::now();
-  const fs::path features_folder = survey.root() / "features";
-  const FeatureStore store(features_folder);
-  const std::vector<FeatureIndexEntry>& entries = store.images();
-  if (entries.size() < 2) {
-    throw StageError(kStage, features_folder.string() + "/index.csv lists " +
-                                 std::to_string(entries.size()) +
-                                 " image(s): at least 2 are needed");
-  }
-  fs::path navigation;
-  const std::vector<TimedPosition> trajectory = readNavigation(survey, options, navigation);
-  const PlacedImages placed = placeImages(survey, entries, trajectory);
-  const size_t images_placed = placed.placed;
-  if (!trajectory.empty()) {
-    std::cout << "match: navigation " << navigation.string() << ": " << images_placed << " of "
-              << placed.images.size() << " keyframes placed; appearance pairs at most "
-              << options.pairs.loop_max_distance_m << " m apart" << std::endl;
-  }
-  // Appearance similarity for loop candidates (only where pairs are not exhaustive).
-  const bool exhaustive = static_cast<int>(entries.size()) <= options.pairs.exhaustive_max_images;
-  const cv::Mat similarity = !exhaustive && options.pairs.loop_top_k > 0
-                                 ? appearanceSimilarity(store, entries, options)
-                                 : cv::Mat();
-  const std::vector<CandidatePair> candidates =
-      selectPairs(placed.images, similarity, options.pairs);
-  const int threads = threadCount(options.threads);
-  std::vector<PairOutcome> outcomes = matchCandidates(store, placed, candidates, options, threads);
+namespace {
 
+constexpr const char* kCsvHeader =
+    "image1,image2,source,kind,putative,inliers,homography_inliers,log10_nfa,threshold_px,status\n";
+
+/// One line of pairs.csv.
+std::string csvRow(const PairOutcome& o) {
+  const VerifiedPair& p = o.pair;
+  std::ostringstream row;
+  row << p.image1 << "," << p.image2 << "," << pairSourceName(p.source) << ","
+      << geometryKindName(p.kind) << "," << p.putative << "," << p.inliers.size() << ","
+      << p.homography_inliers << "," << p.log10_nfa << "," << p.threshold_px << "," << o.status
+      << "\n";
+  return row.str();
+}
+
+double secondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+/// features/matches/ (pairs.bin of the verified pairs, pairs.csv of every candidate) and the
+/// stage's section of report.json.
+MatchStageResult writeMatches(const Survey& survey, const MatchStageOptions& options,
+                              const MatchPlan& plan, const std::vector<VerifiedPair>& verified,
+                              const std::string& csv, double seconds, int threads, int shards) {
   MatchStageResult summary;
-  summary.images = entries.size();
-  summary.candidate_pairs = candidates.size();
-  std::vector<VerifiedPair> verified;
+  summary.images = plan.store->images().size();
+  summary.candidate_pairs = plan.candidates.size();
+  summary.verified_pairs = verified.size();
   std::map<std::string, size_t> by_source;
-  std::ostringstream csv;
-  csv << "image1,image2,source,kind,putative,inliers,homography_inliers,log10_nfa,threshold_px,"
-         "status\n";
-  for (PairOutcome& o : outcomes) {
-    const VerifiedPair& p = o.pair;
-    csv << p.image1 << "," << p.image2 << "," << pairSourceName(p.source) << ","
-        << geometryKindName(p.kind) << "," << p.putative << "," << p.inliers.size() << ","
-        << p.homography_inliers << "," << p.log10_nfa << "," << p.threshold_px << "," << o.status
-        << "\n";
-    if (o.pair.inliers.empty()) continue;
+  for (const VerifiedPair& p : verified) {
     ++by_source[pairSourceName(p.source)];
     summary.verified_matches += p.inliers.size();
     (p.kind == GeometryKind::ESSENTIAL ? summary.essential_pairs : summary.fundamental_pairs)++;
-    verified.push_back(std::move(o.pair));
   }
-  summary.verified_pairs = verified.size();
   if (verified.empty()) {
-    throw StageError(kStage, "no pair of the " + std::to_string(candidates.size()) +
+    throw StageError(kStage, "no pair of the " + std::to_string(plan.candidates.size()) +
                                  " candidates verified (at least " +
                                  std::to_string(options.verification.min_inliers) +
                                  " geometric inliers needed); earlier matches kept");
   }
-
-  StagedOutput output(features_folder / "matches");
+  StagedOutput output(survey.root() / "features" / "matches");
   writeVerifiedPairs(output.path() / "pairs.bin", verified);
-  writeFileAtomically(output.path() / "pairs.csv", csv.str());
+  writeFileAtomically(output.path() / "pairs.csv", kCsvHeader + csv);
   output.commit();
-  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  summary.seconds = seconds;
 
   nlohmann::json sources = nlohmann::json::object();
   for (const auto& [source, count] : by_source) sources[source] = count;
-  updateReport(survey.report(), kStage,
-               {{"images", summary.images},
-                {"images_with_navigation", images_placed},
-                {"candidate_pairs", summary.candidate_pairs},
-                {"verified_pairs", summary.verified_pairs},
-                {"verified_pairs_by_source", sources},
-                {"verified_matches", summary.verified_matches},
-                {"essential_pairs", summary.essential_pairs},
-                {"fundamental_pairs", summary.fundamental_pairs},
-                {"exhaustive", exhaustive},
-                {"seconds", summary.seconds},
-                {"threads", threads},
-                {"options",
-                 {{"ratio", options.matching.ratio},
-                  {"mutual", options.matching.mutual},
-                  {"flann_above", options.matching.flann_above},
-                  {"flann_trees", options.matching.flann_trees},
-                  {"flann_checks", options.matching.flann_checks},
-                  {"sequential_window", options.pairs.sequential_window},
-                  {"exhaustive_max_images", options.pairs.exhaustive_max_images},
-                  {"cross_camera_max_dt_s", options.pairs.cross_camera_max_dt_s},
-                  {"loop_top_k", options.pairs.loop_top_k},
-                  {"loop_max_distance_m", options.pairs.loop_max_distance_m},
-                  {"navigation", navigation.string()},
-                  {"min_inliers", options.verification.min_inliers},
-                  {"max_threshold_px", options.verification.max_threshold_px}}}});
+  nlohmann::json report = {{"images", summary.images},
+                           {"images_with_navigation", plan.placed.placed},
+                           {"candidate_pairs", summary.candidate_pairs},
+                           {"verified_pairs", summary.verified_pairs},
+                           {"verified_pairs_by_source", sources},
+                           {"verified_matches", summary.verified_matches},
+                           {"essential_pairs", summary.essential_pairs},
+                           {"fundamental_pairs", summary.fundamental_pairs},
+                           {"exhaustive", plan.exhaustive},
+                           {"seconds", summary.seconds},
+                           {"threads", threads},
+                           {"options",
+                            {{"ratio", options.matching.ratio},
+                             {"mutual", options.matching.mutual},
+                             {"flann_above", options.matching.flann_above},
+                             {"flann_trees", options.matching.flann_trees},
+                             {"flann_checks", options.matching.flann_checks},
+                             {"sequential_window", options.pairs.sequential_window},
+                             {"exhaustive_max_images", options.pairs.exhaustive_max_images},
+                             {"cross_camera_max_dt_s", options.pairs.cross_camera_max_dt_s},
+                             {"loop_top_k", options.pairs.loop_top_k},
+                             {"loop_max_distance_m", options.pairs.loop_max_distance_m},
+                             {"navigation", plan.navigation.string()},
+                             {"min_inliers", options.verification.min_inliers},
+                             {"max_threshold_px", options.verification.max_threshold_px}}}};
+  if (shards > 1) report["shards"] = shards;
+  updateReport(survey.report(), kStage, report);
   return summary;
 }
 
-StageReport MatchStage::runWith(const Survey& survey, const MatchStageOptions& options) const {
-  const MatchStageResult result = runMatchStage(survey, options);
+}  // namespace
+
+MatchStageResult runMatchStage(const Survey& survey, const MatchStageOptions& options) {
+  options.check();
+  const auto start = std::chrono::steady_clock::now();
+  const MatchPlan plan = planMatches(survey, options);
+  const int threads = matchThreads(options.threads);
+  std::vector<PairOutcome> outcomes =
+      matchCandidates(*plan.store, plan.placed, plan.candidates, options, threads);
+  std::vector<VerifiedPair> verified;
+  std::string csv;
+  for (PairOutcome& o : outcomes) {
+    csv += csvRow(o);
+    if (!o.pair.inliers.empty()) verified.push_back(std::move(o.pair));
+  }
+  return writeMatches(survey, options, plan, verified, csv, secondsSince(start), threads, 1);
+}
+
+size_t runMatchShard(const Survey& survey, const MatchStageOptions& options, Shard shard) {
+  options.check();
+  if (shard.count < 1 || shard.index < 0 || shard.index >= shard.count) {
+    throw std::invalid_argument("shard " + std::to_string(shard.index) + "/" +
+                                std::to_string(shard.count) + ": expected 0 <= index < count");
+  }
+  const auto start = std::chrono::steady_clock::now();
+  const MatchPlan plan = planMatches(survey, options);
+  std::vector<CandidatePair> mine;  // candidates index, index + count, ...
+  for (size_t i = static_cast<size_t>(shard.index); i < plan.candidates.size(); i += shard.count) {
+    mine.push_back(plan.candidates[i]);
+  }
+  const int threads = matchThreads(options.threads);
+  std::vector<PairOutcome> outcomes =
+      mine.empty() ? std::vector<PairOutcome>{}
+                   : matchCandidates(*plan.store, plan.placed, mine, options, threads);
+  std::vector<VerifiedPair> verified;
+  std::string csv;
+  for (PairOutcome& o : outcomes) {
+    csv += csvRow(o);
+    if (!o.pair.inliers.empty()) verified.push_back(std::move(o.pair));
+  }
+  StagedOutput output(shardFolder(survey, kStage, shard));
+  writeVerifiedPairs(output.path() / "pairs.bin", verified);
+  writeFileAtomically(output.path() / "rows.csv", csv);
+  writeFileAtomically(output.path() / "shard.json",
+                      nlohmann::json{{"candidates", plan.candidates.size()},
+                                     {"seconds", secondsSince(start)},
+                                     {"threads", threads}}
+                          .dump());
+  output.commit();
+  return mine.size();
+}
+
+MatchStageResult mergeMatchShards(const Survey& survey, const MatchStageOptions& options,
+                                  int count) {
+  options.check();
+  const MatchPlan plan = planMatches(survey, options);
+  struct ShardRows {
+    std::vector<std::string> rows;
+    std::vector<VerifiedPair> verified;
+    size_t next_row = 0, next_pair = 0;
+  };
+  std::vector<ShardRows> shards(count);
+  double seconds = 0;
+  int threads = 1;
+  for (int index = 0; index < count; ++index) {
+    const fs::path folder = shardFolder(survey, kStage, {index, count});
+    const std::string which = "shard " + std::to_string(index) + " of " + std::to_string(count);
+    if (!fs::exists(folder / "shard.json")) {
+      throw StageError(kStage, which + " has not run (`auv recon run " + survey.root().string() +
+                                   " --from match --to match --shard " + std::to_string(index) +
+                                   "/" + std::to_string(count) + "`)");
+    }
+    std::ifstream json_in(folder / "shard.json");
+    const nlohmann::json shard_report = nlohmann::json::parse(json_in, nullptr, false);
+    if (shard_report.value("candidates", size_t{0}) != plan.candidates.size()) {
+      throw StageError(kStage, which +
+                                   " matched another set of candidate pairs (the features "
+                                   "or options changed since it ran): run the shards again");
+    }
+    seconds += shard_report.value("seconds", 0.0);
+    threads = std::max(threads, shard_report.value("threads", 1));
+    std::ifstream rows_in(folder / "rows.csv");
+    for (std::string line; std::getline(rows_in, line);) shards[index].rows.push_back(line + "\n");
+    shards[index].verified = readVerifiedPairs(folder / "pairs.bin");
+  }
+  // The candidates in their order: candidate i is row i / count of shard i % count.
+  std::vector<VerifiedPair> verified;
+  std::string csv;
+  for (size_t i = 0; i < plan.candidates.size(); ++i) {
+    ShardRows& shard = shards[i % count];
+    if (shard.next_row >= shard.rows.size()) {
+      throw StageError(kStage, "shard " + std::to_string(i % count) + " of " +
+                                   std::to_string(count) + " is short of rows: run it again");
+    }
+    const std::string& row = shard.rows[shard.next_row++];
+    csv += row;
+    if (row.size() > 10 && row.compare(row.size() - 10, 10, ",verified\n") == 0) {
+      if (shard.next_pair >= shard.verified.size()) {
+        throw StageError(kStage, "shard " + std::to_string(i % count) +
+                                     ": pairs.bin and rows.csv disagree: run it again");
+      }
+      verified.push_back(std::move(shard.verified[shard.next_pair++]));
+    }
+  }
+  MatchStageResult result =
+      writeMatches(survey, options, plan, verified, csv, seconds, threads, count);
+  fs::remove_all(survey.root() / ".shards" / kStage);
+  return result;
+}
+
+namespace {
+
+StageReport reportOf(const Survey& survey, const MatchStageResult& result) {
   std::ostringstream line;
   line << "match: " << result.verified_pairs << " of " << result.candidate_pairs
        << " candidate pairs verified (" << result.essential_pairs << " essential, "
@@ -503,6 +457,29 @@ StageReport MatchStage::runWith(const Survey& survey, const MatchStageOptions& o
   report.summary = std::to_string(result.verified_pairs) + " of " +
                    std::to_string(result.candidate_pairs) + " pairs verified, " +
                    std::to_string(result.verified_matches) + " matches";
+  return report;
+}
+
+}  // namespace
+
+StageReport MatchStage::runWith(const Survey& survey, const MatchStageOptions& options) const {
+  return reportOf(survey, runMatchStage(survey, options));
+}
+
+StageReport MatchStage::runShardWith(const Survey& survey, const MatchStageOptions& options,
+                                     Shard shard) const {
+  const size_t pairs = runMatchShard(survey, options, shard);
+  StageReport report;
+  report.summary = "shard " + std::to_string(shard.index) + " of " + std::to_string(shard.count) +
+                   ": " + std::to_string(pairs) + " pairs";
+  report.lines.push_back("match: " + report.summary);
+  return report;
+}
+
+StageReport MatchStage::mergeShardsWith(const Survey& survey, const MatchStageOptions& options,
+                                        int count) const {
+  StageReport report = reportOf(survey, mergeMatchShards(survey, options, count));
+  report.summary += " (" + std::to_string(count) + " shards merged)";
   return report;
 }
 

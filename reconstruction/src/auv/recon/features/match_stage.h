@@ -79,6 +79,17 @@ struct MatchStageResult {
 /// naming what is missing (features/, a feature file) or when no pair verifies.
 MatchStageResult runMatchStage(const Survey& survey, const MatchStageOptions& options);
 
+/// Shard `shard` of a sharded match (cluster/README.md): candidate pairs shard.index,
+/// shard.index + shard.count, ... of the plan every shard computes alike (match_plan.h), into
+/// shardFolder(survey, "match", shard). Returns the pairs matched.
+size_t runMatchShard(const Survey& survey, const MatchStageOptions& options, Shard shard);
+
+/// features/matches/ from the `count` shards' folders, the same files as runMatchStage writes;
+/// the shards' folders are removed after. Throws StageError naming a shard that has not run or
+/// matched another set of candidates.
+MatchStageResult mergeMatchShards(const Survey& survey, const MatchStageOptions& options,
+                                  int count);
+
 /// The `match` stage (common/stage.h): `auv recon match` and a step of `auv recon run`.
 class MatchStage final : public StageWith<MatchStageOptions> {
  public:
@@ -96,6 +107,11 @@ class MatchStage final : public StageWith<MatchStageOptions> {
     return {survey.root() / "features" / "matches"};
   }
   StageReport runWith(const Survey& survey, const MatchStageOptions& options) const override;
+  bool shardable() const override { return true; }
+  StageReport runShardWith(const Survey& survey, const MatchStageOptions& options,
+                           Shard shard) const override;
+  StageReport mergeShardsWith(const Survey& survey, const MatchStageOptions& options,
+                              int count) const override;
 };
 
 }  // namespace auv::recon::features
