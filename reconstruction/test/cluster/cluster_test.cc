@@ -142,15 +142,15 @@ TEST_F(SlurmCluster, AChainOfStagesRunsAsJobsAndIsFollowed) {
       << bad.err;
   EXPECT_FALSE(fs::exists(root / "slurm" / "jobs.json"));
 
-  // features as two array tasks (one per host) and a merge, then match and sfm.
+  // features and match as two array tasks each (one per host) and a merge, then sfm.
   const CommandOutput run =
       tool({"run", root.string(), "--executor", "slurm", "--from", "features", "--to", "sfm",
             "--config", (root / "recon.yaml").string(), "--mem-mb", "2000", "--shards", "2"});
   ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
-  EXPECT_NE(run.out.find("4 jobs submitted to Slurm"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("5 jobs submitted to Slurm"), std::string::npos) << run.out;
   EXPECT_NE(run.err.find("run: features.shards: submitted as job"), std::string::npos) << run.err;
   EXPECT_NE(run.err.find("(2 array tasks)"), std::string::npos) << run.err;
-  EXPECT_NE(run.err.find("run: match: submitted as job"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("run: match.merge: submitted as job"), std::string::npos) << run.err;
   // A second submission while the first is queued is refused, naming the running job.
   const CommandOutput twice = tool({"run", root.string(), "--executor", "slurm"});
   EXPECT_EQ(twice.exit_code, 2);
@@ -158,7 +158,7 @@ TEST_F(SlurmCluster, AChainOfStagesRunsAsJobsAndIsFollowed) {
 
   const CommandOutput status = waitForJobs(root, 1500);
   EXPECT_EQ(status.exit_code, 0) << status.out << status.err;
-  EXPECT_NE(status.out.find("status: 4 of 4 jobs completed"), std::string::npos) << status.out;
+  EXPECT_NE(status.out.find("status: 5 of 5 jobs completed"), std::string::npos) << status.out;
   // The two shards ran at once, one on each host.
   const std::string shards_line = status.out.substr(status.out.find("features.shards"));
   const std::string shards_row = shards_line.substr(0, shards_line.find('\n'));
@@ -166,7 +166,8 @@ TEST_F(SlurmCluster, AChainOfStagesRunsAsJobsAndIsFollowed) {
   EXPECT_NE(shards_row.find("n2"), std::string::npos) << status.out;
   EXPECT_GE(scene::readColmapText(survey.sparse()).images.size(), 8u);
   // Each stage ran on a host of the cluster, in its own job, and logged there.
-  for (const char* stage : {"features.shards", "features.merge", "match", "sfm"}) {
+  for (const char* stage :
+       {"features.shards", "features.merge", "match.shards", "match.merge", "sfm"}) {
     bool logged = false;
     for (const auto& entry : fs::directory_iterator(root / "slurm")) {
       logged = logged || entry.path().filename().string().rfind(std::string(stage) + "-", 0) == 0;
