@@ -9,6 +9,13 @@ std::filesystem::path shardFolder(const Survey& survey, const std::string& stage
          (std::to_string(shard.index) + "-of-" + std::to_string(shard.count));
 }
 
+void Shard::check() const {
+  if (count < 1 || index < 0 || index >= count) {
+    throw std::invalid_argument("shard " + std::to_string(index) + "/" + std::to_string(count) +
+                                ": expected 0 <= index < count");
+  }
+}
+
 StageReport Stage::runShard(const Survey&, const StageOptions&, Shard) const {
   throw std::logic_error(name() + ": this stage is not sharded");
 }

@@ -50,6 +50,8 @@ struct StageReport {
 struct Shard {
   int index = 0;
   int count = 1;
+  /// Throws std::invalid_argument ("shard I/N: ...") unless 0 <= index < count.
+  void check() const;
 };
 
 /// `<survey>/.shards/<stage>/<index>-of-<count>/`: where a shard writes (hidden, so that the

@@ -219,10 +219,7 @@ FeaturesStageResult runFeaturesStage(const Survey& survey, const FeaturesStageOp
 
 size_t runFeaturesShard(const Survey& survey, const FeaturesStageOptions& options, Shard shard) {
   options.check();
-  if (shard.count < 1 || shard.index < 0 || shard.index >= shard.count) {
-    throw std::invalid_argument("shard " + std::to_string(shard.index) + "/" +
-                                std::to_string(shard.count) + ": expected 0 <= index < count");
-  }
+  shard.check();
   const auto start = std::chrono::steady_clock::now();
   std::vector<std::string> cameras;
   const std::vector<Job> all = listJobs(survey, options, cameras);

@@ -353,10 +353,7 @@ MatchStageResult runMatchStage(const Survey& survey, const MatchStageOptions& op
 
 size_t runMatchShard(const Survey& survey, const MatchStageOptions& options, Shard shard) {
   options.check();
-  if (shard.count < 1 || shard.index < 0 || shard.index >= shard.count) {
-    throw std::invalid_argument("shard " + std::to_string(shard.index) + "/" +
-                                std::to_string(shard.count) + ": expected 0 <= index < count");
-  }
+  shard.check();
   const auto start = std::chrono::steady_clock::now();
   const MatchPlan plan = planMatches(survey, options);
   std::vector<CandidatePair> mine;  // candidates index, index + count, ...
