@@ -72,7 +72,7 @@ PsnrResult psnr(const cv::Mat& reference, const cv::Mat& test, const cv::Mat& ma
 
 std::vector<cv::Mat> readVideoFrames(const std::filesystem::path& video,
                                      const std::vector<int64_t>& frames) {
-  cv::VideoCapture capture(video.string());
+  cv::VideoCapture capture(video.string(), cv::CAP_FFMPEG);
   if (!capture.isOpened()) throw StageError("evaluate", video.string() + ": cannot open video");
   std::map<int64_t, size_t> wanted;
   for (size_t i = 0; i < frames.size(); ++i) wanted.emplace(frames[i], i);

@@ -48,7 +48,10 @@ void importVideo(const Survey& survey, const ImportStageOptions& options,
   }
 
   // Decode it once through: the frame times for the sidecar, and proof that it is a video.
-  cv::VideoCapture capture(source.string());
+  // FFmpeg, as every stage reads videos (keyframes/video.h): the same frames and times, and no
+  // probing of the other backends (GStreamer's camera plugins leaked libusb's device list at
+  // each open, found by the recon_frames fuzz harness under ASan).
+  cv::VideoCapture capture(source.string(), cv::CAP_FFMPEG);
   std::ostringstream sidecar;
   sidecar.precision(15);
   sidecar << "frame,camera_time_s,sim_time_s\n";

@@ -146,7 +146,7 @@ OverlayDetection detectInVideos(const std::vector<fs::path>& videos,
   for (const fs::path& video : videos) {
     int count = keyframes::expectedFrameCount(video);
     if (count <= 0) {  // unknown: count by decoding
-      cv::VideoCapture capture(video.string());
+      cv::VideoCapture capture(video.string(), cv::CAP_FFMPEG);
       if (!capture.isOpened()) throw std::runtime_error(video.string() + ": cannot open the video");
       count = 0;
       while (capture.grab()) ++count;
@@ -160,7 +160,7 @@ OverlayDetection detectInVideos(const std::vector<fs::path>& videos,
   long first = 0;  // global index of the current video's frame 0
   int next = 0;    // next sample
   for (size_t v = 0; v < videos.size(); ++v) {
-    cv::VideoCapture capture(videos[v].string());
+    cv::VideoCapture capture(videos[v].string(), cv::CAP_FFMPEG);
     if (!capture.isOpened()) {
       throw std::runtime_error(videos[v].string() + ": cannot open the video");
     }
