@@ -159,7 +159,8 @@ void SlurmOptions::bind(OptionSet& set) {
   set.add("probe_timeout_s", &probe_timeout_s,
           "s a probe job may take to show the nodes see the survey (0: no probe)");
   set.add("shards", &shards,
-          "a shardable stage (features) runs as an array of this many jobs, then a merge job");
+          "shardable stages (features, match) run as an array of this many jobs, then a merge "
+          "job");
 }
 
 std::vector<SubmittedJob> submitPipeline(const Survey& survey,
