@@ -134,17 +134,15 @@ void checkAvailable() {
         "--executor slurm: no Slurm on this machine (sbatch not found on PATH); install the "
         "cluster's client commands, or run with --executor local");
   }
-  const CommandOutput info = runCommand({"sinfo", "--noheader", "--format=%R"}, 60);
-  if (info.exit_code != 0) {
-    throw ClusterError("--executor slurm: Slurm's controller cannot be reached: " +
-                       trimmed(info.err) + " (is SLURM_CONF the cluster's?)");
-  }
 }
 
 std::vector<std::string> partitions(std::string* default_partition) {
   const std::vector<std::string> argv = {"sinfo", "--noheader", "--format=%P"};
   const CommandOutput result = runCommand(argv, 60);
-  if (result.exit_code != 0) throw ClusterError(failure(argv, result));
+  if (result.exit_code != 0) {  // the first question asked of the controller
+    throw ClusterError("--executor slurm: Slurm's controller cannot be reached: " +
+                       trimmed(result.err) + " (is SLURM_CONF the cluster's?)");
+  }
   std::vector<std::string> names;
   if (default_partition != nullptr) default_partition->clear();
   std::istringstream lines(result.out);

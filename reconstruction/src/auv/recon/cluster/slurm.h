@@ -43,10 +43,11 @@ struct JobInfo {
 
 namespace slurm {
 
-/// Throws ClusterError when sbatch is not on PATH or cannot reach a controller.
+/// Throws ClusterError when sbatch is not on PATH.
 void checkAvailable();
 /// The partitions (the default one marked by Slurm's '*' is returned without it); `default_`
-/// gets the default partition's name (empty: none).
+/// gets the default partition's name (empty: none). Throws ClusterError when no controller
+/// answers.
 std::vector<std::string> partitions(std::string* default_partition = nullptr);
 /// sbatch `args` `script`; returns the job id. Throws ClusterError with sbatch's message.
 std::string submit(const std::vector<std::string>& args, const std::filesystem::path& script);
