@@ -24,6 +24,10 @@ PACKAGES=(
   # reconstruction: bundle adjustment (Ceres); COLMAP is the SfM benchmark's anchor, opencv-doc
   # ships real chessboard photos for the calibration tests
   libceres-dev colmap opencv-doc
+  # the COLMAP benchmark reads COLMAP's database (pairs matched and verified)
+  sqlite3
+  # reconstruction: the 5-point relative-pose solver of AC-RANSAC's essential matrix (OpenGV)
+  libopengv-dev
   # reconstruction import: EXIF of photos from anywhere (libexiv2); exiv2 writes test EXIF
   libexiv2-dev exiv2
   # reconstruction texturing: max-flow (Boost.Graph, header-only), atlas packing (stb_rect_pack)

@@ -24,11 +24,13 @@
 #   reconstruction/bench/pipeline/make_canyon_survey.sh [--survey DIR] [--run DIR] [--full]
 #       [--start S] [--seconds S] [--fps F] [--width W] [--height H] [--visibility M]
 #       [--threads N] [--seed N] [--world NAME|SCENARIO.yaml] [--initial-map MAP.bt]
-#       [--calibrate] [--no-recordings] [--domain N]
+#       [--calibrate] [--no-recordings] [--domain N] [--reuse-render]
 # --world: the world of the mission (default canyon), e.g. a later visit of the canyon with its
 # changes (`auv sim generate canyon --epoch 2`: <dir>/canyon_epoch2.yaml); --seed is then the
 # sensors' noise only. --initial-map MAP.bt: the mission starts from an earlier visit's map
 # (<run>/mission/map.bt), aligned to this visit's sonar returns before it is trusted.
+# --reuse-render keeps a render folder that holds every camera's video (e.g. after a survey
+# step failed): only the survey folder is made again.
 # --no-recordings leaves recordings/ to `auv recon pull` from a recorder serving
 # <survey>.truth/vehicle/recordings (what scripts/run-demo.sh does).
 # Paths are relative to the workspace root (default survey auv_runs/survey-canyon-eval, mission
@@ -52,6 +54,7 @@ initial_map=
 calibrate=0
 recordings=1
 domain=46
+reuse_render=0
 while [ $# -gt 0 ]; do
   case "$1" in
     --survey) survey=$2; shift 2 ;;
@@ -70,6 +73,7 @@ while [ $# -gt 0 ]; do
     --calibrate) calibrate=1; shift ;;
     --no-recordings) recordings=0; shift ;;
     --domain) domain=$2; shift 2 ;;
+    --reuse-render) reuse_render=1; shift ;;
     -h|--help) sed -n '2,30p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) echo "make_canyon_survey: unknown option $1 (--help)" >&2; exit 2 ;;
   esac
@@ -117,12 +121,15 @@ EOF
 )
 start=$(python3 -c "print(round($mission_start + $start, 2))")
 end=$(python3 -c "print(round($start + $seconds, 2))")
-step "render folder $truth: ${width}x${height} at $fps fps, sim time $start-$end s (mission start $mission_start s)"
-rm -rf "$truth"
-mkdir -p "$truth/ground_truth"
-cp "$run/ground_truth/trajectory.tum" "$run/ground_truth/navigation.tum" "$truth/ground_truth/"
-[ -f "$run/mission/summary.json" ] && mkdir -p "$truth/mission" && cp "$run/mission/summary.json" "$truth/mission/"
-python3 - "$run/scenario.yaml" "$truth/scenario.yaml" "$width" "$height" "$fps" "$visibility" <<'EOF'
+if [ "$reuse_render" = 1 ] && ls "$truth"/vehicle/recordings/*/*.mp4 > /dev/null 2>&1; then
+  step "reusing the render folder $truth"
+else
+  step "render folder $truth: ${width}x${height} at $fps fps, sim time $start-$end s (mission start $mission_start s)"
+  rm -rf "$truth"
+  mkdir -p "$truth/ground_truth"
+  cp "$run/ground_truth/trajectory.tum" "$run/ground_truth/navigation.tum" "$truth/ground_truth/"
+  [ -f "$run/mission/summary.json" ] && mkdir -p "$truth/mission" && cp "$run/mission/summary.json" "$truth/mission/"
+  python3 - "$run/scenario.yaml" "$truth/scenario.yaml" "$width" "$height" "$fps" "$visibility" <<'EOF'
 import sys, yaml
 source, target, width, height, fps, visibility = sys.argv[1:7]
 scenario = yaml.safe_load(open(source))
@@ -136,9 +143,10 @@ with open(target, "w") as out:
     out.write("# The mission's scenario with the survey's camera settings (make_canyon_survey.sh)\n")
     yaml.safe_dump(scenario, out, sort_keys=False)
 EOF
-auv sim check "$truth/scenario.yaml" | head -3
-"${guard[@]}" auv sim render "$truth" --start "$start" --end "$end" --threads "$threads" \
-  --progress-every 30
+  auv sim check "$truth/scenario.yaml" | head -3
+  "${guard[@]}" auv sim render "$truth" --start "$start" --end "$end" --threads "$threads" \
+    --progress-every 30
+fi
 t2=$(date +%s)
 
 # 3. The survey folder.

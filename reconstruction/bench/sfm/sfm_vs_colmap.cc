@@ -1,16 +1,23 @@
 // Benchmark (issue 6): our features + match + incremental SfM against COLMAP 3.8 (CPU:
-// feature_extractor, exhaustive_matcher, mapper) on the same undistorted images of a survey
+// feature_extractor, a matcher, mapper) on the same undistorted images of a survey
 // (corrected/<camera>/ + corrected/<camera>.yaml), in the same run: wall time per stage,
 // images registered, points, mean track length, mean reprojection error (both models measured
 // by the same code), and, with --truth (a simulator run's ground_truth/ folder), the camera
 // position error after a similarity alignment to the true poses.
 //
 //   sfm_vs_colmap --survey S --work DIR --out bench_results/sfm_vs_colmap_<name>.json
-//                 [--truth <run>/ground_truth] [--threads 2] [--skip-colmap]
+//                 [--truth <run>/ground_truth] [--threads 2] [--skip-colmap] [--skip-ours]
+//                 [--colmap-matcher exhaustive|sequential|vocab_tree] [--vocab-images 20]
+//
+// COLMAP's matchers (issue 24): exhaustive (every pair), sequential (each image with the next
+// 10 of COLMAP's image order, which is camera by camera here, and quadratic overlap; no loop
+// detection) and vocab_tree (a tree of 4096 words built on the survey's own descriptors with
+// vocab_tree_builder, then the --vocab-images most similar images per image).
 //
 // The survey's features/, sparse/ are (re)written by our stages; COLMAP works in DIR/colmap.
 // Goal (issue 6): our time <= 0.5x COLMAP's, error <= COLMAP's, registered >= COLMAP's.
 #include <chrono>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -45,6 +52,18 @@ double timedSystem(const std::string& command, const fs::path& log) {
   const int code = std::system((command + " >> '" + log.string() + "' 2>&1").c_str());
   if (code != 0) throw std::runtime_error("failed (" + std::to_string(code) + "): " + command);
   return since(start);
+}
+
+/// The first line `command` prints on stdout (empty when it fails).
+std::string firstLine(const std::string& command) {
+  std::string line;
+  if (FILE* pipe = popen(command.c_str(), "r")) {
+    char buffer[256];
+    if (fgets(buffer, sizeof buffer, pipe) != nullptr) line = buffer;
+    pclose(pipe);
+  }
+  while (!line.empty() && (line.back() == '\n' || line.back() == '\r')) line.pop_back();
+  return line;
 }
 
 struct ModelFigures {
@@ -92,16 +111,19 @@ ModelFigures figures(const scene::Reconstruction& model,
 
 int main(int argc, char** argv) {
   std::map<std::string, std::string> args;
-  bool skip_colmap = false;
+  bool skip_colmap = false, skip_ours = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--skip-colmap") {
       skip_colmap = true;
+    } else if (a == "--skip-ours") {
+      skip_ours = true;
     } else if (a.rfind("--", 0) == 0 && i + 1 < argc) {
       args[a.substr(2)] = argv[++i];
     } else {
       std::cerr << "usage: sfm_vs_colmap --survey S --work DIR --out FILE.json [--truth DIR] "
-                   "[--threads N] [--skip-colmap]\n";
+                   "[--threads N] [--skip-colmap] [--skip-ours] [--colmap-matcher "
+                   "exhaustive|sequential|vocab_tree] [--vocab-images N]\n";
       return 2;
     }
   }
@@ -110,6 +132,13 @@ int main(int argc, char** argv) {
     return 2;
   }
   const int threads = args.count("threads") ? std::stoi(args["threads"]) : 2;
+  const std::string matcher = args.count("colmap-matcher") ? args["colmap-matcher"] : "exhaustive";
+  if (matcher != "exhaustive" && matcher != "sequential" && matcher != "vocab_tree") {
+    std::cerr << "sfm_vs_colmap: --colmap-matcher " << matcher
+              << ": must be exhaustive, sequential or vocab_tree\n";
+    return 2;
+  }
+  const std::string vocab_images = args.count("vocab-images") ? args["vocab-images"] : "20";
   const Survey survey(args["survey"]);
   const fs::path work = fs::absolute(args["work"]);
   fs::create_directories(work);
@@ -126,7 +155,7 @@ int main(int argc, char** argv) {
   }
 
   // Ours: features, match, sfm (library entry points, as `auv recon run` calls them).
-  {
+  if (!skip_ours) {
     features::FeaturesStageOptions extraction;
     extraction.threads = threads;
     features::MatchStageOptions matching;
@@ -189,10 +218,30 @@ int main(int argc, char** argv) {
               std::to_string(threads),
           log);
     }
-    const double t_match = timedSystem(
-        "colmap exhaustive_matcher --database_path '" + db.string() +
-            "' --SiftMatching.use_gpu 0 --SiftMatching.num_threads " + std::to_string(threads),
-        log);
+    const std::string common = " --database_path '" + db.string() +
+                               "' --SiftMatching.use_gpu 0 --SiftMatching.num_threads " +
+                               std::to_string(threads);
+    double t_match = 0;
+    if (matcher == "vocab_tree") {
+      const fs::path tree = colmap / "vocab_tree.bin";
+      t_match += timedSystem(
+          "colmap vocab_tree_builder --database_path '" + db.string() + "' --vocab_tree_path '" +
+              tree.string() + "' --num_visual_words 4096 --num_threads " + std::to_string(threads),
+          log);
+      t_match += timedSystem("colmap vocab_tree_matcher" + common +
+                                 " --VocabTreeMatching.vocab_tree_path '" + tree.string() +
+                                 "' --VocabTreeMatching.num_images " + vocab_images,
+                             log);
+    } else {
+      t_match = timedSystem("colmap " + matcher + "_matcher" + common, log);
+    }
+    // Pairs matched and pairs with a verified two-view geometry (COLMAP's database).
+    auto count = [&](const std::string& sql) {
+      const std::string n = firstLine("sqlite3 '" + db.string() + "' '" + sql + "'");
+      return n.empty() ? -1L : std::stol(n);
+    };
+    const long candidate_pairs = count("select count(*) from matches where rows > 0");
+    const long verified_pairs = count("select count(*) from two_view_geometries where rows > 0");
     const double t_map = timedSystem("colmap mapper --database_path '" + db.string() +
                                          "' --image_path '" + survey.corrected().string() +
                                          "' --output_path '" + (colmap / "sparse").string() +
@@ -217,6 +266,9 @@ int main(int argc, char** argv) {
     ModelFigures f;
     if (!best.empty()) f = figures(scene::readColmapText(best), truth);
     result["colmap"] = {{"version", "3.8 (Debian, CPU)"},
+                        {"matcher", matcher},
+                        {"matched_pairs", candidate_pairs},
+                        {"verified_pairs", verified_pairs},
                         {"seconds_features", t_features},
                         {"seconds_match", t_match},
                         {"seconds_sfm", t_map},
@@ -235,7 +287,7 @@ int main(int argc, char** argv) {
   std::cout << "figure                         ours        COLMAP 3.8\n";
   auto row = [&](const std::string& label, const std::string& key) {
     std::cout << std::left << std::setw(28) << label << std::right << std::setw(10)
-              << result["ours"].value(key, 0.0);
+              << (result.contains("ours") ? result["ours"].value(key, 0.0) : 0.0);
     if (result.contains("colmap")) std::cout << std::setw(14) << result["colmap"].value(key, 0.0);
     std::cout << "\n";
   };
@@ -247,14 +299,16 @@ int main(int argc, char** argv) {
   row("points", "points");
   row("mean track length", "mean_track_length");
   row("mean reprojection error px", "mean_reprojection_error_px");
-  if (result.contains("colmap")) {
+  if (result.contains("colmap") && result.contains("ours")) {
     const double ratio = result["ours"]["seconds_total"].get<double>() /
                          result["colmap"]["seconds_total"].get<double>();
     result["time_ratio_ours_over_colmap"] = ratio;
     std::cout << "time ours / COLMAP: " << ratio << " (goal <= 0.5)\n";
   }
   if (!truth.empty()) {
-    std::cout << "pose errors ours:   " << result["ours"]["pose_errors"].dump() << "\n";
+    if (result.contains("ours")) {
+      std::cout << "pose errors ours:   " << result["ours"]["pose_errors"].dump() << "\n";
+    }
     if (result.contains("colmap")) {
       std::cout << "pose errors COLMAP: " << result["colmap"]["pose_errors"].dump() << "\n";
     }

@@ -1,6 +1,7 @@
 // The features and match stages over a survey folder: a real image set (Sceaux castle),
 // synthetic SIFT geometry, bad inputs named, earlier outputs intact.
 #include <fstream>
+#include <random>
 
 #include <gtest/gtest.h>
 #include <Eigen/Geometry>
@@ -308,6 +309,38 @@ TEST(SurveyStages, UncalibratedCamerasUseTheFundamentalMatrix) {
         << e.what();
   }
   fs::remove_all(root);
+}
+
+// A pair whose putative matches are chance (random positions): with hopeless_exit it stops at
+// the samples that would have found a model of min_inliers inliers, without it it draws them
+// all; either way it does not verify.
+TEST(VerifyPair, AChancePairStopsAtTheMinInliersBound) {
+  std::mt19937 random(3);
+  std::uniform_real_distribution<float> x(0, 1352), y(0, 1014);
+  ImageFeatures a, b;
+  a.image = "cam/a.png";
+  b.image = "cam/b.png";
+  a.width = b.width = 1352;
+  a.height = b.height = 1014;
+  PairGeometryInput input;
+  for (uint32_t i = 0; i < 60; ++i) {
+    a.keypoints.push_back({x(random), y(random)});
+    b.keypoints.push_back({x(random), y(random)});
+    input.putative.emplace_back(i, i);
+  }
+  const scene::Camera camera = scene::Camera::pinhole(1, 1352, 1014, 682, 682, 675.5, 506.5);
+  input.features1 = &a;
+  input.features2 = &b;
+  input.camera1 = input.camera2 = &camera;
+  VerificationOptions options;
+  PairVerification bounded, full;
+  EXPECT_TRUE(verifyPair(input, options, &bounded).inliers.empty());
+  EXPECT_TRUE(bounded.hopeless);
+  EXPECT_EQ(bounded.iterations, 146);  // log(0.01) / log(1 - (30/60)^5) = 145.05
+  options.hopeless_exit = false;
+  EXPECT_TRUE(verifyPair(input, options, &full).inliers.empty());
+  EXPECT_FALSE(full.hopeless);
+  EXPECT_EQ(full.iterations, 4096 - 409);  // no meaningful model: no reserve drawn
 }
 
 }  // namespace

@@ -22,7 +22,14 @@
 // inliers and e_k the adaptive threshold. Everything is computed in log10.
 //
 // Sampling: uniform minimal samples; once a meaningful model exists the run stops early when
-// the usual RANSAC bound says an all-inlier sample was drawn with `confidence`, then a reserve
+// the usual RANSAC bound says an all-inlier sample was drawn with `confidence`. A caller that
+// needs at least `min_inliers` inliers (a pair with fewer is dropped) bounds the run further:
+// a model with k >= min_inliers inliers among n is drawn with `confidence` within
+// requiredIterations(min_inliers / n, s, confidence) uniform samples, so a run that has found
+// none by then stops (the exit of a hopeless pair: most failing pairs have a few tens of
+// putative matches, where this bound is a few hundred samples instead of max_iterations), and
+// a model with fewer than min_inliers data within the threshold bound is not scored at all
+// (no sort, no NFA: the cheap rejection of most models of a failing pair). Then a reserve
 // of iterations samples from the best model's inliers only ([2] section 2.4, "optimised
 // ORSA"). Finally the kernel may refine the model on its inliers (non-minimal fit); the refined
 // model is kept only if its NFA is not worse.
@@ -69,6 +76,10 @@ struct AcRansacOptions {
   bool refine = true;
   /// Random generator seed (runs are deterministic for one seed).
   uint64_t seed = 42;
+  /// Fewest inliers a useful model has. Models with fewer are not scored, and the run stops
+  /// when none was found within the RANSAC bound for this count (see above): a success then
+  /// has >= min_inliers inliers. 0: no such need (any k > s; the plain sample budget).
+  int min_inliers = 0;
 
   /// Throws OptionError naming the field and its value.
   void check() const;
@@ -90,6 +101,8 @@ struct AcRansacResult {
   double log10_nfa = std::numeric_limits<double>::infinity();
   double threshold = 0;  ///< adaptive threshold found (largest inlier residual), px
   int iterations = 0;    ///< minimal samples drawn
+  /// No meaningful model of min_inliers inliers within the (shorter) min_inliers bound.
+  bool hopeless = false;
   bool refined = false;  ///< the kernel's refinement was kept
 
   bool success() const { return status == AcRansacStatus::SUCCESS; }
@@ -104,15 +117,16 @@ std::vector<double> log10CombinationsOfN(size_t n);
 std::vector<double> log10CombinationsOfK(size_t s, size_t n);
 
 /// Best (log10 NFA, k) over the sorted residuals (ascending; the smallest of the n data, it may
-/// be a prefix), k > s, e_k <= max_threshold; log_c_n, log_c_k are the tables for all n data.
-/// k = 0 when no k qualifies.
+/// be a prefix), k > s, k >= min_k, e_k <= max_threshold; log_c_n, log_c_k are the tables for
+/// all n data. k = 0 when no k qualifies.
 struct NfaPoint {
   double log10_nfa = std::numeric_limits<double>::infinity();
   size_t k = 0;
 };
 NfaPoint bestNfa(const std::vector<double>& sorted_residuals, size_t s, double log_alpha0,
                  double error_dimension, double log10_e0, double max_threshold,
-                 const std::vector<double>& log_c_n, const std::vector<double>& log_c_k);
+                 const std::vector<double>& log_c_n, const std::vector<double>& log_c_k,
+                 size_t min_k = 0);
 
 /// RANSAC bound: samples needed to draw one all-inlier minimal sample with `confidence`.
 double requiredIterations(double inlier_ratio, int sample_size, double confidence);
@@ -149,6 +163,7 @@ AcRansacResult<typename Kernel::Model> acRansac(const Kernel& kernel,
   // Residuals beyond the bound, or where alpha(e) >= 1 (a model can never be meaningful with
   // them), cannot be inliers: only the others are sorted.
   const double cutoff = std::min(options.max_threshold, std::pow(10.0, -log_alpha0 / dimension));
+  const size_t min_k = std::max(s + 1, static_cast<size_t>(std::max(options.min_inliers, 0)));
 
   // NFA of one model: fills ranked (residual, index) ascending and returns the best point.
   auto evaluate = [&](const Model& model) {
@@ -157,10 +172,12 @@ AcRansacResult<typename Kernel::Model> acRansac(const Kernel& kernel,
     for (size_t i = 0; i < n; ++i) {
       if (residuals[i] <= cutoff) ranked.emplace_back(residuals[i], static_cast<int>(i));
     }
+    if (ranked.size() < min_k) return detail::NfaPoint{};  // too few within the bound
     std::sort(ranked.begin(), ranked.end());
     sorted.resize(ranked.size());
     for (size_t i = 0; i < ranked.size(); ++i) sorted[i] = ranked[i].first;
-    return detail::bestNfa(sorted, s, log_alpha0, dimension, log10_e0, cutoff, log_c_n, log_c_k);
+    return detail::bestNfa(sorted, s, log_alpha0, dimension, log10_e0, cutoff, log_c_n, log_c_k,
+                           min_k);
   };
   auto keep = [&](const Model& model, const detail::NfaPoint& best) {
     result.model = model;
@@ -194,6 +211,15 @@ AcRansacResult<typename Kernel::Model> acRansac(const Kernel& kernel,
 
   const int reserve = static_cast<int>(options.max_iterations * options.reserve_fraction);
   int uniform_budget = options.max_iterations - reserve;
+  // With a caller's min_inliers: no more samples than it takes to draw a model of min_k
+  // inliers, if there is one (0 keeps the plain budget).
+  bool bounded = false;
+  if (options.min_inliers > 0) {
+    const double enough = detail::requiredIterations(static_cast<double>(min_k) / n,
+                                                     static_cast<int>(s), options.confidence);
+    bounded = enough < uniform_budget;
+    if (bounded) uniform_budget = std::max(1, static_cast<int>(std::ceil(enough)));
+  }
   int iteration = 0;
   // Uniform phase, stopped early by the RANSAC bound on the best meaningful model's inliers.
   while (iteration < uniform_budget) {
@@ -219,6 +245,7 @@ AcRansacResult<typename Kernel::Model> acRansac(const Kernel& kernel,
 
   if (!(result.log10_nfa < options.max_log10_nfa)) {
     result.inliers.clear();
+    result.hopeless = bounded;
     return result;  // NO_MEANINGFUL_MODEL
   }
   if (options.refine) {

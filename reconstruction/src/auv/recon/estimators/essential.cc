@@ -7,6 +7,8 @@
 #include <Eigen/Geometry>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
+#include <opengv/relative_pose/CentralRelativeAdapter.hpp>
+#include <opengv/relative_pose/methods.hpp>
 
 #include "auv/recon/estimators/fundamental.h"
 #include "auv/recon/estimators/two_view_util.h"
@@ -70,24 +72,27 @@ EssentialKernel::EssentialKernel(const std::vector<Eigen::Vector2d>& points1,
   k2_inverse_ = camera2.K().inverse();
   normalized1_ = normalize(pixels1_, k1_inverse_);
   normalized2_ = normalize(pixels2_, k2_inverse_);
+  bearings1_.reserve(size());
+  bearings2_.reserve(size());
+  for (size_t i = 0; i < size(); ++i) {
+    bearings1_.push_back(normalized1_[i].homogeneous().normalized());
+    bearings2_.push_back(normalized2_[i].homogeneous().normalized());
+  }
+  adapter_ =
+      std::make_unique<opengv::relative_pose::CentralRelativeAdapter>(bearings1_, bearings2_);
   focal_ = 0.25 * (camera1.fx + camera1.fy + camera2.fx + camera2.fy);
   // max(d1, d2) <= e implies each d <= e: the tighter of the two images' bounds holds.
   log_alpha0_ = std::min(lineLogAlpha0(camera1.width, camera1.height),
                          lineLogAlpha0(camera2.width, camera2.height));
 }
 
+EssentialKernel::~EssentialKernel() = default;
+
 void EssentialKernel::fit(const std::vector<int>& sample, std::vector<Model>* models) const {
-  const std::vector<cv::Point2d> x1 = internal::toCv(normalized1_, sample);
-  const std::vector<cv::Point2d> x2 = internal::toCv(normalized2_, sample);
-  // On exactly 5 points OpenCV runs the 5-point solver once and returns every solution stacked
-  // (verified in test/estimators): the threshold and probability are not used.
-  cv::Mat stacked;
-  try {
-    stacked = cv::findEssentialMat(x1, x2, cv::Mat::eye(3, 3, CV_64F), cv::RANSAC, 0.999, 1e-3);
-  } catch (const cv::Exception&) {
-    return;  // degenerate sample
+  // OpenGV's E = [t]x R maps viewpoint 2 to 1 (f1^T E f2 = 0); this kernel's maps 1 to 2.
+  for (const Eigen::Matrix3d& e : opengv::relative_pose::fivept_nister(*adapter_, sample)) {
+    if (e.allFinite()) models->push_back(e.transpose());
   }
-  internal::splitStacked(stacked, models);
 }
 
 Eigen::Matrix3d EssentialKernel::fundamentalOf(const Model& essential) const {

@@ -35,6 +35,8 @@ struct MatchPlan {
   std::filesystem::path navigation;  ///< the trajectory read (empty: none)
   bool exhaustive = false;           ///< every pair (few images)
   std::vector<CandidatePair> candidates;
+  /// n x n CV_32F appearance similarity of the images (vocabulary.h; empty: not computed).
+  cv::Mat similarity;
 };
 
 /// The plan of `survey`'s match stage; throws StageError (features missing, fewer than 2

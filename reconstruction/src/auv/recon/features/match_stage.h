@@ -30,6 +30,10 @@ struct VerificationOptions {
   double max_threshold_px = 4.0;
   /// AC-RANSAC minimal samples per pair.
   int max_iterations = 4096;
+  /// Stop a pair's AC-RANSAC after the samples that would have drawn a model of min_inliers
+  /// inliers with 99 % confidence, and never score a model with fewer (ac_ransac.h): the exit
+  /// of pairs that cannot verify. false: every failing pair draws max_iterations samples.
+  bool hopeless_exit = true;
   /// Also fit a homography to record homography_inliers (planarity of the pair).
   bool estimate_homography = true;
   /// Use the fundamental matrix even when both cameras are calibrated.
@@ -47,7 +51,13 @@ struct PairGeometryInput {
   const scene::Camera* camera2 = nullptr;
   std::vector<MatchIndices> putative;
 };
-VerifiedPair verifyPair(const PairGeometryInput& input, const VerificationOptions& options);
+/// How verification went, for pairs.csv.
+struct PairVerification {
+  int iterations = 0;     ///< AC-RANSAC samples drawn (0: not verified, too few putatives)
+  bool hopeless = false;  ///< stopped at the min_inliers bound (VerificationOptions)
+};
+VerifiedPair verifyPair(const PairGeometryInput& input, const VerificationOptions& options,
+                        PairVerification* verification = nullptr);
 
 struct MatchStageOptions {
   MatchingOptions matching;

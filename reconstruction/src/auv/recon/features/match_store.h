@@ -5,7 +5,8 @@
 //   <survey>/features/matches/
 //     pairs.bin   every verified pair (format below)
 //     pairs.csv   one line per candidate pair, for people: image1,image2,source,kind,
-//                 putative,inliers,homography_inliers,log10_nfa,threshold_px,status
+//                 putative,inliers,homography_inliers,log10_nfa,threshold_px,status,
+//                 iterations,similarity
 //
 // `pairs.bin` (little-endian, README.md of this folder):
 //   char[8] "AUVMATCH", uint32 version (1), uint32 pair count, then per pair:
@@ -56,6 +57,7 @@ struct VerifiedPair {
   uint32_t putative = 0;                            ///< matches after the ratio and mutual tests
   /// Inliers of an AC-RANSAC homography on the same putative matches (0: none meaningful);
   /// a ratio homography_inliers / inliers near 1 means a planar scene or a pure rotation.
+  /// With VerificationOptions::hopeless_exit, 0 also when fewer than min_inliers.
   uint32_t homography_inliers = 0;
   std::vector<MatchIndices> inliers;  ///< geometrically verified matches
 

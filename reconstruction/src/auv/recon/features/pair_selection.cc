@@ -105,7 +105,10 @@ std::vector<CandidatePair> selectPairs(const std::vector<PairImage>& images,
   }
   std::vector<CandidatePair> pairs;
   pairs.reserve(chosen.size());
-  for (const auto& [key, source] : chosen) pairs.push_back({key.first, key.second, source});
+  for (const auto& [key, source] : chosen) {
+    pairs.push_back({key.first, key.second, source});
+    if (!similarity.empty()) pairs.back().similarity = similarity.at<float>(key.first, key.second);
+  }
   return pairs;
 }
 

@@ -62,6 +62,8 @@ struct PairImage {
 struct CandidatePair {
   int index1 = 0, index2 = 0;  ///< into the image list, index1 < index2
   PairSource source = PairSource::SEQUENTIAL;
+  /// Appearance similarity of the two images (NaN: no similarity was given).
+  float similarity = std::numeric_limits<float>::quiet_NaN();
 };
 
 /// Candidate pairs, each once (first source wins: exhaustive, sequential, cross-camera, loop),
