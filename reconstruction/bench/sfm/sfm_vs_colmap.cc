@@ -109,7 +109,7 @@ ModelFigures figures(const scene::Reconstruction& model,
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int benchMain(int argc, char** argv) {
   std::map<std::string, std::string> args;
   bool skip_colmap = false, skip_ours = false;
   for (int i = 1; i < argc; ++i) {
@@ -224,10 +224,10 @@ int main(int argc, char** argv) {
     double t_match = 0;
     if (matcher == "vocab_tree") {
       const fs::path tree = colmap / "vocab_tree.bin";
-      t_match += timedSystem(
-          "colmap vocab_tree_builder --database_path '" + db.string() + "' --vocab_tree_path '" +
-              tree.string() + "' --num_visual_words 4096 --num_threads " + std::to_string(threads),
-          log);
+      t_match +=
+          timedSystem("colmap vocab_tree_builder --database_path '" + db.string() +
+                          "' --vocab_tree_path '" + tree.string() + "' --num_visual_words 4096",
+                      log);
       t_match += timedSystem("colmap vocab_tree_matcher" + common +
                                  " --VocabTreeMatching.vocab_tree_path '" + tree.string() +
                                  "' --VocabTreeMatching.num_images " + vocab_images,
@@ -317,4 +317,13 @@ int main(int argc, char** argv) {
   std::ofstream(args["out"]) << result.dump(2) << "\n";
   std::cout << "results: " << args["out"] << std::endl;
   return 0;
+}
+
+int main(int argc, char** argv) {
+  try {
+    return benchMain(argc, argv);
+  } catch (const std::exception& error) {
+    std::cerr << "sfm_vs_colmap: " << error.what() << "\n";
+    return 1;
+  }
 }
