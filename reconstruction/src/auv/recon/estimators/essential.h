@@ -42,6 +42,9 @@ class EssentialKernel {
                   const std::vector<Eigen::Vector2d>& points2, const scene::Camera& camera1,
                   const scene::Camera& camera2);
   ~EssentialKernel();
+  // The OpenGV adapter refers to this object's bearing vectors: neither copied nor moved.
+  EssentialKernel(const EssentialKernel&) = delete;
+  EssentialKernel& operator=(const EssentialKernel&) = delete;
 
   size_t size() const { return pixels1_.size(); }
   void fit(const std::vector<int>& sample, std::vector<Model>* models) const;
