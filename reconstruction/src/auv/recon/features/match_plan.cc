@@ -181,10 +181,10 @@ MatchPlan planMatches(const Survey& survey, const MatchStageOptions& options) {
   }
   // Appearance similarity for loop candidates (only where pairs are not exhaustive).
   plan.exhaustive = static_cast<int>(entries.size()) <= options.pairs.exhaustive_max_images;
-  if (!plan.exhaustive && options.pairs.loop_top_k > 0) {
-    plan.similarity = appearanceSimilarity(*plan.store, entries, options);
-  }
-  plan.candidates = selectPairs(plan.placed.images, plan.similarity, options.pairs);
+  const cv::Mat similarity = !plan.exhaustive && options.pairs.loop_top_k > 0
+                                 ? appearanceSimilarity(*plan.store, entries, options)
+                                 : cv::Mat();
+  plan.candidates = selectPairs(plan.placed.images, similarity, options.pairs);
   return plan;
 }
 

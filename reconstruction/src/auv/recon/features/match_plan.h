@@ -32,11 +32,9 @@ struct PlacedImages {
 struct MatchPlan {
   std::unique_ptr<FeatureStore> store;
   PlacedImages placed;
-  std::filesystem::path navigation;  ///< the trajectory read (empty: none)
-  bool exhaustive = false;           ///< every pair (few images)
-  std::vector<CandidatePair> candidates;
-  /// n x n CV_32F appearance similarity of the images (vocabulary.h; empty: not computed).
-  cv::Mat similarity;
+  std::filesystem::path navigation;       ///< the trajectory read (empty: none)
+  bool exhaustive = false;                ///< every pair (few images)
+  std::vector<CandidatePair> candidates;  ///< each with its images' similarity, if computed
 };
 
 /// The plan of `survey`'s match stage; throws StageError (features missing, fewer than 2

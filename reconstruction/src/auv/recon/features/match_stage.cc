@@ -222,13 +222,12 @@ std::vector<PairOutcome> matchCandidates(const FeatureStore& store, const Placed
   };
   std::vector<size_t> order(candidates.size());
   std::iota(order.begin(), order.end(), size_t{0});
-  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
-    const CandidatePair &x = candidates[a], &y = candidates[b];
-    return std::make_pair(std::min(when(x.index1), when(x.index2)),
-                          std::max(when(x.index1), when(x.index2))) <
-           std::make_pair(std::min(when(y.index1), when(y.index2)),
-                          std::max(when(y.index1), when(y.index2)));
-  });
+  auto key = [&](const CandidatePair& c) {
+    const double a = when(c.index1), b = when(c.index2);
+    return std::make_pair(std::min(a, b), std::max(a, b));
+  };
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return key(candidates[a]) < key(candidates[b]); });
   FeatureCache cache(
       store, options.matching,
       static_cast<size_t>(std::max(48, 2 * options.pairs.sequential_window + 4 * threads)));
