@@ -52,7 +52,7 @@ anchor=$(python3 -c "print($(now) - $t0)")
 t0=$(now)
 previous=
 ids=
-for i in $(seq "$jobs"); do
+for _ in $(seq "$jobs"); do
   previous=$(sbatch --parsable --chdir "$work" --output /dev/null \
     ${previous:+--dependency=afterok:$previous --kill-on-invalid-dep=yes} "$work/job.sh")
   ids="${ids:+$ids,}$previous"
