@@ -48,14 +48,13 @@ std::vector<double> log10CombinationsOfK(size_t s, size_t n) {
 
 NfaPoint bestNfa(const std::vector<double>& sorted_residuals, size_t s, double log_alpha0,
                  double error_dimension, double log10_e0, double max_threshold,
-                 const std::vector<double>& log_c_n, const std::vector<double>& log_c_k,
-                 size_t min_k) {
+                 const std::vector<double>& log_c_n, const std::vector<double>& log_c_k) {
   NfaPoint best;
   const size_t n = sorted_residuals.size();
   // Residuals below 1e-3 px count as 1e-3 px: keypoints are far coarser than that, and the
   // sample's own points (residual ~0) would otherwise dominate through log10(0).
   constexpr double kTiny = 1e-3;
-  for (size_t k = std::max(s + 1, min_k); k <= n; ++k) {
+  for (size_t k = s + 1; k <= n; ++k) {
     const double e = sorted_residuals[k - 1];
     if (!(e <= max_threshold)) break;  // also stops at +inf / NaN
     const double log_alpha = log_alpha0 + error_dimension * std::log10(std::max(e, kTiny));

@@ -29,7 +29,8 @@
 // none by then stops (the exit of a hopeless pair: most failing pairs have a few tens of
 // putative matches, where this bound is a few hundred samples instead of max_iterations), and
 // a model with fewer than min_inliers data within the threshold bound is not scored at all
-// (no sort, no NFA: the cheap rejection of most models of a failing pair). Then a reserve
+// (no sort, no NFA: the cheap rejection of most models of a failing pair), nor is one whose
+// best k is below min_inliers. Then a reserve
 // of iterations samples from the best model's inliers only ([2] section 2.4, "optimised
 // ORSA"). Finally the kernel may refine the model on its inliers (non-minimal fit); the refined
 // model is kept only if its NFA is not worse.
@@ -117,16 +118,15 @@ std::vector<double> log10CombinationsOfN(size_t n);
 std::vector<double> log10CombinationsOfK(size_t s, size_t n);
 
 /// Best (log10 NFA, k) over the sorted residuals (ascending; the smallest of the n data, it may
-/// be a prefix), k > s, k >= min_k, e_k <= max_threshold; log_c_n, log_c_k are the tables for
-/// all n data. k = 0 when no k qualifies.
+/// be a prefix), k > s, e_k <= max_threshold; log_c_n, log_c_k are the tables for all n data.
+/// k = 0 when no k qualifies.
 struct NfaPoint {
   double log10_nfa = std::numeric_limits<double>::infinity();
   size_t k = 0;
 };
 NfaPoint bestNfa(const std::vector<double>& sorted_residuals, size_t s, double log_alpha0,
                  double error_dimension, double log10_e0, double max_threshold,
-                 const std::vector<double>& log_c_n, const std::vector<double>& log_c_k,
-                 size_t min_k = 0);
+                 const std::vector<double>& log_c_n, const std::vector<double>& log_c_k);
 
 /// RANSAC bound: samples needed to draw one all-inlier minimal sample with `confidence`.
 double requiredIterations(double inlier_ratio, int sample_size, double confidence);
@@ -176,8 +176,11 @@ AcRansacResult<typename Kernel::Model> acRansac(const Kernel& kernel,
     std::sort(ranked.begin(), ranked.end());
     sorted.resize(ranked.size());
     for (size_t i = 0; i < ranked.size(); ++i) sorted[i] = ranked[i].first;
-    return detail::bestNfa(sorted, s, log_alpha0, dimension, log10_e0, cutoff, log_c_n, log_c_k,
-                           min_k);
+    // The model's own a-contrario inliers (its best k over all k) must reach min_k: a model is
+    // not stretched to min_k at a looser threshold than its best.
+    const detail::NfaPoint best =
+        detail::bestNfa(sorted, s, log_alpha0, dimension, log10_e0, cutoff, log_c_n, log_c_k);
+    return best.k >= min_k ? best : detail::NfaPoint{};
   };
   auto keep = [&](const Model& model, const detail::NfaPoint& best) {
     result.model = model;
