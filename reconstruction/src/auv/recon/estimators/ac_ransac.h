@@ -163,7 +163,7 @@ AcRansacResult<typename Kernel::Model> acRansac(const Kernel& kernel,
   // Residuals beyond the bound, or where alpha(e) >= 1 (a model can never be meaningful with
   // them), cannot be inliers: only the others are sorted.
   const double cutoff = std::min(options.max_threshold, std::pow(10.0, -log_alpha0 / dimension));
-  const size_t min_k = std::max(s + 1, static_cast<size_t>(std::max(options.min_inliers, 0)));
+  const size_t min_k = std::max(s + 1, static_cast<size_t>(options.min_inliers));  // check(): >= 0
 
   // NFA of one model: fills ranked (residual, index) ascending and returns the best point.
   auto evaluate = [&](const Model& model) {

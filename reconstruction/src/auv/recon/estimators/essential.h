@@ -18,7 +18,6 @@
 #include <vector>
 
 #include <Eigen/Core>
-#include <Eigen/StdVector>
 
 #include "auv/recon/estimators/ac_ransac.h"
 #include "auv/recon/scene/camera.h"

@@ -89,7 +89,6 @@ struct PairOutcome {
   VerifiedPair pair;
   std::string status;
   PairVerification verification;
-  float similarity = std::numeric_limits<float>::quiet_NaN();
 };
 
 }  // namespace
@@ -250,7 +249,6 @@ std::vector<PairOutcome> matchCandidates(const FeatureStore& store, const Placed
         input.camera2 = placed.cameras.at(images[c.index2].camera).get();
         input.putative = matchDescriptors(f1->index, f2->index, options.matching);
         PairOutcome& out = outcomes[i];
-        out.similarity = c.similarity;
         out.pair = verifyPair(input, options.verification, &out.verification);
         out.pair.source = c.source;
         if (out.pair.putative < static_cast<uint32_t>(options.verification.min_inliers)) {
@@ -291,17 +289,30 @@ constexpr const char* kCsvHeader =
     "image1,image2,source,kind,putative,inliers,homography_inliers,log10_nfa,threshold_px,status,"
     "iterations,similarity\n";
 
-/// One line of pairs.csv.
-std::string csvRow(const PairOutcome& o) {
+/// One line of pairs.csv: the outcome of candidate `c`.
+std::string csvRow(const PairOutcome& o, const CandidatePair& c) {
   const VerifiedPair& p = o.pair;
   std::ostringstream row;
   row << p.image1 << "," << p.image2 << "," << pairSourceName(p.source) << ","
       << geometryKindName(p.kind) << "," << p.putative << "," << p.inliers.size() << ","
       << p.homography_inliers << "," << p.log10_nfa << "," << p.threshold_px << "," << o.status
       << "," << o.verification.iterations << ",";
-  if (!std::isnan(o.similarity)) row << o.similarity;
+  if (!std::isnan(c.similarity)) row << c.similarity;
   row << "\n";
   return row.str();
+}
+
+/// pairs.csv's rows of `outcomes` (of `candidates`, in order); their verified pairs moved to
+/// `verified`.
+std::string collectOutcomes(std::vector<PairOutcome>& outcomes,
+                            const std::vector<CandidatePair>& candidates,
+                            std::vector<VerifiedPair>* verified) {
+  std::string csv;
+  for (size_t i = 0; i < outcomes.size(); ++i) {
+    csv += csvRow(outcomes[i], candidates[i]);
+    if (!outcomes[i].pair.inliers.empty()) verified->push_back(std::move(outcomes[i].pair));
+  }
+  return csv;
 }
 
 double secondsSince(std::chrono::steady_clock::time_point start) {
@@ -377,11 +388,7 @@ MatchStageResult runMatchStage(const Survey& survey, const MatchStageOptions& op
   std::vector<PairOutcome> outcomes =
       matchCandidates(*plan.store, plan.placed, plan.candidates, options, threads);
   std::vector<VerifiedPair> verified;
-  std::string csv;
-  for (PairOutcome& o : outcomes) {
-    csv += csvRow(o);
-    if (!o.pair.inliers.empty()) verified.push_back(std::move(o.pair));
-  }
+  const std::string csv = collectOutcomes(outcomes, plan.candidates, &verified);
   return writeMatches(survey, options, plan, verified, csv, secondsSince(start), threads, 1);
 }
 
@@ -399,11 +406,7 @@ size_t runMatchShard(const Survey& survey, const MatchStageOptions& options, Sha
       mine.empty() ? std::vector<PairOutcome>{}
                    : matchCandidates(*plan.store, plan.placed, mine, options, threads);
   std::vector<VerifiedPair> verified;
-  std::string csv;
-  for (PairOutcome& o : outcomes) {
-    csv += csvRow(o);
-    if (!o.pair.inliers.empty()) verified.push_back(std::move(o.pair));
-  }
+  const std::string csv = collectOutcomes(outcomes, mine, &verified);
   StagedOutput output(shardFolder(survey, kStage, shard));
   writeVerifiedPairs(output.path() / "pairs.bin", verified);
   writeFileAtomically(output.path() / "rows.csv", csv);
