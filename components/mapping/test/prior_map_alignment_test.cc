@@ -4,11 +4,13 @@
 // site (a boulder gone, one added) still aligns and, once the prior is in the map, beams through
 // the gone boulder clear it; one straight wall is DEGENERATE; an unrelated site FAILS.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <string>
 
 #include "auv/mapping/map_builder.h"
 #include "auv/mapping/prior_map_alignment.h"
@@ -34,7 +36,10 @@ Eigen::Isometry3d navigationOffset() {
 std::unique_ptr<octomap::OcTree> priorMap(const Scene& scene, double x_from, double x_to) {
   MapBuilder first;
   test::mapVisit(first, scene, x_from, x_to);
-  const std::string path = testing::TempDir() + "prior_map_alignment_test.bt";
+  // One file per test and process: CTest runs this binary's tests in parallel.
+  const std::string path = testing::TempDir() + "prior_map_alignment_" +
+                           testing::UnitTest::GetInstance()->current_test_info()->name() + "_" +
+                           std::to_string(getpid()) + ".bt";
   EXPECT_TRUE(first.save(path));
   MapBuilder loader;
   loader.load(path);
