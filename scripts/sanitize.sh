@@ -9,6 +9,7 @@
 #   scripts/sanitize.sh              build, then every test
 #   scripts/sanitize.sh --build-only
 #   scripts/sanitize.sh --thread --packages-up-to auv_mapping -- --packages-select auv_interfaces auv_mapping
+#   (--packages-up-to may be given more than once)
 #   scripts/sanitize.sh -- <colcon test arguments>   e.g. -- --packages-select auv_mission
 #
 # Vendor libraries (Fast DDS, Cyclone DDS, OpenCV, Open3D, ...) are not instrumented: ASan
@@ -24,7 +25,10 @@ while [ $# -gt 0 ]; do
   case "$1" in
     --build-only) build_only=true ;;
     --thread) thread=true ;;
-    --packages-up-to) build_args=(--packages-up-to "${2:?--packages-up-to needs a package}"); shift ;;
+    --packages-up-to)
+      # Repeatable: colcon builds the union of the packages and what they depend on.
+      [ ${#build_args[@]} -eq 0 ] && build_args=(--packages-up-to)
+      build_args+=("${2:?--packages-up-to needs a package}"); shift ;;
     --) shift; test_args=("$@"); break ;;
     *) echo "sanitize: unknown argument '$1' (--build-only, --thread, --packages-up-to PKG, -- <colcon test arguments>)" >&2; exit 2 ;;
   esac
