@@ -4,6 +4,7 @@
 #include <iterator>
 #include <random>
 #include <set>
+#include <string>
 #include <thread>
 
 #include <gtest/gtest.h>
@@ -88,16 +89,23 @@ TEST(DescriptorMatcher, MutualCheckRemovesOneSidedMatches) {
   EXPECT_EQ(mutual[0], MatchIndices(0, 0));
 }
 
-TEST(DescriptorMatcher, FlannAgreesWithBruteForce) {
+TEST(DescriptorMatcher, BothApproximateSearchesAgreeWithBruteForce) {
   std::mt19937_64 random(2);
   const cv::Mat d1 = randomDescriptors(600, random);
   const cv::Mat d2 = withNoise(d1, 2.f, random);
-  MatchingOptions exact, approximate;
-  approximate.flann_above = 100;
+  MatchingOptions exact;
   const auto a = matchDescriptors(d1, d2, exact);
-  const auto b = matchDescriptors(d1, d2, approximate);
   EXPECT_GE(a.size(), 590u);
-  EXPECT_GE(b.size(), 0.95 * a.size());
+  for (const std::string search : {"cascade_hash", "kdtree"}) {
+    MatchingOptions approximate;
+    approximate.flann_above = 100;
+    approximate.search = search;
+    const auto b = matchDescriptors(d1, d2, approximate);
+    std::vector<MatchIndices> common;
+    std::set_intersection(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(common));
+    EXPECT_GE(common.size(), 0.95 * a.size()) << search;
+    EXPECT_GE(common.size(), 0.99 * b.size()) << search << ": matches brute force does not make";
+  }
 }
 
 TEST(DescriptorMatcher, OneIndexPerImageServesEveryPairFromSeveralThreads) {
@@ -108,36 +116,52 @@ TEST(DescriptorMatcher, OneIndexPerImageServesEveryPairFromSeveralThreads) {
   const cv::Mat base = randomDescriptors(400, random);
   const std::vector<cv::Mat> images = {withNoise(base, 2.f, random), withNoise(base, 2.f, random),
                                        withNoise(base, 2.f, random)};
+  for (const std::string search : {"cascade_hash", "kdtree"}) {
+    SCOPED_TRACE(search);
+    MatchingOptions options;
+    options.flann_above = 100;
+    options.search = search;
+    // One hashing for the collection (cascade_hash), as the match stage makes.
+    const auto projection = std::make_shared<CascadeHashProjection>(meanDescriptor(images));
+    std::vector<DescriptorIndex> indexes;
+    for (const cv::Mat& d : images) indexes.emplace_back(d, options, projection);
+    ASSERT_TRUE(indexes[0].approximate());
+    EXPECT_FALSE(DescriptorIndex(base.rowRange(0, 50), options).approximate());
+
+    const std::vector<std::pair<int, int>> pairs = {{0, 1}, {0, 2}, {1, 2}, {1, 0}};
+    std::vector<std::vector<MatchIndices>> shared(pairs.size()), expected(pairs.size());
+    for (size_t p = 0; p < pairs.size(); ++p) {
+      expected[p] = matchDescriptors(images[pairs[p].first], images[pairs[p].second], options);
+      EXPECT_GE(expected[p].size(), 380u) << p;
+    }
+    std::vector<std::thread> threads;
+    for (int t = 0; t < 2; ++t) {
+      threads.emplace_back([&, t] {
+        for (size_t p = t; p < pairs.size(); p += 2) {
+          shared[p] = matchDescriptors(indexes[pairs[p].first], indexes[pairs[p].second], options);
+        }
+      });
+    }
+    for (std::thread& t : threads) t.join();
+    for (size_t p = 0; p < pairs.size(); ++p) {
+      // FLANN's randomised trees differ between builds: the same matches up to a few misses.
+      std::vector<MatchIndices> common;
+      std::set_intersection(shared[p].begin(), shared[p].end(), expected[p].begin(),
+                            expected[p].end(), std::back_inserter(common));
+      EXPECT_GE(common.size(), 0.97 * expected[p].size()) << p;
+      EXPECT_GE(common.size(), 0.97 * shared[p].size()) << p;
+    }
+  }
+}
+
+TEST(DescriptorMatcher, IndexesHashedDifferentlyAreNotCompared) {
+  // Codes of two projections mean nothing to each other: refused, not silently wrong.
+  std::mt19937_64 random(4);
+  const cv::Mat d = randomDescriptors(300, random);
   MatchingOptions options;
   options.flann_above = 100;
-  std::vector<DescriptorIndex> indexes;
-  for (const cv::Mat& d : images) indexes.emplace_back(d, options);
-  ASSERT_TRUE(indexes[0].approximate());
-  EXPECT_FALSE(DescriptorIndex(base.rowRange(0, 50), options).approximate());
-
-  const std::vector<std::pair<int, int>> pairs = {{0, 1}, {0, 2}, {1, 2}, {1, 0}};
-  std::vector<std::vector<MatchIndices>> shared(pairs.size()), expected(pairs.size());
-  for (size_t p = 0; p < pairs.size(); ++p) {
-    expected[p] = matchDescriptors(images[pairs[p].first], images[pairs[p].second], options);
-    EXPECT_GE(expected[p].size(), 380u) << p;
-  }
-  std::vector<std::thread> threads;
-  for (int t = 0; t < 2; ++t) {
-    threads.emplace_back([&, t] {
-      for (size_t p = t; p < pairs.size(); p += 2) {
-        shared[p] = matchDescriptors(indexes[pairs[p].first], indexes[pairs[p].second], options);
-      }
-    });
-  }
-  for (std::thread& t : threads) t.join();
-  for (size_t p = 0; p < pairs.size(); ++p) {
-    // FLANN's randomised trees differ between builds: the same matches up to a few misses.
-    std::vector<MatchIndices> common;
-    std::set_intersection(shared[p].begin(), shared[p].end(), expected[p].begin(),
-                          expected[p].end(), std::back_inserter(common));
-    EXPECT_GE(common.size(), 0.97 * expected[p].size()) << p;
-    EXPECT_GE(common.size(), 0.97 * shared[p].size()) << p;
-  }
+  const DescriptorIndex own1(d, options), own2(d, options);
+  EXPECT_THROW(matchDescriptors(own1, own2, options), std::invalid_argument);
 }
 
 TEST(DescriptorMatcher, BadInputs) {
@@ -152,6 +176,15 @@ TEST(DescriptorMatcher, BadInputs) {
     FAIL() << "no exception";
   } catch (const OptionError& e) {
     EXPECT_NE(std::string(e.what()).find("ratio = 1.5"), std::string::npos);
+  }
+  MatchingOptions unknown_search;
+  unknown_search.search = "lsh";
+  try {
+    unknown_search.check();
+    FAIL() << "no exception";
+  } catch (const OptionError& e) {
+    EXPECT_NE(std::string(e.what()).find("search = lsh: must be cascade_hash or kdtree"),
+              std::string::npos);
   }
 }
 

@@ -1,6 +1,7 @@
 #include "auv/recon/features/descriptor_matcher.h"
 
 #include <algorithm>
+#include <numeric>
 #include <stdexcept>
 #include <string>
 
@@ -13,10 +14,14 @@ void MatchingOptions::check() const {
   AUV_RECON_CHECK_OPTION(flann_above >= 0, flann_above, "must be >= 0");
   AUV_RECON_CHECK_OPTION(flann_trees > 0, flann_trees, "must be > 0");
   AUV_RECON_CHECK_OPTION(flann_checks > 0, flann_checks, "must be > 0");
+  AUV_RECON_CHECK_OPTION(search == "cascade_hash" || search == "kdtree", search,
+                         "must be cascade_hash or kdtree");
+  AUV_RECON_CHECK_OPTION(hash_candidates >= 2, hash_candidates, "must be >= 2");
 }
 
-DescriptorIndex::DescriptorIndex(const cv::Mat& descriptors, const MatchingOptions& options)
-    : checks_(options.flann_checks) {
+DescriptorIndex::DescriptorIndex(const cv::Mat& descriptors, const MatchingOptions& options,
+                                 std::shared_ptr<const CascadeHashProjection> projection)
+    : checks_(options.flann_checks), hash_candidates_(options.hash_candidates) {
   options.check();
   if (!descriptors.empty() && descriptors.type() != CV_8U && descriptors.type() != CV_32F) {
     throw std::invalid_argument("DescriptorIndex: descriptors of type " +
@@ -27,7 +32,22 @@ DescriptorIndex::DescriptorIndex(const cv::Mat& descriptors, const MatchingOptio
   } else {
     descriptors.convertTo(descriptors_, CV_32F);
   }
-  if (descriptors_.rows > options.flann_above) {
+  approximate_ = descriptors_.rows > options.flann_above;
+  if (options.search == "cascade_hash") {
+    if (projection == nullptr && !descriptors_.empty()) {
+      projection = std::make_shared<CascadeHashProjection>(meanDescriptor({descriptors_}));
+    }
+    if (projection != nullptr && projection->width() != descriptors_.cols &&
+        !descriptors_.empty()) {
+      throw std::invalid_argument("DescriptorIndex: descriptors of " +
+                                  std::to_string(descriptors_.cols) + " columns, hashing of " +
+                                  std::to_string(projection->width()));
+    }
+    projection_ = std::move(projection);
+    if (projection_ != nullptr) {
+      hashed_ = std::make_shared<const HashedDescriptors>(projection_->hash(descriptors_));
+    }
+  } else if (approximate_) {
     // The forest's trees are random (FLANN draws from this thread's cv::theRNG()): one seed per
     // build makes an image's index, and so its matches, the same in every run and every shard
     // of a sharded match, whichever thread builds it after whatever else.
@@ -37,16 +57,28 @@ DescriptorIndex::DescriptorIndex(const cv::Mat& descriptors, const MatchingOptio
   }
 }
 
-void DescriptorIndex::knn(const cv::Mat& queries, int k, cv::Mat* indices,
-                          cv::Mat* distances) const {
+void DescriptorIndex::knn(const DescriptorIndex& queries, const std::vector<int>& rows, int k,
+                          cv::Mat* indices, cv::Mat* distances) const {
+  if (approximate_ && hashed_ != nullptr) {
+    if (queries.projection_ != projection_) {
+      throw std::invalid_argument("DescriptorIndex: two indexes hashed by different projections");
+    }
+    cascadeHashKnn(descriptors_, *hashed_, queries.descriptors_, *queries.hashed_, rows, k,
+                   hash_candidates_, indices, distances);
+    return;
+  }
+  cv::Mat query_rows(static_cast<int>(rows.size()), queries.cols(), CV_32F);
+  for (size_t i = 0; i < rows.size(); ++i) {
+    queries.descriptors_.row(rows[i]).copyTo(query_rows.row(static_cast<int>(i)));
+  }
   if (forest_ != nullptr) {
     // FLANN's L2 distances are squared.
-    forest_->knnSearch(queries, *indices, *distances, k, cv::flann::SearchParams(checks_));
+    forest_->knnSearch(query_rows, *indices, *distances, k, cv::flann::SearchParams(checks_));
     cv::sqrt(*distances, *distances);
     return;
   }
   // Exact: OpenCV's vectorised distances with a k-best selection (what cv::BFMatcher runs).
-  cv::batchDistance(queries, descriptors_, *distances, CV_32F, *indices, cv::NORM_L2,
+  cv::batchDistance(query_rows, descriptors_, *distances, CV_32F, *indices, cv::NORM_L2,
                     std::min(k, descriptors_.rows));
 }
 
@@ -61,8 +93,10 @@ std::vector<MatchIndices> matchDescriptors(const DescriptorIndex& index1,
                                 std::to_string(index2.cols()) + " columns)");
   }
   if (index2.rows() < 2) return {};  // no second neighbour: the ratio test cannot pass
+  std::vector<int> rows1(index1.rows());
+  std::iota(rows1.begin(), rows1.end(), 0);
   cv::Mat nearest, distance;
-  index2.knn(index1.descriptors(), 2, &nearest, &distance);
+  index2.knn(index1, rows1, 2, &nearest, &distance);
   std::vector<MatchIndices> matches;
   for (int row = 0; row < nearest.rows; ++row) {
     const int* n = nearest.ptr<int>(row);
@@ -79,12 +113,8 @@ std::vector<MatchIndices> matchDescriptors(const DescriptorIndex& index1,
     for (const MatchIndices& m : matches) rows2.push_back(static_cast<int>(m.second));
     std::sort(rows2.begin(), rows2.end());
     rows2.erase(std::unique(rows2.begin(), rows2.end()), rows2.end());
-    cv::Mat queries(static_cast<int>(rows2.size()), index2.cols(), CV_32F);
-    for (size_t i = 0; i < rows2.size(); ++i) {
-      index2.descriptors().row(rows2[i]).copyTo(queries.row(static_cast<int>(i)));
-    }
     cv::Mat back, back_distance;
-    index1.knn(queries, 1, &back, &back_distance);
+    index1.knn(index2, rows2, 1, &back, &back_distance);
     std::vector<int> best_back(index2.rows(), -1);
     for (size_t i = 0; i < rows2.size(); ++i)
       best_back[rows2[i]] = back.at<int>(static_cast<int>(i), 0);
@@ -109,8 +139,13 @@ std::vector<MatchIndices> matchDescriptors(const cv::Mat& descriptors1, const cv
                                 std::to_string(descriptors2.cols) +
                                 " columns; CV_8U or CV_32F expected)");
   }
-  return matchDescriptors(DescriptorIndex(descriptors1, options),
-                          DescriptorIndex(descriptors2, options), options);
+  std::shared_ptr<const CascadeHashProjection> projection;
+  if (options.search == "cascade_hash") {
+    projection =
+        std::make_shared<CascadeHashProjection>(meanDescriptor({descriptors1, descriptors2}));
+  }
+  return matchDescriptors(DescriptorIndex(descriptors1, options, projection),
+                          DescriptorIndex(descriptors2, options, projection), options);
 }
 
 }  // namespace auv::recon::features

@@ -40,8 +40,9 @@ namespace {
 constexpr const char* kStage = "match";
 
 struct IndexedFeatures {
-  IndexedFeatures(ImageFeatures f, const MatchingOptions& options)
-      : features(std::move(f)), index(features.descriptors, options) {}
+  IndexedFeatures(ImageFeatures f, const MatchingOptions& options,
+                  std::shared_ptr<const CascadeHashProjection> projection)
+      : features(std::move(f)), index(features.descriptors, options, std::move(projection)) {}
   ImageFeatures features;
   DescriptorIndex index;
 };
@@ -49,8 +50,9 @@ struct IndexedFeatures {
 // A bounded cache of indexed images shared by the matching threads.
 class FeatureCache {
  public:
-  FeatureCache(const FeatureStore& store, const MatchingOptions& options, size_t capacity)
-      : store_(store), options_(options), capacity_(capacity) {}
+  FeatureCache(const FeatureStore& store, const MatchingOptions& options,
+               std::shared_ptr<const CascadeHashProjection> projection, size_t capacity)
+      : store_(store), options_(options), projection_(std::move(projection)), capacity_(capacity) {}
 
   std::shared_ptr<const IndexedFeatures> get(const std::string& image) {
     {
@@ -61,7 +63,8 @@ class FeatureCache {
         return it->second.first;
       }
     }
-    auto features = std::make_shared<const IndexedFeatures>(store_.read(image), options_);
+    auto features =
+        std::make_shared<const IndexedFeatures>(store_.read(image), options_, projection_);
     std::lock_guard<std::mutex> lock(mutex_);
     if (entries_.count(image) == 0) {
       order_.push_front(image);
@@ -77,6 +80,7 @@ class FeatureCache {
  private:
   const FeatureStore& store_;
   const MatchingOptions& options_;
+  std::shared_ptr<const CascadeHashProjection> projection_;
   size_t capacity_;
   std::mutex mutex_;
   std::list<std::string> order_;  // most recent first
@@ -84,6 +88,21 @@ class FeatureCache {
                                             std::list<std::string>::iterator>>
       entries_;
 };
+
+/// The hashing every image shares (search "cascade_hash"; else nullptr): centred on the mean
+/// descriptor of up to 64 images spread over the survey, the same in every shard.
+std::shared_ptr<const CascadeHashProjection> surveyProjection(const FeatureStore& store,
+                                                              const std::vector<PairImage>& images,
+                                                              const MatchingOptions& options) {
+  if (options.search != "cascade_hash" || images.empty()) return nullptr;
+  constexpr size_t kSampled = 64;
+  std::vector<cv::Mat> sample;
+  for (size_t i = 0; i < std::min(kSampled, images.size()); ++i) {
+    sample.push_back(
+        store.read(images[i * images.size() / std::min(kSampled, images.size())].name).descriptors);
+  }
+  return std::make_shared<const CascadeHashProjection>(meanDescriptor(sample));
+}
 
 struct PairOutcome {
   VerifiedPair pair;
@@ -110,7 +129,11 @@ void MatchStageOptions::bind(OptionSet& set) {
   set.add("ratio", &matching.ratio, "Lowe's ratio test: best < ratio x second best");
   set.add("mutual", &matching.mutual, "keep only mutual best matches");
   set.add("flann_above", &matching.flann_above,
-          "images with more descriptors are searched approximately (FLANN k-d forest)");
+          "images with more descriptors are searched approximately (search)");
+  set.add("search", &matching.search,
+          "approximate nearest neighbours: cascade_hash (Cheng et al. 2014) or kdtree (FLANN)");
+  set.add("hash_candidates", &matching.hash_candidates,
+          "cascade_hash: exact distances per query, for the closest codes");
   set.add("flann_trees", &matching.flann_trees, "randomised k-d trees of a FLANN forest");
   set.add("flann_checks", &matching.flann_checks, "FLANN leaf checks");
   set.add("exhaustive_max_images", &pairs.exhaustive_max_images,
@@ -228,7 +251,7 @@ std::vector<PairOutcome> matchCandidates(const FeatureStore& store, const Placed
   std::stable_sort(order.begin(), order.end(),
                    [&](size_t a, size_t b) { return key(candidates[a]) < key(candidates[b]); });
   FeatureCache cache(
-      store, options.matching,
+      store, options.matching, surveyProjection(store, images, options.matching),
       static_cast<size_t>(std::max(48, 2 * options.pairs.sequential_window + 4 * threads)));
   std::vector<PairOutcome> outcomes(candidates.size());
   Progress progress("match", "pairs", candidates.size());
@@ -365,6 +388,8 @@ MatchStageResult writeMatches(const Survey& survey, const MatchStageOptions& opt
                              {"flann_above", options.matching.flann_above},
                              {"flann_trees", options.matching.flann_trees},
                              {"flann_checks", options.matching.flann_checks},
+                             {"search", options.matching.search},
+                             {"hash_candidates", options.matching.hash_candidates},
                              {"sequential_window", options.pairs.sequential_window},
                              {"exhaustive_max_images", options.pairs.exhaustive_max_images},
                              {"cross_camera_max_dt_s", options.pairs.cross_camera_max_dt_s},
