@@ -37,7 +37,7 @@ TEST(CascadeHash, FindsTheExactNearestNeighbourOfMostQueriesWithItsExactDistance
   std::mt19937_64 random(11);
   const cv::Mat references = siftLike(3000, random);
   const cv::Mat queries = perturbed(references.rowRange(0, 1000), 8.f, random);
-  const CascadeHashProjection projection(meanDescriptor({references, queries}));
+  const CascadeHashProjection projection(meanDescriptor({references, queries}), 1);
   const HashedDescriptors hashed_references = projection.hash(references);
   const HashedDescriptors hashed_queries = projection.hash(queries);
   ASSERT_EQ(hashed_references.size(), 3000u);
@@ -70,8 +70,8 @@ TEST(CascadeHash, CodesAreTheSameForTheSameSeedAndMean) {
   std::mt19937_64 random(12);
   const cv::Mat d = siftLike(200, random);
   const cv::Mat mean = meanDescriptor({d});
-  const HashedDescriptors a = CascadeHashProjection(mean).hash(d);
-  const HashedDescriptors b = CascadeHashProjection(mean).hash(d);
+  const HashedDescriptors a = CascadeHashProjection(mean, 1).hash(d);
+  const HashedDescriptors b = CascadeHashProjection(mean, 1).hash(d);
   const HashedDescriptors other_seed = CascadeHashProjection(mean, 7).hash(d);
   EXPECT_EQ(a.codes, b.codes);
   EXPECT_EQ(a.buckets, b.buckets);
@@ -89,7 +89,7 @@ TEST(CascadeHash, QueriesWithoutCandidatesGetNoNeighbour) {
   references.row(1).setTo(10.f);
   cv::Mat queries = cv::Mat::zeros(1, 128, CV_32F);
   queries.setTo(-10.f);
-  const CascadeHashProjection projection(cv::Mat::zeros(1, 128, CV_32F));
+  const CascadeHashProjection projection(cv::Mat::zeros(1, 128, CV_32F), 1);
   cv::Mat indices, distances;
   cascadeHashKnn(references, projection.hash(references), queries, projection.hash(queries), {0}, 2,
                  10, &indices, &distances);
@@ -98,9 +98,9 @@ TEST(CascadeHash, QueriesWithoutCandidatesGetNoNeighbour) {
 }
 
 TEST(CascadeHash, BadInputsAreNamed) {
-  EXPECT_THROW(CascadeHashProjection(cv::Mat::zeros(2, 128, CV_32F)), std::invalid_argument);
-  EXPECT_THROW(CascadeHashProjection(cv::Mat::zeros(1, 128, CV_64F)), std::invalid_argument);
-  const CascadeHashProjection projection(cv::Mat::zeros(1, 128, CV_32F));
+  EXPECT_THROW(CascadeHashProjection(cv::Mat::zeros(2, 128, CV_32F), 1), std::invalid_argument);
+  EXPECT_THROW(CascadeHashProjection(cv::Mat::zeros(1, 128, CV_64F), 1), std::invalid_argument);
+  const CascadeHashProjection projection(cv::Mat::zeros(1, 128, CV_32F), 1);
   EXPECT_THROW(projection.hash(cv::Mat::zeros(3, 64, CV_32F)), std::invalid_argument);
   EXPECT_THROW(projection.hash(cv::Mat::zeros(3, 128, CV_8U)), std::invalid_argument);
   EXPECT_THROW(meanDescriptor({}), std::invalid_argument);

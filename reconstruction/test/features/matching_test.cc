@@ -122,7 +122,8 @@ TEST(DescriptorMatcher, OneIndexPerImageServesEveryPairFromSeveralThreads) {
     options.flann_above = 100;
     options.search = search;
     // One hashing for the collection (cascade_hash), as the match stage makes.
-    const auto projection = std::make_shared<CascadeHashProjection>(meanDescriptor(images));
+    const auto projection =
+        std::make_shared<CascadeHashProjection>(meanDescriptor(images), hashSeed(options));
     std::vector<DescriptorIndex> indexes;
     for (const cv::Mat& d : images) indexes.emplace_back(d, options, projection);
     ASSERT_TRUE(indexes[0].approximate());

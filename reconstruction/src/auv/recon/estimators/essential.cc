@@ -78,19 +78,19 @@ EssentialKernel::EssentialKernel(const std::vector<Eigen::Vector2d>& points1,
     bearings1_.push_back(normalized1_[i].homogeneous().normalized());
     bearings2_.push_back(normalized2_[i].homogeneous().normalized());
   }
-  adapter_ =
-      std::make_unique<opengv::relative_pose::CentralRelativeAdapter>(bearings1_, bearings2_);
   focal_ = 0.25 * (camera1.fx + camera1.fy + camera2.fx + camera2.fy);
   // max(d1, d2) <= e implies each d <= e: the tighter of the two images' bounds holds.
   log_alpha0_ = std::min(lineLogAlpha0(camera1.width, camera1.height),
                          lineLogAlpha0(camera2.width, camera2.height));
 }
 
-EssentialKernel::~EssentialKernel() = default;
-
 void EssentialKernel::fit(const std::vector<int>& sample, std::vector<Model>* models) const {
   // OpenGV's E = [t]x R maps viewpoint 2 to 1 (f1^T E f2 = 0); this kernel's maps 1 to 2.
-  for (const Eigen::Matrix3d& e : opengv::relative_pose::fivept_nister(*adapter_, sample)) {
+  // The adapter only refers to the bearing vectors, and lives on the stack: OpenGV's deleting
+  // destructor (built without C++17's aligned new) frees with Eigen's free what our C++17
+  // `new` would have allocated with operator new (ASan: alloc-dealloc-mismatch).
+  const opengv::relative_pose::CentralRelativeAdapter adapter(bearings1_, bearings2_);
+  for (const Eigen::Matrix3d& e : opengv::relative_pose::fivept_nister(adapter, sample)) {
     if (e.allFinite()) models->push_back(e.transpose());
   }
 }

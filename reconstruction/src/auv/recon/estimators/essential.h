@@ -14,17 +14,12 @@
 // Refinement: Levenberg-Marquardt (Ceres) on R, t of E = [t]x R minimising the Sampson
 // distance of the inliers, in pixels.
 
-#include <memory>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include "auv/recon/estimators/ac_ransac.h"
 #include "auv/recon/scene/camera.h"
-
-namespace opengv::relative_pose {
-class CentralRelativeAdapter;
-}
 
 namespace auv::recon::estimators {
 
@@ -40,10 +35,6 @@ class EssentialKernel {
   EssentialKernel(const std::vector<Eigen::Vector2d>& points1,
                   const std::vector<Eigen::Vector2d>& points2, const scene::Camera& camera1,
                   const scene::Camera& camera2);
-  ~EssentialKernel();
-  // The OpenGV adapter refers to this object's bearing vectors: neither copied nor moved.
-  EssentialKernel(const EssentialKernel&) = delete;
-  EssentialKernel& operator=(const EssentialKernel&) = delete;
 
   size_t size() const { return pixels1_.size(); }
   void fit(const std::vector<int>& sample, std::vector<Model>* models) const;
@@ -58,9 +49,8 @@ class EssentialKernel {
  private:
   std::vector<Eigen::Vector2d> pixels1_, pixels2_;
   std::vector<Eigen::Vector2d> normalized1_, normalized2_;
-  // Unit bearing vectors of the normalised points and OpenGV's view of them (the minimal solver).
+  // Unit bearing vectors of the normalised points (OpenGV's minimal solver takes these).
   std::vector<Eigen::Vector3d, Eigen::aligned_allocator<Eigen::Vector3d>> bearings1_, bearings2_;
-  std::unique_ptr<opengv::relative_pose::CentralRelativeAdapter> adapter_;
   Eigen::Matrix3d k1_inverse_, k2_inverse_;
   double focal_ = 1;  ///< mean focal length of the two cameras, px (Sampson residual scale)
   double log_alpha0_ = 0;

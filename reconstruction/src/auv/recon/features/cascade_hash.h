@@ -39,7 +39,7 @@ class CascadeHashProjection {
  public:
   /// `mean`: 1 x width CV_32F, the mean descriptor of the collection (meanDescriptor);
   /// `seed`: of the random directions. Throws std::invalid_argument for another mean's shape.
-  explicit CascadeHashProjection(const cv::Mat& mean, uint64_t seed = 0xCA5CADE);
+  CascadeHashProjection(const cv::Mat& mean, uint64_t seed);
 
   int width() const { return mean_.cols; }
   /// `descriptors`: CV_32F rows of width(). Throws std::invalid_argument otherwise.

@@ -17,6 +17,11 @@ void MatchingOptions::check() const {
   AUV_RECON_CHECK_OPTION(search == "cascade_hash" || search == "kdtree", search,
                          "must be cascade_hash or kdtree");
   AUV_RECON_CHECK_OPTION(hash_candidates >= 2, hash_candidates, "must be >= 2");
+  AUV_RECON_CHECK_OPTION(random_seed >= 0, random_seed, "must be >= 0");
+}
+
+uint64_t hashSeed(const MatchingOptions& options) {
+  return 0xCA5CADE ^ static_cast<uint64_t>(options.random_seed);
 }
 
 DescriptorIndex::DescriptorIndex(const cv::Mat& descriptors, const MatchingOptions& options,
@@ -35,7 +40,8 @@ DescriptorIndex::DescriptorIndex(const cv::Mat& descriptors, const MatchingOptio
   approximate_ = descriptors_.rows > options.flann_above;
   if (options.search == "cascade_hash") {
     if (projection == nullptr && !descriptors_.empty()) {
-      projection = std::make_shared<CascadeHashProjection>(meanDescriptor({descriptors_}));
+      projection = std::make_shared<CascadeHashProjection>(meanDescriptor({descriptors_}),
+                                                           hashSeed(options));
     }
     if (projection != nullptr && projection->width() != descriptors_.cols &&
         !descriptors_.empty()) {
@@ -51,7 +57,7 @@ DescriptorIndex::DescriptorIndex(const cv::Mat& descriptors, const MatchingOptio
     // The forest's trees are random (FLANN draws from this thread's cv::theRNG()): one seed per
     // build makes an image's index, and so its matches, the same in every run and every shard
     // of a sharded match, whichever thread builds it after whatever else.
-    cv::theRNG() = cv::RNG(0x5eed);
+    cv::theRNG() = cv::RNG(0x5eed ^ static_cast<uint64_t>(options.random_seed));
     forest_ = std::make_shared<cv::flann::Index>(
         descriptors_, cv::flann::KDTreeIndexParams(options.flann_trees), cvflann::FLANN_DIST_L2);
   }
@@ -141,8 +147,8 @@ std::vector<MatchIndices> matchDescriptors(const cv::Mat& descriptors1, const cv
   }
   std::shared_ptr<const CascadeHashProjection> projection;
   if (options.search == "cascade_hash") {
-    projection =
-        std::make_shared<CascadeHashProjection>(meanDescriptor({descriptors1, descriptors2}));
+    projection = std::make_shared<CascadeHashProjection>(
+        meanDescriptor({descriptors1, descriptors2}), hashSeed(options));
   }
   return matchDescriptors(DescriptorIndex(descriptors1, options, projection),
                           DescriptorIndex(descriptors2, options, projection), options);

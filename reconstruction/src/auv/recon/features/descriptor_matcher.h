@@ -28,6 +28,10 @@ struct MatchingOptions {
   std::string search = "cascade_hash";
   /// cascade_hash: exact distances per query, for the candidates closest in Hamming distance.
   int hash_candidates = 10;
+  /// The random draw of either search (the hashing's directions, the forest's trees): the
+  /// same seed gives the same matches in every run and shard; another seed, another sample
+  /// of the same approximation (bench/features: how much the SfM moves with it).
+  int random_seed = 0;
   /// Randomised k-d trees of the forest.
   int flann_trees = 4;
   /// FLANN leaf checks (more: closer to exact, slower).
@@ -35,6 +39,9 @@ struct MatchingOptions {
 
   void check() const;
 };
+
+/// The seed of the cascade hashing's directions for `options` (random_seed).
+uint64_t hashSeed(const MatchingOptions& options);
 
 /// One image's descriptors ready for nearest-neighbour queries: as CV_32F, hashed or with a
 /// FLANN k-d forest above MatchingOptions::flann_above rows. Built once per image and shared

@@ -101,7 +101,7 @@ std::shared_ptr<const CascadeHashProjection> surveyProjection(const FeatureStore
     sample.push_back(
         store.read(images[i * images.size() / std::min(kSampled, images.size())].name).descriptors);
   }
-  return std::make_shared<const CascadeHashProjection>(meanDescriptor(sample));
+  return std::make_shared<const CascadeHashProjection>(meanDescriptor(sample), hashSeed(options));
 }
 
 struct PairOutcome {
@@ -134,6 +134,8 @@ void MatchStageOptions::bind(OptionSet& set) {
           "approximate nearest neighbours: cascade_hash (Cheng et al. 2014) or kdtree (FLANN)");
   set.add("hash_candidates", &matching.hash_candidates,
           "cascade_hash: exact distances per query, for the closest codes");
+  set.add("random_seed", &matching.random_seed,
+          "random draw of the approximate search (hashing directions, forest trees)");
   set.add("flann_trees", &matching.flann_trees, "randomised k-d trees of a FLANN forest");
   set.add("flann_checks", &matching.flann_checks, "FLANN leaf checks");
   set.add("exhaustive_max_images", &pairs.exhaustive_max_images,
@@ -390,6 +392,7 @@ MatchStageResult writeMatches(const Survey& survey, const MatchStageOptions& opt
                              {"flann_checks", options.matching.flann_checks},
                              {"search", options.matching.search},
                              {"hash_candidates", options.matching.hash_candidates},
+                             {"random_seed", options.matching.random_seed},
                              {"sequential_window", options.pairs.sequential_window},
                              {"exhaustive_max_images", options.pairs.exhaustive_max_images},
                              {"cross_camera_max_dt_s", options.pairs.cross_camera_max_dt_s},
