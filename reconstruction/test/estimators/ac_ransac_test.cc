@@ -155,8 +155,8 @@ TEST_P(EssentialWithOutliers, FindsTheTrueModelAndInliers) {
     const InlierScore s = score(result.inliers, scene.num_inliers);
     // Gaussian noise puts a few true inliers beyond the threshold; random outliers near an
     // epipolar line by chance cannot be told from inliers. Which of the near-equal models wins
-    // follows the last bits of the arithmetic: the per-scene recall was 0.94-1 built by GCC
-    // -O2, 0.895-1 by Clang -O1 (the sanitizer build); a wrong model recalls < 0.5.
+    // follows the last bits of the arithmetic: the per-scene recall was 0.94-1 built by GCC,
+    // 0.895-1 by Clang with ASan (scripts/sanitize.sh); a wrong model recalls < 0.5.
     EXPECT_GE(s.recall, sigma == 0 ? 1.0 : 0.85) << "sigma " << sigma << " scene " << i;
     recall += s.recall / kScenes;
     EXPECT_LE(s.false_positives, chanceOutlierBound(200, result.threshold)) << "scene " << i;
