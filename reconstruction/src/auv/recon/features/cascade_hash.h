@@ -2,8 +2,9 @@
 // Cascade hashing of real-valued descriptors (J. Cheng, C. Leng, J. Wu, H. Cui, H. Lu, "Fast and
 // accurate image matching with cascade hashing for 3D reconstruction", CVPR 2014). Descriptors
 // centred on the collection's mean are projected on random directions:
-//   1. 6 groups of 8 signs put each descriptor in one of 256 buckets per group; a query's
-//      candidates are the rows sharing a bucket with it in any group;
+//   1. 10 groups of 8 signs put each descriptor in one of 256 buckets per group; a query's
+//      candidates are the rows sharing a bucket with it in any group (the paper's 6 groups
+//      miss about one true match in seven: features/README.md);
 //   2. 128 more signs make a binary code; candidates are ranked by Hamming distance;
 //   3. only the best-ranked candidates get their exact Euclidean distance.
 // An image is hashed once and searched in every pair it is in. Per query it costs a few
