@@ -73,9 +73,15 @@ void DescriptorIndex::knn(const DescriptorIndex& queries, const std::vector<int>
                    hash_candidates_, indices, distances);
     return;
   }
-  cv::Mat query_rows(static_cast<int>(rows.size()), queries.cols(), CV_32F);
-  for (size_t i = 0; i < rows.size(); ++i) {
-    queries.descriptors_.row(rows[i]).copyTo(query_rows.row(static_cast<int>(i)));
+  // Every row in order (the forward search of a pair) is the matrix itself: no 4 MB copy.
+  bool all_rows = static_cast<int>(rows.size()) == queries.rows();
+  for (size_t i = 0; all_rows && i < rows.size(); ++i) all_rows = rows[i] == static_cast<int>(i);
+  cv::Mat query_rows = queries.descriptors_;
+  if (!all_rows) {
+    query_rows = cv::Mat(static_cast<int>(rows.size()), queries.cols(), CV_32F);  // a new one
+    for (size_t i = 0; i < rows.size(); ++i) {
+      queries.descriptors_.row(rows[i]).copyTo(query_rows.row(static_cast<int>(i)));
+    }
   }
   if (forest_ != nullptr) {
     // FLANN's L2 distances are squared.

@@ -95,11 +95,10 @@ std::shared_ptr<const CascadeHashProjection> surveyProjection(const FeatureStore
                                                               const std::vector<PairImage>& images,
                                                               const MatchingOptions& options) {
   if (options.search != "cascade_hash" || images.empty()) return nullptr;
-  constexpr size_t kSampled = 64;
+  const size_t sampled = std::min<size_t>(64, images.size());
   std::vector<cv::Mat> sample;
-  for (size_t i = 0; i < std::min(kSampled, images.size()); ++i) {
-    sample.push_back(
-        store.read(images[i * images.size() / std::min(kSampled, images.size())].name).descriptors);
+  for (size_t i = 0; i < sampled; ++i) {
+    sample.push_back(store.read(images[i * images.size() / sampled].name).descriptors);
   }
   return std::make_shared<const CascadeHashProjection>(meanDescriptor(sample), hashSeed(options));
 }
