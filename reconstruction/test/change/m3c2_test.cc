@@ -1,7 +1,7 @@
 // M3C2 on synthetic pairs with analytic answers: parallel planes, concentric spheres, a step,
 // no change with noise (about 5 % significant at 95 %), the registration error inside the
-// level of detection, points of one depth map counted as one measurement, too few points,
-// and the option checks.
+// level of detection, points of one depth map counted as one measurement, a surface lying along
+// the cylinder, too few points, and the option checks.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -225,6 +225,72 @@ TEST(M3C2, TheCylinderHoldsExactlyThePointsInsideIt) {
   EXPECT_EQ(p.count2, inside);
 }
 
+/// A wall x = 0 facing +x (y, z within ±2 m, every 2 cm) with its normals; `covered_below`
+/// leaves out the wall under that z (hidden behind a block).
+void addWall(std::vector<Eigen::Vector3d>& points, std::vector<Eigen::Vector3d>& normals,
+             double covered_below) {
+  for (double y = -2.0; y <= 2.0; y += 0.02) {
+    for (double z = -2.0; z <= 2.0; z += 0.02) {
+      if (z < covered_below) continue;
+      points.emplace_back(0.0, y, z);
+      normals.emplace_back(1.0, 0.0, 0.0);
+    }
+  }
+}
+
+TEST(M3C2, ASurfaceLyingAlongTheCylinderIsNoDisplacement) {
+  // A long block fallen against a wall: its top (z = -0.2, normals up) runs out from the wall
+  // under the horizontal cylinder of a wall core point at z = 0, and the wall is unchanged
+  // there. Lague's M3C2 averages the top's points along the axis into a distance; with the
+  // clouds' normals they are not counted and the wall measures no change.
+  std::vector<Eigen::Vector3d> before, before_normals, after, after_normals;
+  addWall(before, before_normals, -10.0);
+  addWall(after, after_normals, -0.2);
+  for (double x = 0.02; x <= 1.5; x += 0.02) {
+    for (double y = -1.0; y <= 1.0; y += 0.02) {
+      after.emplace_back(x, y, -0.2);
+      after_normals.emplace_back(0.0, 0.0, 1.0);
+    }
+  }
+  M3C2Options options;
+  options.orientation = Eigen::Vector3d::UnitX();
+  const std::vector<Eigen::Vector3d> core = {{0.0, 0.0, 0.0}};
+  const M3C2Point plain = m3c2(before, after, core, options)[0];
+  EXPECT_GT(plain.distance, 0.05) << "the unguarded mean should be pulled out along the top";
+  const M3C2Point guarded =
+      m3c2({before, nullptr, &before_normals}, {after, nullptr, &after_normals}, core, options)[0];
+  ASSERT_TRUE(guarded.valid());
+  EXPECT_NEAR(guarded.distance, 0.0, 1e-9);
+  EXPECT_LT(guarded.count2, plain.count2);
+  // 90 degrees counts every point again.
+  options.max_axis_angle_deg = 90.0;
+  const M3C2Point all =
+      m3c2({before, nullptr, &before_normals}, {after, nullptr, &after_normals}, core, options)[0];
+  EXPECT_DOUBLE_EQ(all.distance, plain.distance);
+  EXPECT_EQ(all.count2, plain.count2);
+}
+
+TEST(M3C2, AChangedSurfaceTiltedAcrossTheCylinderStillCounts) {
+  // Growth that leaves a slope: the plane z = 0 becomes z = 0.3 + tan(40°) x. Its normals stand
+  // 40° from the axis, within the default 60°: the distance at the core is still 0.3 m.
+  const double slope = std::tan(40.0 * kPi / 180.0);
+  const auto before = plane(0.0, 0.0, 3);
+  const auto after = surface(
+      5.0, 0.05, [slope](double x, double) { return 0.3 + slope * x; }, 0.0, 4);
+  const std::vector<Eigen::Vector3d> up(before.size(), Eigen::Vector3d::UnitZ());
+  const std::vector<Eigen::Vector3d> tilted(after.size(),
+                                            Eigen::Vector3d(-slope, 0.0, 1.0).normalized());
+  const M3C2Point p =
+      m3c2({before, nullptr, &up}, {after, nullptr, &tilted}, {{0, 0, 0}}, upwards())[0];
+  ASSERT_TRUE(p.valid());
+  EXPECT_NEAR(p.distance, 0.3, 0.02);
+  EXPECT_EQ(p.count2, m3c2(before, after, {{0, 0, 0}}, upwards())[0].count2);
+  // Normals that do not fit the cloud are refused.
+  const std::vector<Eigen::Vector3d> short_normals(up.begin(), up.end() - 1);
+  EXPECT_THROW(m3c2({before, nullptr, &short_normals}, {after}, {{0, 0, 0}}, upwards()),
+               std::invalid_argument);
+}
+
 TEST(M3C2, TooFewPointsGiveNoDistance) {
   const auto before = plane(0.0, 0.0, 9);
   const std::vector<Eigen::Vector3d> sparse = {{0, 0, 0.1}, {0.05, 0, 0.1}};
@@ -254,6 +320,11 @@ TEST(M3C2, OptionsOutOfRangeAreNamed) {
   options = M3C2Options();
   options.orientation = Eigen::Vector3d::Zero();
   EXPECT_THROW(options.check(), OptionError);
+  for (double angle : {0.0, 90.5}) {
+    options = M3C2Options();
+    options.max_axis_angle_deg = angle;
+    EXPECT_THROW(options.check(), OptionError) << angle;
+  }
 }
 
 }  // namespace

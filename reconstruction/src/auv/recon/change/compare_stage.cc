@@ -235,6 +235,9 @@ void CompareOptions::bind(OptionSet& set) {
           "m: M3C2 projection scale d (cylinder diameter)");
   set.add("max_depth_m", &m3c2.max_depth_m, "m: M3C2 cylinder half-length: the largest change");
   set.add("min_points", &m3c2.min_points, "M3C2: fewer points of a cloud in the cylinder: none");
+  set.add("max_axis_angle_deg", &m3c2.max_axis_angle_deg,
+          "deg: points whose normal is farther from the cylinder's axis lie along it, not counted "
+          "(90: all)");
   set.add("registration_error_m", &m3c2.registration_error_m,
           "m: inside the level of detection (0: the co-registration's RMS on stable points)");
   set.add("appearance_radius_m", &appearance.radius_m,
@@ -258,13 +261,22 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
   options.check();
   const auto start = std::chrono::steady_clock::now();
   const Survey later(options.later);
-  const open3d::geometry::PointCloud first =
+  open3d::geometry::PointCloud first =
       scene::readCloud(survey.dense() / "fused.ply", kStage, "dense");
   open3d::geometry::PointCloud second =
       scene::readCloud(later.dense() / "fused.ply", kStage, "dense");
   std::optional<PointSources> sources1 = readSources(survey, first.points_.size());
   std::optional<PointSources> sources2 = readSources(later, second.points_.size());
   if (!sources1 || !sources2) sources1 = sources2 = std::nullopt;  // n alike on both sides
+  // A cloud from elsewhere (a laser scan) may come without the normals fused.ply carries.
+  std::string point_normals = "read from dense/fused.ply";
+  for (open3d::geometry::PointCloud* cloud : {&first, &second}) {
+    if (!cloud->HasNormals()) {
+      point_normals = "estimated where fused.ply had none (radius d/2, 30 neighbours)";
+      cloud->EstimateNormals(
+          open3d::geometry::KDTreeSearchParamHybrid(0.5 * options.m3c2.projection_scale_m, 30));
+    }
+  }
   const double read_s = since(start);
 
   auto phase = std::chrono::steady_clock::now();
@@ -289,8 +301,9 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
     M3C2Options m3c2_options = scales;
     const bool given_error = m3c2_options.registration_error_m > 0.0;
     if (!given_error) m3c2_options.registration_error_m = aligned.rms_m;
-    out.points = m3c2(first.points_, second.points_, cores, m3c2_options, hints,
-                      sources1 ? &*sources1 : nullptr, sources2 ? &*sources2 : nullptr);
+    out.points = m3c2({first.points_, sources1 ? &*sources1 : nullptr, &first.normals_},
+                      {second.points_, sources2 ? &*sources2 : nullptr, &second.normals_}, cores,
+                      m3c2_options, hints);
     out.bias = {{"radius_m", options.bias_radius_m}};
     out.error_source = given_error ? "option" : "co-registration rms";
     if (options.bias_radius_m > 0.0) {
@@ -354,7 +367,8 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
         {"volume_margin_m", region_options.volume_margin_m},
         {"region_confidence", options.region_confidence},
         {"region_footprint_m2", region_options.footprint_m2},
-        {"level_of_detection_z", region_options.level_of_detection_z}}},
+        {"level_of_detection_z", region_options.level_of_detection_z},
+        {"max_axis_angle_deg", options.m3c2.max_axis_angle_deg}}},
       {"registration",
        {{"rms_m", aligned.rms_m},
         {"overlap", aligned.overlap},
@@ -367,6 +381,7 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
       {"level_of_detection_n",
        sources1 ? "distinct images fused into the cylinder's points" : "points in the cylinder"},
       {"orientation", hints.empty() ? "option" : "towards survey 1's cameras"},
+      {"point_normals", point_normals},
       {"core_points", cores.size()},
       {"core_points_measured", valid},
       {"core_points_significant", significant},

@@ -19,6 +19,8 @@ void M3C2Options::check() const {
   AUV_RECON_CHECK_OPTION(min_points >= 2, min_points, "must be >= 2 (a spread needs two)");
   AUV_RECON_CHECK_OPTION(registration_error_m >= 0, registration_error_m, "must be >= 0");
   AUV_RECON_CHECK_OPTION(confidence_z > 0, confidence_z, "must be > 0");
+  AUV_RECON_CHECK_OPTION(max_axis_angle_deg > 0 && max_axis_angle_deg <= 90, max_axis_angle_deg,
+                         "must be in (0, 90]");
   if (!(orientation.norm() > 0) || !orientation.allFinite()) {
     throw OptionError("orientation: must be a non-zero vector");
   }
@@ -54,10 +56,11 @@ struct AxisStatistics {
 };
 
 /// Mean and standard deviation of the positions along `normal` of the cloud's points inside
-/// the cylinder around `core`, and how many distinct sources they came from.
-AxisStatistics alongAxis(const IndexedCloud& cloud, const PointSources* sources,
+/// the cylinder around `core`, and how many distinct sources they came from. Points whose
+/// own normal is farther than `min_cos_to_axis` allows lie along the axis and are left out.
+AxisStatistics alongAxis(const IndexedCloud& cloud, const M3C2Cloud& input,
                          const Eigen::Vector3d& core, const Eigen::Vector3d& normal,
-                         const M3C2Options& options) {
+                         const M3C2Options& options, double min_cos_to_axis) {
   const double radius = 0.5 * options.projection_scale_m;
   const double depth = options.max_depth_m;
   // The cylinder is searched as a row of short segments, each inside a small sphere: one
@@ -77,13 +80,14 @@ AxisStatistics alongAxis(const IndexedCloud& cloud, const PointSources* sources,
       const double along = offset.dot(normal);
       if (along < low || along > high || (along == high && j + 1 < segments)) continue;
       if ((offset - along * normal).squaredNorm() > radius * radius) continue;
+      if (input.normals && std::abs((*input.normals)[i].dot(normal)) < min_cos_to_axis) continue;
       ++s.count;
       sum += along;
       sum2 += along * along;
-      if (sources) {
+      if (input.sources) {
         const size_t p = static_cast<size_t>(i);
-        seen.insert(seen.end(), sources->ids.begin() + sources->offsets[p],
-                    sources->ids.begin() + sources->offsets[p + 1]);
+        seen.insert(seen.end(), input.sources->ids.begin() + input.sources->offsets[p],
+                    input.sources->ids.begin() + input.sources->offsets[p + 1]);
       }
     }
   }
@@ -98,13 +102,18 @@ AxisStatistics alongAxis(const IndexedCloud& cloud, const PointSources* sources,
   return s;
 }
 
-void checkSources(const PointSources* sources, const std::vector<Eigen::Vector3d>& cloud,
-                  const char* which) {
-  if (!sources) return;
-  if (sources->size() != cloud.size() || sources->offsets.back() != sources->ids.size()) {
+void checkCloud(const M3C2Cloud& cloud, const char* which) {
+  const size_t size = cloud.points.size();
+  if (cloud.sources && (cloud.sources->size() != size ||
+                        cloud.sources->offsets.back() != cloud.sources->ids.size())) {
     throw std::invalid_argument(std::string("m3c2: the sources of ") + which + " list " +
-                                std::to_string(sources->size()) + " points for " +
-                                std::to_string(cloud.size()));
+                                std::to_string(cloud.sources->size()) + " points for " +
+                                std::to_string(size));
+  }
+  if (cloud.normals && cloud.normals->size() != size) {
+    throw std::invalid_argument(std::string("m3c2: ") + which + " has " +
+                                std::to_string(cloud.normals->size()) + " normals for " +
+                                std::to_string(size) + " points");
   }
 }
 
@@ -122,16 +131,27 @@ std::vector<M3C2Point> m3c2(const std::vector<Eigen::Vector3d>& cloud1,
                             const M3C2Options& options,
                             const std::vector<Eigen::Vector3d>& orientation_hints,
                             const PointSources* sources1, const PointSources* sources2) {
+  return m3c2(M3C2Cloud{cloud1, sources1}, M3C2Cloud{cloud2, sources2}, core_points, options,
+              orientation_hints);
+}
+
+std::vector<M3C2Point> m3c2(const M3C2Cloud& cloud1, const M3C2Cloud& cloud2,
+                            const std::vector<Eigen::Vector3d>& core_points,
+                            const M3C2Options& options,
+                            const std::vector<Eigen::Vector3d>& orientation_hints) {
   options.check();
   if (!orientation_hints.empty() && orientation_hints.size() != core_points.size()) {
     throw std::invalid_argument("m3c2: " + std::to_string(orientation_hints.size()) +
                                 " orientation hints for " + std::to_string(core_points.size()) +
                                 " core points");
   }
-  checkSources(sources1, cloud1, "cloud 1");
-  checkSources(sources2, cloud2, "cloud 2");
-  const IndexedCloud first(cloud1);
-  const IndexedCloud second(cloud2);
+  checkCloud(cloud1, "cloud 1");
+  checkCloud(cloud2, "cloud 2");
+  const IndexedCloud first(cloud1.points);
+  const IndexedCloud second(cloud2.points);
+  // Slightly below the cosine so that 90 degrees lets every point in, rounding included.
+  const double min_cos_to_axis =
+      std::cos(options.max_axis_angle_deg * 3.14159265358979323846 / 180.0) - 1e-12;
   std::vector<M3C2Point> result(core_points.size());
   const double normal_radius = 0.5 * options.normal_scale_m;
 #pragma omp parallel for schedule(dynamic, 64)
@@ -150,8 +170,8 @@ std::vector<M3C2Point> m3c2(const std::vector<Eigen::Vector3d>& cloud1,
         orientation_hints.empty() ? options.orientation : orientation_hints[c];
     if (normal.dot(hint) < 0) normal = -normal;
     out.normal = normal;
-    const AxisStatistics s1 = alongAxis(first, sources1, core, normal, options);
-    const AxisStatistics s2 = alongAxis(second, sources2, core, normal, options);
+    const AxisStatistics s1 = alongAxis(first, cloud1, core, normal, options, min_cos_to_axis);
+    const AxisStatistics s2 = alongAxis(second, cloud2, core, normal, options, min_cos_to_axis);
     out.count1 = s1.count;
     out.count2 = s2.count;
     out.sources1 = s1.sources;

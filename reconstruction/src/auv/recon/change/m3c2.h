@@ -17,6 +17,13 @@
 // cylinder may rest on five images and σ/√n would promise a precision they do not have. When
 // each point's sources are given (the images fused into it, dense/fused_views.bin), n is the
 // number of distinct sources in the cylinder (at most its point count).
+//
+// A cylinder may also take in a surface that does not cross it: beside a fallen block lying
+// against a wall, the wall's horizontal cylinders pass over the block's top, whose points spread
+// along the axis and whose mean along it is no displacement (Lague's M3C2, py4dgeo and
+// CloudCompare's plugin have no guard). When a cloud's point normals are given, a point counts
+// only where its own normal is within max_axis_angle_deg of the axis: its surface crosses the
+// cylinder.
 #include <algorithm>
 #include <limits>
 #include <vector>
@@ -35,6 +42,10 @@ struct M3C2Options {
   /// m, the co-registration's error, added inside the level of detection (Lague's "reg").
   double registration_error_m = 0.0;
   double confidence_z = 1.96;  ///< two-sided normal quantile of the level of detection (95 %)
+  /// deg: a point with a normal farther than this from the cylinder's axis lies on a surface
+  /// along it and is not counted (90: every point counts, as in Lague's M3C2). Applies where
+  /// the cloud's normals are given.
+  double max_axis_angle_deg = 60.0;
   /// Orientation of the normals where no per-point hint is given: they point to its side.
   Eigen::Vector3d orientation = Eigen::Vector3d(0, 0, -1);  ///< NED: up
 
@@ -68,11 +79,27 @@ using PointSources = dense::PointViews;
 /// level of detection of a measured point.
 double levelOfDetection(const M3C2Point& p, double registration_error_m, double confidence_z);
 
+/// One cloud of the comparison and what is known of its points.
+struct M3C2Cloud {
+  const std::vector<Eigen::Vector3d>& points;
+  /// Per point, its independent measurements: n is then the distinct ones (see above).
+  const PointSources* sources = nullptr;
+  /// Per point, its surface's unit normal (either side): points of surfaces along a cylinder
+  /// are then not counted in it (see above).
+  const std::vector<Eigen::Vector3d>* normals = nullptr;
+};
+
 /// M3C2 of `cloud2` against `cloud1` at `core_points`. `orientation_hints`, when not empty (one
 /// per core point), gives each normal's side (e.g. towards the cameras that saw the point);
-/// otherwise options.orientation does. `sources1`/`sources2`, when given (one list per point of
-/// the cloud), make n the distinct sources (see above). Throws OptionError on bad options and
-/// std::invalid_argument when the hints or sources do not match the core points or clouds.
+/// otherwise options.orientation does. Throws OptionError on bad options and
+/// std::invalid_argument when the hints, sources or normals do not match the core points or
+/// clouds.
+std::vector<M3C2Point> m3c2(const M3C2Cloud& cloud1, const M3C2Cloud& cloud2,
+                            const std::vector<Eigen::Vector3d>& core_points,
+                            const M3C2Options& options,
+                            const std::vector<Eigen::Vector3d>& orientation_hints = {});
+
+/// The same without point normals; `sources1`/`sources2` as M3C2Cloud::sources.
 std::vector<M3C2Point> m3c2(const std::vector<Eigen::Vector3d>& cloud1,
                             const std::vector<Eigen::Vector3d>& cloud2,
                             const std::vector<Eigen::Vector3d>& core_points,
