@@ -6,6 +6,8 @@
 #include <unistd.h>
 
 #include <fstream>
+#include <iterator>
+#include <map>
 
 #include <open3d/io/PointCloudIO.h>
 #include <opencv2/imgcodecs.hpp>
@@ -204,6 +206,83 @@ TEST_F(DenseStage, EmptyCloudFailsAndKeepsTheEarlierOutput) {
     EXPECT_EQ(entry.path().filename().string().find(".dense.staging"), std::string::npos)
         << "staging folder left behind: " << entry.path();
   }
+}
+
+/// Every file under `folder`, by relative path, with its bytes.
+std::map<std::string, std::string> filesOf(const fs::path& folder) {
+  std::map<std::string, std::string> files;
+  for (const auto& entry : fs::recursive_directory_iterator(folder)) {
+    if (!entry.is_regular_file()) continue;
+    std::ifstream in(entry.path(), std::ios::binary);
+    files[fs::relative(entry.path(), folder).string()] =
+        std::string(std::istreambuf_iterator<char>(in), {});
+  }
+  return files;
+}
+
+// Depth maps per view shard (cluster/README.md): the merge fuses them into the same files as
+// the whole run, on any number of shards, more shards than masters included.
+TEST_F(DenseStage, MergedShardsEqualTheWholeRun) {
+  const testing::Scene scene;
+  const Survey survey = makeSurvey(scene);
+  const DenseStageResult whole = runDenseStage(survey, options_);
+  const auto expected = filesOf(survey.dense());
+  ASSERT_EQ(expected.size(), whole.depth_maps + 3);  // + fused.ply, fused_views.bin, neighbours
+  for (int count : {1, 2, static_cast<int>(whole.masters) + 2}) {
+    SCOPED_TRACE(count);
+    fs::remove_all(survey.dense());
+    size_t maps = 0;
+    for (int index = 0; index < count; ++index) {
+      maps += runDenseShard(survey, options_, {index, count});
+    }
+    EXPECT_EQ(maps, whole.depth_maps);
+    EXPECT_FALSE(fs::exists(survey.dense()));  // shards write only their own folders
+    const DenseStageResult merged = mergeDenseShards(survey, options_, count);
+    EXPECT_EQ(merged.points, whole.points);
+    EXPECT_EQ(merged.depth_pixels, whole.depth_pixels);
+    EXPECT_EQ(merged.width, whole.width);
+    EXPECT_TRUE(filesOf(survey.dense()) == expected) << "sharded dense/ differs from the whole run";
+    EXPECT_FALSE(fs::exists(survey.root() / ".shards" / "dense"));
+    EXPECT_EQ(readReportSection(survey.report(), "dense").value("shards", 1), count);
+  }
+}
+
+// A merge with a shard missing, or a shard of another sparse model, names it and leaves the
+// earlier dense/ as it was.
+TEST_F(DenseStage, MergeRefusesMissingAndStaleShards) {
+  const testing::Scene scene;
+  const Survey survey = makeSurvey(scene);
+  runDenseStage(survey, options_);
+  const auto earlier = filesOf(survey.dense());
+  runDenseShard(survey, options_, {0, 2});
+  try {
+    mergeDenseShards(survey, options_, 2);
+    FAIL() << "merged without shard 1";
+  } catch (const StageError& e) {
+    EXPECT_NE(std::string(e.what()).find("shard 1 of 2 has not run"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("--shard 1/2"), std::string::npos) << e.what();
+  }
+  runDenseShard(survey, options_, {1, 2});
+  const fs::path shard_json = survey.root() / ".shards" / "dense" / "1-of-2" / "shard.json";
+  std::ofstream(shard_json) << R"({"masters": ["elsewhere.png"]})";  // another model's shard
+  try {
+    mergeDenseShards(survey, options_, 2);
+    FAIL() << "merged a shard of other masters";
+  } catch (const StageError& e) {
+    EXPECT_NE(std::string(e.what()).find("shard 1 of 2 holds the depth maps of other masters"),
+              std::string::npos)
+        << e.what();
+  }
+  std::ofstream(shard_json) << "[1, 2]";
+  try {
+    mergeDenseShards(survey, options_, 2);
+    FAIL() << "merged a shard.json that is no object";
+  } catch (const StageError& e) {
+    EXPECT_NE(std::string(e.what()).find("not a shard's JSON object"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_TRUE(filesOf(survey.dense()) == earlier);
 }
 
 TEST_F(DenseStage, MissingInputsAreNamed) {

@@ -158,9 +158,10 @@ void SlurmOptions::bind(OptionSet& set) {
           "minutes per job (0: 3x the stage's seconds in report.json, at least 10)");
   set.add("probe_timeout_s", &probe_timeout_s,
           "s a probe job may take to show the nodes see the survey (0: no probe)");
-  set.add("shards", &shards,
-          "shardable stages (features, match) run as an array of this many jobs, then a merge "
-          "job");
+  set.add(
+      "shards", &shards,
+      "shardable stages (features, match, dense) run as an array of this many jobs, then a merge "
+      "job");
 }
 
 std::vector<SubmittedJob> submitPipeline(const Survey& survey,

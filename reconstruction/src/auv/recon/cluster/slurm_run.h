@@ -36,8 +36,8 @@ struct SlurmOptions {
   /// Minutes per job; 0: three times the stage's seconds in the survey's report.json (at least
   /// 10 min), the partition's limit for a stage that never ran.
   int time_limit_min = 0;
-  /// Shardable stages (Stage::shardable: features, match) run as a job array of this many tasks,
-  /// each one shard, then a merge job; 1: one job per stage.
+  /// Shardable stages (Stage::shardable: features, match, dense) run as a job array of this many
+  /// tasks, each one shard, then a merge job; 1: one job per stage.
   int shards = 1;
   /// Before submitting, one short job checks that the compute nodes see the survey folder
   /// (writable) and can run this auv-recon; seconds it may wait for a node.

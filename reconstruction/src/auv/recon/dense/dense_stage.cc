@@ -5,6 +5,7 @@
 #include <fstream>
 #include <iomanip>
 #include <list>
+#include <set>
 #include <sstream>
 #include <unordered_map>
 
@@ -198,12 +199,28 @@ nlohmann::json DenseStageResult::toJson() const {
           {"writing", figures(writing)}};
 }
 
-DenseStageResult densify(const scene::Reconstruction& model, const fs::path& image_folder,
-                         const fs::path& output_folder, const DenseStageOptions& options,
-                         const ImageMasks& masks) {
-  options.check();
-  const auto start = Clock::now();
-  DenseStageResult summary;
+namespace {
+
+/// What every part of a dense run (whole, shard, merge) derives alike from the model: the
+/// masters with their neighbours, and the views at the matching size (no images).
+struct DensePlan {
+  const scene::Reconstruction& model;
+  std::vector<MasterSelection> selections;
+  std::map<uint32_t, View> views;
+
+  /// The usable masters in selection order: shard i computes those whose rank is i mod N.
+  std::vector<uint32_t> masters() const {
+    std::vector<uint32_t> ids;
+    for (const MasterSelection& s : selections) {
+      if (s.usable()) ids.push_back(s.master);
+    }
+    return ids;
+  }
+  const std::string& name(uint32_t id) const { return model.images.at(id).name; }
+};
+
+DensePlan planDense(const scene::Reconstruction& model, const DenseStageOptions& options,
+                    DenseStageResult& summary) {
   summary.registered_images = model.images.size();
   if (static_cast<int>(model.images.size()) < options.min_registered_images) {
     throw StageError(kStage, "the sparse model has " + std::to_string(model.images.size()) +
@@ -211,12 +228,12 @@ DenseStageResult densify(const scene::Reconstruction& model, const fs::path& ima
                                  std::to_string(options.min_registered_images) +
                                  " needed for dense matching)");
   }
-  std::vector<MasterSelection> selections;
+  DensePlan plan{model, {}, {}};
   {
     SubStage figures(summary.neighbours);
-    selections = selectNeighbours(model, options.neighbours);
+    plan.selections = selectNeighbours(model, options.neighbours);
   }
-  for (const MasterSelection& s : selections) summary.masters += s.usable() ? 1 : 0;
+  summary.masters = plan.masters().size();
   if (summary.masters == 0) {
     throw StageError(kStage, "no registered image has a neighbour sharing >= " +
                                  std::to_string(options.neighbours.min_shared_points) +
@@ -226,92 +243,117 @@ DenseStageResult densify(const scene::Reconstruction& model, const fs::path& ima
                                  "] deg and a depth range (" + std::to_string(model.points.size()) +
                                  " sparse points)");
   }
-
-  StagedOutput output(output_folder);
-  std::map<uint32_t, View> views;  // at the matching size, no images
   for (const auto& [id, image] : model.images) {
     View view = View::fromImage(model, image);
     const cv::Size size = limitedSize(view.width, view.height, options.max_image_size);
-    views.emplace(id, view.scaled(size.width, size.height));
+    plan.views.emplace(id, view.scaled(size.width, size.height));
   }
-  LruCache<View> loaded(options.image_cache);
-  const auto loadedView = [&](uint32_t id) -> View& {
-    return loaded.get(id, [&] {
-      View view = views.at(id);
-      loadImages(view, image_folder.string());
+  return plan;
+}
+
+/// Views with their images, a few kept in memory.
+class LoadedViews {
+ public:
+  LoadedViews(const DensePlan& plan, const fs::path& image_folder, size_t capacity)
+      : plan_(plan), image_folder_(image_folder.string()), cache_(capacity) {}
+  View& get(uint32_t id) {
+    return cache_.get(id, [&] {
+      View view = plan_.views.at(id);
+      loadImages(view, image_folder_);
       return view;
     });
-  };
-
-  {  // neighbours.csv: what each master was matched with
-    std::ostringstream csv;
-    csv << "master,neighbours,shared_points,angles_deg,depth_min,depth_max\n";
-    for (const MasterSelection& s : selections) {
-      csv << model.images.at(s.master).name << ",";
-      for (size_t i = 0; i < s.neighbours.size(); ++i) {
-        csv << (i ? " " : "") << model.images.at(s.neighbours[i]).name;
-      }
-      csv << ",";
-      for (size_t i = 0; i < s.neighbours.size(); ++i) csv << (i ? " " : "") << s.shared_points[i];
-      csv << ",";
-      for (size_t i = 0; i < s.neighbours.size(); ++i) {
-        csv << (i ? " " : "") << std::fixed << std::setprecision(2) << s.angle_deg[i];
-      }
-      csv << "," << std::setprecision(6) << s.depth_min << "," << s.depth_max << "\n";
-    }
-    writeFileAtomically(output.path() / "neighbours.csv", csv.str());
   }
 
-  std::map<uint32_t, bool> has_depth;
-  {
-    SubStage figures(summary.matching);
-    Progress progress("dense: depth maps", "images", summary.masters);
-    for (const MasterSelection& s : selections) {
-      if (!s.usable()) continue;
-      std::vector<View> neighbours;
-      for (const uint32_t id : s.neighbours) neighbours.push_back(loadedView(id));
-      const View& master = loadedView(s.master);
-      // Loaded (and size-checked) before the matching: a bad mask fails at once.
-      const cv::Mat mask =
-          masks ? masks(master.name, {master.source_width, master.source_height}) : cv::Mat();
-      DepthMapResult result =
-          computeDepthMap(master, neighbours, s.depth_min, s.depth_max, options.matcher);
-      if (!mask.empty()) {  // no depth, hence no fused point, from a masked pixel
-        cv::Mat scaled;
-        cv::resize(mask, scaled, result.depth.size(), 0, 0, cv::INTER_NEAREST);
-        result.depth.setTo(0, scaled == 0);
-        if (!result.confidence.empty()) result.confidence.setTo(0, scaled == 0);
-        result.valid_pixels = static_cast<size_t>(cv::countNonZero(result.depth));
-        ++summary.masked_depth_maps;
-      }
-      const fs::path file = depthMapPath(output.path(), master.name);
-      fs::create_directories(file.parent_path());
-      writeDenseArray(file, result.depth);
-      has_depth[s.master] = true;
-      ++summary.depth_maps;
-      summary.depth_pixels += result.valid_pixels;
-      if (summary.width == 0) {
-        summary.width = result.depth.cols;
-        summary.height = result.depth.rows;
-      }
-      progress.advance();
-    }
-  }
+ private:
+  const DensePlan& plan_;
+  std::string image_folder_;
+  LruCache<View> cache_;
+};
 
+/// neighbours.csv: what each master was matched with.
+void writeNeighbours(const DensePlan& plan, const fs::path& folder) {
+  std::ostringstream csv;
+  csv << "master,neighbours,shared_points,angles_deg,depth_min,depth_max\n";
+  for (const MasterSelection& s : plan.selections) {
+    csv << plan.name(s.master) << ",";
+    for (size_t i = 0; i < s.neighbours.size(); ++i) {
+      csv << (i ? " " : "") << plan.name(s.neighbours[i]);
+    }
+    csv << ",";
+    for (size_t i = 0; i < s.neighbours.size(); ++i) csv << (i ? " " : "") << s.shared_points[i];
+    csv << ",";
+    for (size_t i = 0; i < s.neighbours.size(); ++i) {
+      csv << (i ? " " : "") << std::fixed << std::setprecision(2) << s.angle_deg[i];
+    }
+    csv << "," << std::setprecision(6) << s.depth_min << "," << s.depth_max << "\n";
+  }
+  writeFileAtomically(folder / "neighbours.csv", csv.str());
+}
+
+/// The depth maps of shard `shard`'s masters (every count-th usable one), into
+/// `folder`/depth_maps/. Masked pixels get no depth.
+void computeDepthMaps(const DensePlan& plan, const fs::path& image_folder, const fs::path& folder,
+                      const DenseStageOptions& options, const ImageMasks& masks, Shard shard,
+                      DenseStageResult& summary) {
+  const std::vector<uint32_t> masters = plan.masters();
+  std::map<uint32_t, const MasterSelection*> selection_of;
+  for (const MasterSelection& s : plan.selections) selection_of[s.master] = &s;
+  LoadedViews loaded(plan, image_folder, options.image_cache);
+  SubStage figures(summary.matching);
+  Progress progress("dense: depth maps", "images",
+                    (masters.size() + shard.count - 1 - shard.index) / shard.count);
+  for (size_t rank = shard.index; rank < masters.size(); rank += shard.count) {
+    const MasterSelection& s = *selection_of.at(masters[rank]);
+    std::vector<View> neighbours;
+    for (const uint32_t id : s.neighbours) neighbours.push_back(loaded.get(id));
+    const View& master = loaded.get(s.master);
+    // Loaded (and size-checked) before the matching: a bad mask fails at once.
+    const cv::Mat mask =
+        masks ? masks(master.name, {master.source_width, master.source_height}) : cv::Mat();
+    DepthMapResult result =
+        computeDepthMap(master, neighbours, s.depth_min, s.depth_max, options.matcher);
+    if (!mask.empty()) {  // no depth, hence no fused point, from a masked pixel
+      cv::Mat scaled;
+      cv::resize(mask, scaled, result.depth.size(), 0, 0, cv::INTER_NEAREST);
+      result.depth.setTo(0, scaled == 0);
+      if (!result.confidence.empty()) result.confidence.setTo(0, scaled == 0);
+      result.valid_pixels = static_cast<size_t>(cv::countNonZero(result.depth));
+      ++summary.masked_depth_maps;
+    }
+    const fs::path file = depthMapPath(folder, master.name);
+    fs::create_directories(file.parent_path());
+    writeDenseArray(file, result.depth);
+    ++summary.depth_maps;
+    summary.depth_pixels += result.valid_pixels;
+    if (summary.width == 0) {
+      summary.width = result.depth.cols;
+      summary.height = result.depth.rows;
+    }
+    progress.advance();
+  }
+}
+
+/// Fuses the masters' depth maps under `folder`/depth_maps/ (every usable master has one) and
+/// writes fused.ply and fused_views.bin there. Throws StageError below options.min_points.
+void fuseAndWrite(const DensePlan& plan, const fs::path& image_folder, const fs::path& folder,
+                  const DenseStageOptions& options, DenseStageResult& summary) {
+  const std::vector<uint32_t> masters = plan.masters();
+  const std::set<uint32_t> has_depth(masters.begin(), masters.end());
   FusedCloud cloud;
   {
     SubStage figures(summary.fusion);
+    LoadedViews loaded(plan, image_folder, options.image_cache);
     // Holds a master and all its neighbours at once (their references stay valid).
     LruCache<FusionView> fusion_views(
         std::max(options.image_cache, options.neighbours.max_neighbours + 1));
     const auto fusionView = [&](uint32_t id) -> FusionView& {
       return fusion_views.get(id, [&] {
         FusionView fv;
-        fv.view = loadedView(id);
+        fv.view = loaded.get(id);
         fv.view.grey.release();
-        const View& plain = views.at(id);
+        const View& plain = plan.views.at(id);
         if (has_depth.count(id)) {
-          fv.depth = readDenseArray(depthMapPath(output.path(), plain.name));
+          fv.depth = readDenseArray(depthMapPath(folder, plain.name));
         } else {
           fv.depth = cv::Mat(plain.height, plain.width, CV_32F, cv::Scalar(0));
         }
@@ -320,8 +362,8 @@ DenseStageResult densify(const scene::Reconstruction& model, const fs::path& ima
       });
     };
     Fuser fuser(options.fusion);
-    Progress progress("dense: fusion", "images", summary.depth_maps);
-    for (const MasterSelection& s : selections) {
+    Progress progress("dense: fusion", "images", masters.size());
+    for (const MasterSelection& s : plan.selections) {
       if (!has_depth.count(s.master)) continue;
       // Load the neighbours first: the master must stay in the cache while they are used.
       std::vector<const FusionView*> neighbours;
@@ -345,49 +387,191 @@ DenseStageResult densify(const scene::Reconstruction& model, const fs::path& ima
                                  std::to_string(summary.depths_inconsistent) +
                                  " dropped as inconsistent across views)");
   }
-  {
-    SubStage figures(summary.writing);
-    writeFusedViews(output.path() / "fused_views.bin", cloud.images);
-    cloud.images = PointViews();
-    scene::PlyData ply;
-    ply.positions.reserve(cloud.size());
-    for (const Eigen::Vector3f& p : cloud.positions) ply.positions.push_back(p.cast<double>());
-    cloud.positions = {};
-    ply.normals.reserve(ply.positions.size());
-    for (const Eigen::Vector3f& n : cloud.normals) ply.normals.push_back(n.cast<double>());
-    cloud.normals = {};
-    ply.colors = std::move(cloud.colors);
-    scene::writePly(output.path() / "fused.ply", ply);
-    if (!options.keep_depth_maps) fs::remove_all(output.path() / "depth_maps");
-    output.commit();
-  }
+  SubStage figures(summary.writing);
+  writeFusedViews(folder / "fused_views.bin", cloud.images);
+  cloud.images = PointViews();
+  scene::PlyData ply;
+  ply.positions.reserve(cloud.size());
+  for (const Eigen::Vector3f& p : cloud.positions) ply.positions.push_back(p.cast<double>());
+  cloud.positions = {};
+  ply.normals.reserve(ply.positions.size());
+  for (const Eigen::Vector3f& n : cloud.normals) ply.normals.push_back(n.cast<double>());
+  cloud.normals = {};
+  ply.colors = std::move(cloud.colors);
+  scene::writePly(folder / "fused.ply", ply);
+  if (!options.keep_depth_maps) fs::remove_all(folder / "depth_maps");
+}
+
+}  // namespace
+
+DenseStageResult densify(const scene::Reconstruction& model, const fs::path& image_folder,
+                         const fs::path& output_folder, const DenseStageOptions& options,
+                         const ImageMasks& masks) {
+  options.check();
+  const auto start = Clock::now();
+  DenseStageResult summary;
+  const DensePlan plan = planDense(model, options, summary);
+  StagedOutput output(output_folder);
+  writeNeighbours(plan, output.path());
+  computeDepthMaps(plan, image_folder, output.path(), options, masks, Shard(), summary);
+  fuseAndWrite(plan, image_folder, output.path(), options, summary);
+  output.commit();
   summary.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   return summary;
 }
 
-DenseStageResult runDenseStage(const Survey& survey, const DenseStageOptions& options) {
-  options.check();
+namespace {
+
+/// The survey's sparse model and the folder of its (pinhole) images.
+struct SurveyModel {
+  scene::Reconstruction model;
+  fs::path images;
+};
+
+SurveyModel readSurveyModel(const Survey& survey) {
   const Survey::PinholeWorkspace workspace = survey.pinholeWorkspace();
   Survey::requireExists(workspace.model / "images.txt", kStage, "sfm");
   Survey::requireExists(workspace.images, kStage, "correct");
-  scene::Reconstruction model;
+  SurveyModel read{{}, workspace.images};
   try {
-    model = scene::readColmapText(workspace.model);
+    read.model = scene::readColmapText(workspace.model);
   } catch (const std::exception& e) {
     throw StageError(kStage, std::string("cannot read the sparse model: ") + e.what());
   }
-  const masks::SurveyMasks survey_masks(survey, kStage);
-  const DenseStageResult summary = densify(
-      model, workspace.images, survey.dense(), options,
-      [&](const std::string& name, cv::Size size) { return survey_masks.forImage(name, size); });
+  return read;
+}
+
+void writeReport(const Survey& survey, const DenseStageResult& summary,
+                 const DenseStageOptions& options, int shards) {
   nlohmann::json section = summary.toJson();
   section["options"] = options.toJson();
+  if (shards > 1) section["shards"] = shards;
   updateReport(survey.report(), kStage, section);
+}
+
+/// Hard link where the filesystem allows (the shards' folder is in the survey), else a copy.
+void linkOrCopy(const fs::path& from, const fs::path& to) {
+  fs::create_directories(to.parent_path());
+  std::error_code error;
+  fs::create_hard_link(from, to, error);
+  if (error) fs::copy_file(from, to, fs::copy_options::overwrite_existing);
+}
+
+}  // namespace
+
+DenseStageResult runDenseStage(const Survey& survey, const DenseStageOptions& options) {
+  options.check();
+  const SurveyModel read = readSurveyModel(survey);
+  const masks::SurveyMasks survey_masks(survey, kStage);
+  const DenseStageResult summary = densify(
+      read.model, read.images, survey.dense(), options,
+      [&](const std::string& name, cv::Size size) { return survey_masks.forImage(name, size); });
+  writeReport(survey, summary, options, 1);
   return summary;
 }
 
-StageReport DenseStage::runWith(const Survey& survey, const DenseStageOptions& options) const {
-  const DenseStageResult result = runDenseStage(survey, options);
+size_t runDenseShard(const Survey& survey, const DenseStageOptions& options, Shard shard) {
+  options.check();
+  shard.check();
+  const auto start = Clock::now();
+  const SurveyModel read = readSurveyModel(survey);
+  const masks::SurveyMasks survey_masks(survey, kStage);
+  DenseStageResult summary;
+  const DensePlan plan = planDense(read.model, options, summary);
+  StagedOutput output(shardFolder(survey, kStage, shard));
+  computeDepthMaps(
+      plan, read.images, output.path(), options,
+      [&](const std::string& name, cv::Size size) { return survey_masks.forImage(name, size); },
+      shard, summary);
+  // What the merge needs of this shard: which masters it holds (a shard of another model is
+  // refused) and its figures.
+  const std::vector<uint32_t> masters = plan.masters();
+  nlohmann::json names = nlohmann::json::array();
+  for (size_t rank = shard.index; rank < masters.size(); rank += shard.count) {
+    names.push_back(plan.name(masters[rank]));
+  }
+  writeFileAtomically(
+      output.path() / "shard.json",
+      nlohmann::json{{"masters", names},
+                     {"depth_pixels", summary.depth_pixels},
+                     {"masked_depth_maps", summary.masked_depth_maps},
+                     {"depth_map_size", {summary.width, summary.height}},
+                     {"matching", figures(summary.matching)},
+                     {"seconds", std::chrono::duration<double>(Clock::now() - start).count()}}
+          .dump());
+  output.commit();
+  return summary.depth_maps;
+}
+
+DenseStageResult mergeDenseShards(const Survey& survey, const DenseStageOptions& options,
+                                  int count) {
+  options.check();
+  Shard{0, count}.check();
+  const auto start = Clock::now();
+  const SurveyModel read = readSurveyModel(survey);
+  DenseStageResult summary;
+  const DensePlan plan = planDense(read.model, options, summary);
+  const std::vector<uint32_t> masters = plan.masters();
+  StagedOutput output(survey.dense());
+  double shard_seconds = 0;
+  for (int index = 0; index < count; ++index) {
+    const fs::path folder = shardFolder(survey, kStage, {index, count});
+    const std::string which = "shard " + std::to_string(index) + " of " + std::to_string(count);
+    const std::string rerun = " (`auv recon run " + survey.root().string() +
+                              " --from dense --to dense --shard " + std::to_string(index) + "/" +
+                              std::to_string(count) + "`)";
+    if (!fs::exists(folder / "shard.json"))
+      throw StageError(kStage, which + " has not run" + rerun);
+    std::ifstream in(folder / "shard.json");
+    const nlohmann::json shard = nlohmann::json::parse(in, nullptr, false);
+    if (shard.is_discarded() || !shard.is_object()) {
+      throw StageError(kStage,
+                       (folder / "shard.json").string() + ": not a shard's JSON object" + rerun);
+    }
+    nlohmann::json expected = nlohmann::json::array();
+    for (size_t rank = index; rank < masters.size(); rank += count) {
+      expected.push_back(plan.name(masters[rank]));
+    }
+    if (shard.value("masters", nlohmann::json()) != expected) {
+      throw StageError(kStage, which + " holds the depth maps of other masters than " +
+                                   survey.sparse().string() + " now gives: run it again" + rerun);
+    }
+    for (const auto& name : expected) {
+      const fs::path from = depthMapPath(folder, name.get<std::string>());
+      if (!fs::exists(from)) {
+        throw StageError(kStage, which + " lacks " + from.string() + ": run it again" + rerun);
+      }
+      linkOrCopy(from, depthMapPath(output.path(), name.get<std::string>()));
+    }
+    summary.depth_maps += expected.size();
+    summary.depth_pixels += shard.value("depth_pixels", size_t{0});
+    summary.masked_depth_maps += shard.value("masked_depth_maps", size_t{0});
+    const nlohmann::json size = shard.value("depth_map_size", nlohmann::json::array({0, 0}));
+    if (summary.width == 0 && size.is_array() && size.size() == 2 && size[0].is_number()) {
+      summary.width = size[0].get<int>();
+      summary.height = size[1].get<int>();
+    }
+    const nlohmann::json matching = shard.value("matching", nlohmann::json::object());
+    summary.matching.seconds += matching.value("seconds", 0.0);
+    summary.matching.cpu_seconds += matching.value("cpu_seconds", 0.0);
+    summary.matching.peak_memory_bytes =
+        std::max(summary.matching.peak_memory_bytes,
+                 static_cast<size_t>(matching.value("peak_memory_mb", 0.0) * 1048576.0));
+    shard_seconds += shard.value("seconds", 0.0);
+  }
+  writeNeighbours(plan, output.path());
+  fuseAndWrite(plan, read.images, output.path(), options, summary);
+  output.commit();
+  fs::remove_all(survey.root() / ".shards" / kStage);
+  // The work of the whole stage, as the features' merge counts it: the shards' and the merge's.
+  summary.seconds = shard_seconds + std::chrono::duration<double>(Clock::now() - start).count();
+  writeReport(survey, summary, options, count);
+  return summary;
+}
+
+namespace {
+
+StageReport reportOf(const Survey& survey, const DenseStageResult& result) {
   std::ostringstream line;
   line << "dense: " << result.depth_maps << " depth maps (" << result.width << "x" << result.height
        << " px), " << result.points << " points (" << result.depths_inconsistent
@@ -397,6 +581,29 @@ StageReport DenseStage::runWith(const Survey& survey, const DenseStageOptions& o
   report.lines.push_back(line.str());
   report.summary = std::to_string(result.depth_maps) + " depth maps, " +
                    std::to_string(result.points) + " points";
+  return report;
+}
+
+}  // namespace
+
+StageReport DenseStage::runWith(const Survey& survey, const DenseStageOptions& options) const {
+  return reportOf(survey, runDenseStage(survey, options));
+}
+
+StageReport DenseStage::runShardWith(const Survey& survey, const DenseStageOptions& options,
+                                     Shard shard) const {
+  const size_t maps = runDenseShard(survey, options, shard);
+  StageReport report;
+  report.summary = "shard " + std::to_string(shard.index) + " of " + std::to_string(shard.count) +
+                   ": " + std::to_string(maps) + " depth maps";
+  report.lines.push_back("dense: " + report.summary);
+  return report;
+}
+
+StageReport DenseStage::mergeShardsWith(const Survey& survey, const DenseStageOptions& options,
+                                        int count) const {
+  StageReport report = reportOf(survey, mergeDenseShards(survey, options, count));
+  report.summary += " (" + std::to_string(count) + " shards merged)";
   return report;
 }
 

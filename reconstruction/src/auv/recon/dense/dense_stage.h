@@ -85,6 +85,18 @@ DenseStageResult densify(const scene::Reconstruction& model,
 /// The survey's sparse/ and corrected/ -> dense/, and the "dense" section of report.json.
 DenseStageResult runDenseStage(const Survey& survey, const DenseStageOptions& options);
 
+/// Shard `shard` of a sharded run (cluster/README.md): the depth maps of every count-th master
+/// (in the order the neighbour selection gives them) into shardFolder(survey, "dense", shard):
+/// depth_maps/ and shard.json (its masters and figures). Returns the depth maps computed.
+size_t runDenseShard(const Survey& survey, const DenseStageOptions& options, Shard shard);
+
+/// dense/ from the `count` shards' depth maps: neighbours.csv, the fusion and every file
+/// runDenseStage writes, the same bytes; the shards' folders are removed after. Throws
+/// StageError naming a shard that has not run, lacks a depth map or ran on another sparse model
+/// (the previous dense/ then stays as it was).
+DenseStageResult mergeDenseShards(const Survey& survey, const DenseStageOptions& options,
+                                  int count);
+
 /// The `dense` stage (common/stage.h): `auv recon dense` and a step of `auv recon run`.
 class DenseStage final : public StageWith<DenseStageOptions> {
  public:
@@ -100,6 +112,11 @@ class DenseStage final : public StageWith<DenseStageOptions> {
     return {survey.dense()};
   }
   StageReport runWith(const Survey& survey, const DenseStageOptions& options) const override;
+  bool shardable() const override { return true; }
+  StageReport runShardWith(const Survey& survey, const DenseStageOptions& options,
+                           Shard shard) const override;
+  StageReport mergeShardsWith(const Survey& survey, const DenseStageOptions& options,
+                              int count) const override;
 };
 
 }  // namespace auv::recon::dense
