@@ -13,6 +13,7 @@
 
 #include "../support/quarter_sceaux.h"
 #include "auv/recon/cluster/slurm.h"
+#include "auv/recon/common/report.h"
 #include "auv/recon/scene/colmap_text.h"
 
 namespace auv::recon::cluster {
@@ -131,7 +132,8 @@ TEST_F(SlurmCluster, AChainOfStagesRunsAsJobsAndIsFollowed) {
   if (!test_support::quarterSceaux(survey)) GTEST_SKIP() << "Sceaux castle data absent";
   {
     std::ofstream config(root / "recon.yaml");
-    config << "features:\n  threads: 1\nmatch:\n  threads: 1\nsfm:\n  threads: 1\n";
+    // The features' threads are left to the job: the CPUs Slurm gave it (1 per host here).
+    config << "match:\n  threads: 1\nsfm:\n  threads: 1\n";
   }
   // Bad input first: a partition the cluster does not have; nothing is submitted.
   const CommandOutput bad = tool({"run", root.string(), "--executor", "slurm", "--from", "features",
@@ -165,6 +167,8 @@ TEST_F(SlurmCluster, AChainOfStagesRunsAsJobsAndIsFollowed) {
   EXPECT_NE(shards_row.find("n1"), std::string::npos) << status.out;
   EXPECT_NE(shards_row.find("n2"), std::string::npos) << status.out;
   EXPECT_GE(scene::readColmapText(survey.sparse()).images.size(), 8u);
+  // The job's script set OMP_NUM_THREADS to its one CPU (this machine has more cores).
+  EXPECT_EQ(readReportSection(survey.report(), "features").value("threads", 0), 1);
   // Each stage ran on a host of the cluster, in its own job, and logged there.
   for (const char* stage :
        {"features.shards", "features.merge", "match.shards", "match.merge", "sfm"}) {

@@ -1,5 +1,6 @@
 // Survey folders, staged outputs, report.json, option binding: the pieces every stage uses.
 #include <gtest/gtest.h>
+#include <sched.h>
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
@@ -12,6 +13,7 @@
 #include "auv/recon/common/stage_error.h"
 #include "auv/recon/common/staged_output.h"
 #include "auv/recon/common/survey.h"
+#include "auv/recon/common/threads.h"
 
 namespace fs = std::filesystem;
 using namespace auv::recon;
@@ -249,4 +251,40 @@ TEST(Progress, PlainModeCountsAndSummarises) {
   ASSERT_NE(std::fgets(line, sizeof line, out), nullptr);
   EXPECT_EQ(std::string(line).rfind("keyframes left: 10 frames in ", 0), 0u) << line;
   std::fclose(out);
+}
+
+// A Slurm job's script sets OMP_NUM_THREADS to the CPUs it was given; without it, the CPUs the
+// process may run on (a cgroup's cpuset), not every core of the host.
+TEST(DefaultThreadCount, FollowsOmpNumThreadsThenTheAffinityMask) {
+  const char* saved = std::getenv("OMP_NUM_THREADS");
+  const std::string earlier = saved ? saved : "";
+  cpu_set_t mask;
+  ASSERT_EQ(sched_getaffinity(0, sizeof(mask), &mask), 0);
+  const int allowed = CPU_COUNT(&mask);
+  unsetenv("OMP_NUM_THREADS");
+  EXPECT_EQ(defaultThreadCount(), allowed);
+  setenv("OMP_NUM_THREADS", "3", 1);
+  EXPECT_EQ(defaultThreadCount(), 3);
+  setenv("OMP_NUM_THREADS", "5,2", 1);  // one count per nesting level: the first
+  EXPECT_EQ(defaultThreadCount(), 5);
+  for (const char* bad : {"", "0", "-2", "four", "3x"}) {
+    setenv("OMP_NUM_THREADS", bad, 1);
+    EXPECT_EQ(defaultThreadCount(), allowed) << "OMP_NUM_THREADS=" << bad;
+  }
+  // A narrower mask (as Slurm's task/affinity or taskset sets) is followed.
+  unsetenv("OMP_NUM_THREADS");
+  if (allowed > 1) {
+    cpu_set_t one;
+    CPU_ZERO(&one);
+    for (int cpu = 0; cpu < CPU_SETSIZE; ++cpu) {
+      if (CPU_ISSET(cpu, &mask)) {
+        CPU_SET(cpu, &one);
+        break;
+      }
+    }
+    ASSERT_EQ(sched_setaffinity(0, sizeof(one), &one), 0);
+    EXPECT_EQ(defaultThreadCount(), 1);
+    ASSERT_EQ(sched_setaffinity(0, sizeof(mask), &mask), 0);
+  }
+  if (saved) setenv("OMP_NUM_THREADS", earlier.c_str(), 1);
 }

@@ -220,7 +220,13 @@ std::vector<SubmittedJob> submitPipeline(const Survey& survey,
     if (part == "merge") command += " --merge-shards " + count;
     writeFileAtomically(
         survey.root() / job.script,
-        "#!/bin/sh\n# " + std::string(kFormat) + ": stage " + base + "\nexec " + command + "\n");
+        "#!/bin/sh\n# " + std::string(kFormat) + ": stage " + base +
+            "\n# The stage's threads: the CPUs Slurm gave the job, not every core of the host.\n"
+            "if [ -z \"${OMP_NUM_THREADS:-}\" ] && [ -n \"${SLURM_CPUS_ON_NODE:-}\" ]; then\n"
+            "  OMP_NUM_THREADS=\"${SLURM_CPUS_PER_TASK:-$SLURM_CPUS_ON_NODE}\"\n"
+            "  export OMP_NUM_THREADS\n"
+            "fi\nexec " +
+            command + "\n");
     std::vector<std::string> args = commonArgs(partition, slurm);
     args.push_back("--job-name=auv-recon-" + base);
     const std::string output_name = base + (part == "shards" ? "-%A_%a.log" : "-%j.log");

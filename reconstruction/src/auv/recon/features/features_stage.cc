@@ -18,6 +18,7 @@
 #include "auv/recon/common/report.h"
 #include "auv/recon/common/stage_error.h"
 #include "auv/recon/common/staged_output.h"
+#include "auv/recon/common/threads.h"
 #include "auv/recon/masks/mask.h"
 
 namespace fs = std::filesystem;
@@ -29,7 +30,7 @@ constexpr const char* kStage = "features";
 
 int threadCount(int requested) {
   if (requested > 0) return requested;
-  return std::max(1u, std::thread::hardware_concurrency());
+  return defaultThreadCount();
 }
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include "auv/recon/calibration/calibration.h"
 #include "auv/recon/common/progress.h"
 #include "auv/recon/common/stage_error.h"
+#include "auv/recon/common/threads.h"
 #include "auv/recon/common/trajectory.h"
 #include "auv/recon/features/vocabulary.h"
 
@@ -158,7 +159,7 @@ cv::Mat appearanceSimilarity(const FeatureStore& store,
 
 int matchThreads(int requested) {
   if (requested > 0) return requested;
-  return std::max(1u, std::thread::hardware_concurrency());
+  return defaultThreadCount();
 }
 
 MatchPlan planMatches(const Survey& survey, const MatchStageOptions& options) {

@@ -17,6 +17,7 @@
 #include "auv/recon/common/report.h"
 #include "auv/recon/common/stage_error.h"
 #include "auv/recon/common/staged_output.h"
+#include "auv/recon/common/threads.h"
 #include "auv/recon/features/feature_store.h"
 #include "auv/recon/features/match_store.h"
 #include "auv/recon/scene/colmap_text.h"
@@ -50,13 +51,13 @@ void SfmStageOptions::check() const {
   lossFunctionFromName(loss);  // throws naming the value
   AUV_RECON_CHECK_OPTION(min_registered_ratio >= 0 && min_registered_ratio <= 1,
                          min_registered_ratio, "must be in [0, 1]");
-  AUV_RECON_CHECK_OPTION(threads > 0, threads, "must be > 0");
+  AUV_RECON_CHECK_OPTION(threads >= 0, threads, "must be >= 0 (0: the CPUs the process may use)");
 }
 
 MapperOptions SfmStageOptions::mapperOptions() const {
   MapperOptions m = mapper;
   m.ba.loss = lossFunctionFromName(loss);
-  m.ba.num_threads = threads;
+  m.ba.num_threads = threads > 0 ? threads : defaultThreadCount();
   return m;
 }
 
@@ -89,7 +90,7 @@ void SfmStageOptions::bind(OptionSet& set) {
   set.add("navigation", &navigation,
           "TUM trajectory (e.g. <run>/ground_truth/navigation.tum): metric scale and gravity "
           "(default: the survey's navigation.tum, if any)");
-  set.add("threads", &threads, "Ceres threads");
+  set.add("threads", &threads, "Ceres threads (0: OMP_NUM_THREADS, else the CPUs allowed)");
   set.add("refine_focal_length", &m.refine_focal_length,
           "self-calibrate the focal length of cameras that only have a prior (import)");
   set.add("refine_principal_point", &m.refine_principal_point,

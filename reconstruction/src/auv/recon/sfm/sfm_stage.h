@@ -33,7 +33,7 @@ struct SfmStageOptions {
   /// the model is scaled to metres and turned into its frame (navigation.h). Empty: the
   /// survey's navigation.tum when it has one, else SfM's arbitrary frame and scale.
   std::string navigation;
-  int threads = 2;  ///< Ceres threads
+  int threads = 0;  ///< Ceres threads (0: common/threads.h's defaultThreadCount())
 
   /// Throws OptionError naming the field and value.
   void check() const;
