@@ -6,12 +6,11 @@
 #include <unistd.h>
 
 #include <fstream>
-#include <iterator>
-#include <map>
 
 #include <open3d/io/PointCloudIO.h>
 #include <opencv2/imgcodecs.hpp>
 
+#include "../support/folder_files.h"
 #include "auv/recon/common/option_set.h"
 #include "auv/recon/common/report.h"
 #include "auv/recon/common/stage_error.h"
@@ -208,17 +207,7 @@ TEST_F(DenseStage, EmptyCloudFailsAndKeepsTheEarlierOutput) {
   }
 }
 
-/// Every file under `folder`, by relative path, with its bytes.
-std::map<std::string, std::string> filesOf(const fs::path& folder) {
-  std::map<std::string, std::string> files;
-  for (const auto& entry : fs::recursive_directory_iterator(folder)) {
-    if (!entry.is_regular_file()) continue;
-    std::ifstream in(entry.path(), std::ios::binary);
-    files[fs::relative(entry.path(), folder).string()] =
-        std::string(std::istreambuf_iterator<char>(in), {});
-  }
-  return files;
-}
+using test_support::filesOf;
 
 // Depth maps per view shard (cluster/README.md): the merge fuses them into the same files as
 // the whole run, on any number of shards, more shards than masters included.

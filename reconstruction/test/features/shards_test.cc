@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include "../support/folder_files.h"
 #include "../support/quarter_sceaux.h"
 #include "auv/recon/common/stage_error.h"
 #include "auv/recon/features/features_stage.h"
@@ -27,17 +28,7 @@ fs::path freshFolder(const std::string& name) {
   return folder;
 }
 
-/// Every file under `folder`, by relative path, with its bytes.
-std::map<std::string, std::string> filesOf(const fs::path& folder) {
-  std::map<std::string, std::string> files;
-  for (const auto& entry : fs::recursive_directory_iterator(folder)) {
-    if (!entry.is_regular_file()) continue;
-    std::ifstream in(entry.path(), std::ios::binary);
-    files[fs::relative(entry.path(), folder).string()] =
-        std::string(std::istreambuf_iterator<char>(in), {});
-  }
-  return files;
-}
+using test_support::filesOf;
 
 TEST(FeatureShards, MergedShardsEqualTheWholeRunOnAnyNumberOfShards) {
   const fs::path root = freshFolder("equal");
