@@ -7,6 +7,8 @@
 #include <fstream>
 #include <random>
 
+#include <opencv2/core/utility.hpp>
+
 #include "auv/recon/common/option_set.h"
 #include "auv/recon/common/progress.h"
 #include "auv/recon/common/report.h"
@@ -286,5 +288,12 @@ TEST(DefaultThreadCount, FollowsOmpNumThreadsThenTheAffinityMask) {
     EXPECT_EQ(defaultThreadCount(), 1);
     ASSERT_EQ(sched_setaffinity(0, sizeof(mask), &mask), 0);
   }
+  // OpenCV's own pool (TBB) follows the same count once limited.
+  setenv("OMP_NUM_THREADS", "1", 1);
+  limitLibraryThreads();
+  EXPECT_EQ(cv::getNumThreads(), 1);
+  unsetenv("OMP_NUM_THREADS");
+  limitLibraryThreads();
+  EXPECT_EQ(cv::getNumThreads(), allowed);
   if (saved) setenv("OMP_NUM_THREADS", earlier.c_str(), 1);
 }

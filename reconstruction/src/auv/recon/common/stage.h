@@ -58,6 +58,11 @@ struct Shard {
 /// up-to-date rule of the stage's own outputs never sees it).
 std::filesystem::path shardFolder(const Survey& survey, const std::string& stage, Shard shard);
 
+/// What a shard's run reports: summary "shard I of N: <done>" and the line "<stage>: <summary>".
+StageReport shardReport(const std::string& stage, Shard shard, const std::string& done);
+/// A merge's report: the stage's own `whole` with " (N shards merged)" on its summary.
+StageReport mergedReport(StageReport whole, int count);
+
 class Stage {
  public:
   virtual ~Stage() = default;

@@ -7,6 +7,8 @@
 #include <string>
 #include <thread>
 
+#include <opencv2/core/utility.hpp>
+
 namespace auv::recon {
 
 int defaultThreadCount() {
@@ -25,5 +27,7 @@ int defaultThreadCount() {
   }
   return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
 }
+
+void limitLibraryThreads() { cv::setNumThreads(defaultThreadCount()); }
 
 }  // namespace auv::recon

@@ -9,4 +9,9 @@ namespace auv::recon {
 /// regions follow the same variable and mask, so a stage's own threads and its OpenMP loops agree.
 int defaultThreadCount();
 
+/// Sizes OpenCV's own thread pool (TBB in Debian's build, which follows the affinity mask but
+/// not OMP_NUM_THREADS) to defaultThreadCount(): a Slurm job given 1 CPU otherwise ran SIFT and
+/// every other OpenCV loop on all the host's cores. Called once by each `auv recon` command.
+void limitLibraryThreads();
+
 }  // namespace auv::recon

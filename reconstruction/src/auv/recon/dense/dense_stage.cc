@@ -592,19 +592,13 @@ StageReport DenseStage::runWith(const Survey& survey, const DenseStageOptions& o
 
 StageReport DenseStage::runShardWith(const Survey& survey, const DenseStageOptions& options,
                                      Shard shard) const {
-  const size_t maps = runDenseShard(survey, options, shard);
-  StageReport report;
-  report.summary = "shard " + std::to_string(shard.index) + " of " + std::to_string(shard.count) +
-                   ": " + std::to_string(maps) + " depth maps";
-  report.lines.push_back("dense: " + report.summary);
-  return report;
+  return shardReport("dense", shard,
+                     std::to_string(runDenseShard(survey, options, shard)) + " depth maps");
 }
 
 StageReport DenseStage::mergeShardsWith(const Survey& survey, const DenseStageOptions& options,
                                         int count) const {
-  StageReport report = reportOf(survey, mergeDenseShards(survey, options, count));
-  report.summary += " (" + std::to_string(count) + " shards merged)";
-  return report;
+  return mergedReport(reportOf(survey, mergeDenseShards(survey, options, count)), count);
 }
 
 }  // namespace auv::recon::dense

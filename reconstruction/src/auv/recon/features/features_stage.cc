@@ -313,19 +313,13 @@ StageReport FeaturesStage::runWith(const Survey& survey,
 
 StageReport FeaturesStage::runShardWith(const Survey& survey, const FeaturesStageOptions& options,
                                         Shard shard) const {
-  const size_t images = runFeaturesShard(survey, options, shard);
-  StageReport report;
-  report.summary = "shard " + std::to_string(shard.index) + " of " + std::to_string(shard.count) +
-                   ": " + std::to_string(images) + " images";
-  report.lines.push_back("features: " + report.summary);
-  return report;
+  return shardReport("features", shard,
+                     std::to_string(runFeaturesShard(survey, options, shard)) + " images");
 }
 
 StageReport FeaturesStage::mergeShardsWith(const Survey& survey,
                                            const FeaturesStageOptions& options, int count) const {
-  StageReport report = reportOf(survey, mergeFeaturesShards(survey, options, count));
-  report.summary += " (" + std::to_string(count) + " shards merged)";
-  return report;
+  return mergedReport(reportOf(survey, mergeFeaturesShards(survey, options, count)), count);
 }
 
 }  // namespace auv::recon::features

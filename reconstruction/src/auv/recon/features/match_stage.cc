@@ -535,19 +535,13 @@ StageReport MatchStage::runWith(const Survey& survey, const MatchStageOptions& o
 
 StageReport MatchStage::runShardWith(const Survey& survey, const MatchStageOptions& options,
                                      Shard shard) const {
-  const size_t pairs = runMatchShard(survey, options, shard);
-  StageReport report;
-  report.summary = "shard " + std::to_string(shard.index) + " of " + std::to_string(shard.count) +
-                   ": " + std::to_string(pairs) + " pairs";
-  report.lines.push_back("match: " + report.summary);
-  return report;
+  return shardReport("match", shard,
+                     std::to_string(runMatchShard(survey, options, shard)) + " pairs");
 }
 
 StageReport MatchStage::mergeShardsWith(const Survey& survey, const MatchStageOptions& options,
                                         int count) const {
-  StageReport report = reportOf(survey, mergeMatchShards(survey, options, count));
-  report.summary += " (" + std::to_string(count) + " shards merged)";
-  return report;
+  return mergedReport(reportOf(survey, mergeMatchShards(survey, options, count)), count);
 }
 
 }  // namespace auv::recon::features

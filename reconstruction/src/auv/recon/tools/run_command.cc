@@ -6,6 +6,7 @@
 #include "auv/recon/cluster/slurm_run.h"
 #include "auv/recon/common/option_set.h"
 #include "auv/recon/common/stage_error.h"
+#include "auv/recon/common/threads.h"
 #include "auv/recon/pipeline/pipeline.h"
 #include "auv/recon/tools/command.h"
 
@@ -13,6 +14,7 @@ namespace auv::recon {
 namespace {
 
 int runMain(const std::vector<std::string>& args) {
+  limitLibraryThreads();
   return tools::runReportingErrors("run", [&] {
     pipeline::PipelineOptions options;
     cluster::SlurmOptions slurm;
@@ -45,8 +47,8 @@ int runMain(const std::vector<std::string>& args) {
       const auto jobs =
           cluster::submitPipeline(Survey(survey), options, slurm,
                                   std::filesystem::read_symlink("/proc/self/exe"), std::cerr);
-      std::cout << "run: " << jobs.size() << " jobs submitted to Slurm (" << jobs.front().id
-                << ".." << jobs.back().id << "); `auv recon status " << survey << "` follows them"
+      std::cout << "run: " << jobs.size() << " jobs submitted to Slurm (" << jobs.front().id << ".."
+                << jobs.back().id << "); `auv recon status " << survey << "` follows them"
                 << std::endl;
       return tools::kExitOk;
     }

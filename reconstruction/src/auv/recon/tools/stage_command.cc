@@ -5,6 +5,7 @@
 #include <memory>
 
 #include "auv/recon/common/option_set.h"
+#include "auv/recon/common/threads.h"
 #include "auv/recon/pipeline/stages.h"
 #include "auv/recon/tools/command.h"
 
@@ -12,6 +13,7 @@ namespace auv::recon {
 namespace {
 
 int stageMain(const Stage& stage, const std::vector<std::string>& args) {
+  limitLibraryThreads();
   return tools::runReportingErrors(stage.name(), [&] {
     const std::unique_ptr<StageOptions> options = stage.defaultOptions();
     std::string survey;
