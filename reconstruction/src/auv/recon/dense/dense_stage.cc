@@ -207,14 +207,24 @@ struct DensePlan {
   const scene::Reconstruction& model;
   std::vector<MasterSelection> selections;
   std::map<uint32_t, View> views;
+  std::set<uint32_t> masters;  ///< the usable masters: each gets a depth map
 
-  /// The usable masters in selection order: shard i computes those whose rank is i mod N.
-  std::vector<uint32_t> masters() const {
-    std::vector<uint32_t> ids;
+  /// The usable masters of `shard`, in selection order: those whose rank is index mod count.
+  std::vector<const MasterSelection*> mastersOf(Shard shard) const {
+    std::vector<const MasterSelection*> mine;
+    size_t rank = 0;
     for (const MasterSelection& s : selections) {
-      if (s.usable()) ids.push_back(s.master);
+      if (s.usable() && rank++ % shard.count == static_cast<size_t>(shard.index)) {
+        mine.push_back(&s);
+      }
     }
-    return ids;
+    return mine;
+  }
+  /// Their image names, as shard.json lists them.
+  nlohmann::json namesOf(Shard shard) const {
+    nlohmann::json names = nlohmann::json::array();
+    for (const MasterSelection* s : mastersOf(shard)) names.push_back(name(s->master));
+    return names;
   }
   const std::string& name(uint32_t id) const { return model.images.at(id).name; }
 };
@@ -228,12 +238,15 @@ DensePlan planDense(const scene::Reconstruction& model, const DenseStageOptions&
                                  std::to_string(options.min_registered_images) +
                                  " needed for dense matching)");
   }
-  DensePlan plan{model, {}, {}};
+  DensePlan plan{model, {}, {}, {}};
   {
     SubStage figures(summary.neighbours);
     plan.selections = selectNeighbours(model, options.neighbours);
   }
-  summary.masters = plan.masters().size();
+  for (const MasterSelection& s : plan.selections) {
+    if (s.usable()) plan.masters.insert(s.master);
+  }
+  summary.masters = plan.masters.size();
   if (summary.masters == 0) {
     throw StageError(kStage, "no registered image has a neighbour sharing >= " +
                                  std::to_string(options.neighbours.min_shared_points) +
@@ -295,15 +308,12 @@ void writeNeighbours(const DensePlan& plan, const fs::path& folder) {
 void computeDepthMaps(const DensePlan& plan, const fs::path& image_folder, const fs::path& folder,
                       const DenseStageOptions& options, const ImageMasks& masks, Shard shard,
                       DenseStageResult& summary) {
-  const std::vector<uint32_t> masters = plan.masters();
-  std::map<uint32_t, const MasterSelection*> selection_of;
-  for (const MasterSelection& s : plan.selections) selection_of[s.master] = &s;
+  const std::vector<const MasterSelection*> mine = plan.mastersOf(shard);
   LoadedViews loaded(plan, image_folder, options.image_cache);
   SubStage figures(summary.matching);
-  Progress progress("dense: depth maps", "images",
-                    (masters.size() + shard.count - 1 - shard.index) / shard.count);
-  for (size_t rank = shard.index; rank < masters.size(); rank += shard.count) {
-    const MasterSelection& s = *selection_of.at(masters[rank]);
+  Progress progress("dense: depth maps", "images", mine.size());
+  for (const MasterSelection* selection : mine) {
+    const MasterSelection& s = *selection;
     std::vector<View> neighbours;
     for (const uint32_t id : s.neighbours) neighbours.push_back(loaded.get(id));
     const View& master = loaded.get(s.master);
@@ -337,8 +347,7 @@ void computeDepthMaps(const DensePlan& plan, const fs::path& image_folder, const
 /// writes fused.ply and fused_views.bin there. Throws StageError below options.min_points.
 void fuseAndWrite(const DensePlan& plan, const fs::path& image_folder, const fs::path& folder,
                   const DenseStageOptions& options, DenseStageResult& summary) {
-  const std::vector<uint32_t> masters = plan.masters();
-  const std::set<uint32_t> has_depth(masters.begin(), masters.end());
+  const std::set<uint32_t>& has_depth = plan.masters;
   FusedCloud cloud;
   {
     SubStage figures(summary.fusion);
@@ -362,7 +371,7 @@ void fuseAndWrite(const DensePlan& plan, const fs::path& image_folder, const fs:
       });
     };
     Fuser fuser(options.fusion);
-    Progress progress("dense: fusion", "images", masters.size());
+    Progress progress("dense: fusion", "images", has_depth.size());
     for (const MasterSelection& s : plan.selections) {
       if (!has_depth.count(s.master)) continue;
       // Load the neighbours first: the master must stay in the cache while they are used.
@@ -485,14 +494,9 @@ size_t runDenseShard(const Survey& survey, const DenseStageOptions& options, Sha
       shard, summary);
   // What the merge needs of this shard: which masters it holds (a shard of another model is
   // refused) and its figures.
-  const std::vector<uint32_t> masters = plan.masters();
-  nlohmann::json names = nlohmann::json::array();
-  for (size_t rank = shard.index; rank < masters.size(); rank += shard.count) {
-    names.push_back(plan.name(masters[rank]));
-  }
   writeFileAtomically(
       output.path() / "shard.json",
-      nlohmann::json{{"masters", names},
+      nlohmann::json{{"masters", plan.namesOf(shard)},
                      {"depth_pixels", summary.depth_pixels},
                      {"masked_depth_maps", summary.masked_depth_maps},
                      {"depth_map_size", {summary.width, summary.height}},
@@ -511,7 +515,6 @@ DenseStageResult mergeDenseShards(const Survey& survey, const DenseStageOptions&
   const SurveyModel read = readSurveyModel(survey);
   DenseStageResult summary;
   const DensePlan plan = planDense(read.model, options, summary);
-  const std::vector<uint32_t> masters = plan.masters();
   StagedOutput output(survey.dense());
   double shard_seconds = 0;
   for (int index = 0; index < count; ++index) {
@@ -528,10 +531,7 @@ DenseStageResult mergeDenseShards(const Survey& survey, const DenseStageOptions&
       throw StageError(kStage,
                        (folder / "shard.json").string() + ": not a shard's JSON object" + rerun);
     }
-    nlohmann::json expected = nlohmann::json::array();
-    for (size_t rank = index; rank < masters.size(); rank += count) {
-      expected.push_back(plan.name(masters[rank]));
-    }
+    const nlohmann::json expected = plan.namesOf({index, count});
     if (shard.value("masters", nlohmann::json()) != expected) {
       throw StageError(kStage, which + " holds the depth maps of other masters than " +
                                    survey.sparse().string() + " now gives: run it again" + rerun);
