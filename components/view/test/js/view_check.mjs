@@ -64,7 +64,7 @@ try {
   result.texturesMs = Date.now() - t0;
   // ... and the page draws them by itself, untouched (a user sees no black model).
   result.drawnAfterTextures = await page.waitForFunction(
-    () => window.__auvView.lastFrameMs >= window.__auvView.textureArrivedMs, { timeout: 5000 })
+    () => window.__auvView.texturesDrawn === window.__auvView.texturesArrived, { timeout: 5000 })
     .then(() => true, () => false);
   if (liveSeconds > 0) {
     await page.waitForFunction(() => window.__auvView.vehicle !== null, { timeout: 30000 });

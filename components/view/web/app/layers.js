@@ -22,7 +22,7 @@ export async function fetchLayer(layer) {
 /** Set by the page before loading: software GL (no GPU) samples textures on the CPU; the page
  * renders on demand, so it is told when a texture arrives (or fails) after its level. */
 export const renderHints = {
-  softwareGl: false, texturesPending: 0, textureArrivedMs: 0, onTexture: () => {},
+  softwareGl: false, texturesPending: 0, texturesArrived: 0, onTexture: () => {},
   onError: () => {},
 };
 
@@ -33,7 +33,7 @@ function texture(url) {
     renderHints.texturesPending++;
     const t = textureLoader.load(url, () => {
       renderHints.texturesPending--;
-      renderHints.textureArrivedMs = performance.now();
+      renderHints.texturesArrived++;
       renderHints.onTexture();
     }, undefined, () => {
       renderHints.texturesPending--;

@@ -7,7 +7,7 @@ import { LiveView } from './live.js';
 
 const started = performance.now();
 const state = window.__auvView = {
-  ready: false, kind: null, counts: {}, frames: 0, lastFrameMs: 0, errors: [], firstFrameMs: null,
+  ready: false, kind: null, counts: {}, frames: 0, texturesDrawn: 0, errors: [], firstFrameMs: null,
   modelLevel: null, live: null, vehicle: null,
 };
 window.addEventListener('error', (e) => state.errors.push(String(e.message)));
@@ -70,7 +70,9 @@ function frame(now) {
   dirty = false;
   renderer.render(scene, camera);
   state.frames++;
-  state.lastFrameMs = now;
+  // Which arrivals this frame includes: counted, not timed (a frame's timestamp is its start,
+  // earlier than a texture that arrived within it).
+  state.texturesDrawn = renderHints.texturesArrived;
   if (spin) {
     spin.frames++;
     if (now >= spin.until) { spin.resolve(spin.frames / ((now - spin.start) / 1000)); spin = null; }
@@ -162,7 +164,7 @@ renderHints.softwareGl = state.softwareGl;
 renderHints.onTexture = requestRender;
 renderHints.onError = (e) => report(e);
 Object.defineProperty(state, 'texturesPending', { get: () => renderHints.texturesPending });
-Object.defineProperty(state, 'textureArrivedMs', { get: () => renderHints.textureArrivedMs });
+Object.defineProperty(state, 'texturesArrived', { get: () => renderHints.texturesArrived });
 const model = { levels: [], shown: null, level: null, auto: true, loading: new Map(), sphere: null };
 
 function autoLevel() {
