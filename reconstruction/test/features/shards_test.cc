@@ -107,20 +107,31 @@ TEST(MatchShards, MergedShardsEqualTheWholeRunOnAnyNumberOfShards) {
     EXPECT_EQ(filesOf(matches), expected);
     EXPECT_FALSE(fs::exists(root / ".shards" / "match"));
   }
-  // A shard of another plan (here: of other options) is refused, naming it.
+  // Shards of other options, of another plan or of other features are refused, naming them;
+  // the merge reads the shards' plan instead of planning again, so it must notice each.
+  const auto expectRefused = [&](const std::string& why) {
+    try {
+      mergeMatchShards(survey, options, 2);
+      ADD_FAILURE() << "merged, expected: " << why;
+    } catch (const StageError& e) {
+      EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+    }
+  };
   MatchStageOptions other = options;
   other.pairs.exhaustive_max_images = 2;  // sequential pairs: fewer candidates
   other.pairs.sequential_window = 1;
-  runMatchShard(survey, other, {0, 2});
+  runMatchShard(survey, options, {0, 2});
+  runMatchShard(survey, other, {1, 2});
+  expectRefused("shard 1 of 2 matched another plan than shard 0");
+  MatchStageOptions stricter = options;  // the same candidates, another verification
+  stricter.verification.min_inliers += 5;
+  runMatchShard(survey, stricter, {0, 2});
+  runMatchShard(survey, stricter, {1, 2});
+  expectRefused("shard 0 of 2 ran with other match options than the merge");
+  runMatchShard(survey, options, {0, 2});
   runMatchShard(survey, options, {1, 2});
-  try {
-    mergeMatchShards(survey, options, 2);
-    FAIL() << "merged a shard of another plan";
-  } catch (const StageError& e) {
-    EXPECT_NE(std::string(e.what()).find("shard 0 of 2 matched another set of candidate pairs"),
-              std::string::npos)
-        << e.what();
-  }
+  std::ofstream(root / "features" / "index.csv", std::ios::app) << "\n";  // features re-run since
+  expectRefused("shard 0 of 2 matched other features than");
   EXPECT_EQ(filesOf(matches), expected);
   fs::remove_all(root);
 }

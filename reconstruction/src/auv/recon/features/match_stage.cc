@@ -345,12 +345,43 @@ double secondsSince(std::chrono::steady_clock::time_point start) {
 
 /// features/matches/ (pairs.bin of the verified pairs, pairs.csv of every candidate) and the
 /// stage's section of report.json.
+/// What report.json says of the plan; a sharded match's merge reads it from the shards.
+struct PlanFigures {
+  size_t images = 0, images_with_navigation = 0, candidates = 0;
+  bool exhaustive = false;
+  std::string navigation;
+};
+
+PlanFigures figuresOf(const MatchPlan& plan) {
+  return {plan.store->images().size(), plan.placed.placed, plan.candidates.size(), plan.exhaustive,
+          plan.navigation.string()};
+}
+
+nlohmann::json optionsJson(const MatchStageOptions& options, const std::string& navigation) {
+  return {{"ratio", options.matching.ratio},
+          {"mutual", options.matching.mutual},
+          {"flann_above", options.matching.flann_above},
+          {"flann_trees", options.matching.flann_trees},
+          {"flann_checks", options.matching.flann_checks},
+          {"search", options.matching.search},
+          {"hash_candidates", options.matching.hash_candidates},
+          {"random_seed", options.matching.random_seed},
+          {"sequential_window", options.pairs.sequential_window},
+          {"exhaustive_max_images", options.pairs.exhaustive_max_images},
+          {"cross_camera_max_dt_s", options.pairs.cross_camera_max_dt_s},
+          {"loop_top_k", options.pairs.loop_top_k},
+          {"loop_max_distance_m", options.pairs.loop_max_distance_m},
+          {"navigation", navigation},
+          {"min_inliers", options.verification.min_inliers},
+          {"max_threshold_px", options.verification.max_threshold_px}};
+}
+
 MatchStageResult writeMatches(const Survey& survey, const MatchStageOptions& options,
-                              const MatchPlan& plan, const std::vector<VerifiedPair>& verified,
+                              const PlanFigures& plan, const std::vector<VerifiedPair>& verified,
                               const std::string& csv, double seconds, int threads, int shards) {
   MatchStageResult summary;
-  summary.images = plan.store->images().size();
-  summary.candidate_pairs = plan.candidates.size();
+  summary.images = plan.images;
+  summary.candidate_pairs = plan.candidates;
   summary.verified_pairs = verified.size();
   std::map<std::string, size_t> by_source;
   for (const VerifiedPair& p : verified) {
@@ -359,7 +390,7 @@ MatchStageResult writeMatches(const Survey& survey, const MatchStageOptions& opt
     (p.kind == GeometryKind::ESSENTIAL ? summary.essential_pairs : summary.fundamental_pairs)++;
   }
   if (verified.empty()) {
-    throw StageError(kStage, "no pair of the " + std::to_string(plan.candidates.size()) +
+    throw StageError(kStage, "no pair of the " + std::to_string(plan.candidates) +
                                  " candidates verified (at least " +
                                  std::to_string(options.verification.min_inliers) +
                                  " geometric inliers needed); earlier matches kept");
@@ -373,7 +404,7 @@ MatchStageResult writeMatches(const Survey& survey, const MatchStageOptions& opt
   nlohmann::json sources = nlohmann::json::object();
   for (const auto& [source, count] : by_source) sources[source] = count;
   nlohmann::json report = {{"images", summary.images},
-                           {"images_with_navigation", plan.placed.placed},
+                           {"images_with_navigation", plan.images_with_navigation},
                            {"candidate_pairs", summary.candidate_pairs},
                            {"verified_pairs", summary.verified_pairs},
                            {"verified_pairs_by_source", sources},
@@ -383,23 +414,7 @@ MatchStageResult writeMatches(const Survey& survey, const MatchStageOptions& opt
                            {"exhaustive", plan.exhaustive},
                            {"seconds", summary.seconds},
                            {"threads", threads},
-                           {"options",
-                            {{"ratio", options.matching.ratio},
-                             {"mutual", options.matching.mutual},
-                             {"flann_above", options.matching.flann_above},
-                             {"flann_trees", options.matching.flann_trees},
-                             {"flann_checks", options.matching.flann_checks},
-                             {"search", options.matching.search},
-                             {"hash_candidates", options.matching.hash_candidates},
-                             {"random_seed", options.matching.random_seed},
-                             {"sequential_window", options.pairs.sequential_window},
-                             {"exhaustive_max_images", options.pairs.exhaustive_max_images},
-                             {"cross_camera_max_dt_s", options.pairs.cross_camera_max_dt_s},
-                             {"loop_top_k", options.pairs.loop_top_k},
-                             {"loop_max_distance_m", options.pairs.loop_max_distance_m},
-                             {"navigation", plan.navigation.string()},
-                             {"min_inliers", options.verification.min_inliers},
-                             {"max_threshold_px", options.verification.max_threshold_px}}}};
+                           {"options", optionsJson(options, plan.navigation)}};
   if (shards > 1) report["shards"] = shards;
   updateReport(survey.report(), kStage, report);
   return summary;
@@ -416,8 +431,50 @@ MatchStageResult runMatchStage(const Survey& survey, const MatchStageOptions& op
       matchCandidates(*plan.store, plan.placed, plan.candidates, options, threads);
   std::vector<VerifiedPair> verified;
   const std::string csv = collectOutcomes(outcomes, plan.candidates, &verified);
-  return writeMatches(survey, options, plan, verified, csv, secondsSince(start), threads, 1);
+  return writeMatches(survey, options, figuresOf(plan), verified, csv, secondsSince(start), threads,
+                      1);
 }
+
+namespace {
+
+/// FNV-1a of a file's bytes: the features a shard matched, compared at the merge.
+std::string contentHash(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  uint64_t hash = 14695981039346656037ull;
+  for (char c; in.get(c);) hash = (hash ^ static_cast<unsigned char>(c)) * 1099511628211ull;
+  std::ostringstream hex;
+  hex << std::hex << hash;
+  return hex.str();
+}
+
+/// A JSON file's value; a discarded value when it is missing or not JSON.
+nlohmann::json readJsonFile(const fs::path& file) {
+  std::ifstream in(file);
+  return nlohmann::json::parse(in, nullptr, false);
+}
+
+fs::path featureIndex(const Survey& survey) { return survey.root() / "features" / "index.csv"; }
+
+/// What every shard computes alike and the merge needs instead of planning again (25-49 s on
+/// the 277-keyframe canyon): the plan's figures, its candidates by name, the options and the
+/// features it was made of. The merge refuses shards whose records differ.
+nlohmann::json planRecord(const Survey& survey, const MatchStageOptions& options,
+                          const MatchPlan& plan) {
+  const PlanFigures figures = figuresOf(plan);
+  nlohmann::json pairs = nlohmann::json::array();
+  for (const CandidatePair& c : plan.candidates) {
+    pairs.push_back({plan.placed.images[c.index1].name, plan.placed.images[c.index2].name});
+  }
+  return {{"images", figures.images},
+          {"images_with_navigation", figures.images_with_navigation},
+          {"exhaustive", figures.exhaustive},
+          {"navigation", figures.navigation},
+          {"options", optionsJson(options, figures.navigation)},
+          {"features_index", contentHash(featureIndex(survey))},
+          {"candidates", pairs}};
+}
+
+}  // namespace
 
 size_t runMatchShard(const Survey& survey, const MatchStageOptions& options, Shard shard) {
   options.check();
@@ -437,11 +494,10 @@ size_t runMatchShard(const Survey& survey, const MatchStageOptions& options, Sha
   StagedOutput output(shardFolder(survey, kStage, shard));
   writeVerifiedPairs(output.path() / "pairs.bin", verified);
   writeFileAtomically(output.path() / "rows.csv", csv);
-  writeFileAtomically(output.path() / "shard.json",
-                      nlohmann::json{{"candidates", plan.candidates.size()},
-                                     {"seconds", secondsSince(start)},
-                                     {"threads", threads}}
-                          .dump());
+  writeFileAtomically(output.path() / "plan.json", planRecord(survey, options, plan).dump());
+  writeFileAtomically(
+      output.path() / "shard.json",
+      nlohmann::json{{"seconds", secondsSince(start)}, {"threads", threads}}.dump());
   output.commit();
   return mine.size();
 }
@@ -449,29 +505,43 @@ size_t runMatchShard(const Survey& survey, const MatchStageOptions& options, Sha
 MatchStageResult mergeMatchShards(const Survey& survey, const MatchStageOptions& options,
                                   int count) {
   options.check();
-  const MatchPlan plan = planMatches(survey, options);
   struct ShardRows {
     std::vector<std::string> rows;
     std::vector<VerifiedPair> verified;
     size_t next_row = 0, next_pair = 0;
   };
   std::vector<ShardRows> shards(count);
+  nlohmann::json plan;  // shard 0's record; every other shard's must equal it
   double seconds = 0;
   int threads = 1;
   for (int index = 0; index < count; ++index) {
     const fs::path folder = shardFolder(survey, kStage, {index, count});
     const std::string which = "shard " + std::to_string(index) + " of " + std::to_string(count);
+    const std::string rerun = ": run the shards again";
     if (!fs::exists(folder / "shard.json")) {
       throw StageError(kStage, which + " has not run (`auv recon run " + survey.root().string() +
                                    " --from match --to match --shard " + std::to_string(index) +
                                    "/" + std::to_string(count) + "`)");
     }
-    std::ifstream json_in(folder / "shard.json");
-    const nlohmann::json shard_report = nlohmann::json::parse(json_in, nullptr, false);
-    if (shard_report.value("candidates", size_t{0}) != plan.candidates.size()) {
+    const nlohmann::json shard_report = readJsonFile(folder / "shard.json");
+    const nlohmann::json record = readJsonFile(folder / "plan.json");
+    if (!shard_report.is_object() || !record.is_object() || !record["candidates"].is_array()) {
+      throw StageError(kStage, which + ": shard.json or plan.json is damaged" + rerun);
+    }
+    if (index == 0) {
+      plan = record;
+      if (plan.value("features_index", "") != contentHash(featureIndex(survey))) {
+        throw StageError(kStage, which + " matched other features than " +
+                                     featureIndex(survey).string() + " lists" + rerun);
+      }
+      if (plan["options"] != optionsJson(options, plan.value("navigation", ""))) {
+        throw StageError(kStage, which + " ran with other match options than the merge" + rerun);
+      }
+    } else if (record != plan) {
       throw StageError(kStage, which +
-                                   " matched another set of candidate pairs (the features "
-                                   "or options changed since it ran): run the shards again");
+                                   " matched another plan than shard 0 (the features or "
+                                   "options changed between the shards)" +
+                                   rerun);
     }
     seconds += shard_report.value("seconds", 0.0);
     threads = std::max(threads, shard_report.value("threads", 1));
@@ -481,20 +551,19 @@ MatchStageResult mergeMatchShards(const Survey& survey, const MatchStageOptions&
   }
   // The candidates in their order: candidate i is row i / count of shard i % count, and the
   // shard's next verified pair when that pair is of the candidate's two images.
-  const std::vector<PairImage>& images = plan.placed.images;
+  const nlohmann::json& candidates = plan["candidates"];
   std::vector<VerifiedPair> verified;
   std::string csv;
-  for (size_t i = 0; i < plan.candidates.size(); ++i) {
+  for (size_t i = 0; i < candidates.size(); ++i) {
     ShardRows& shard = shards[i % count];
     if (shard.next_row >= shard.rows.size()) {
       throw StageError(kStage, "shard " + std::to_string(i % count) + " of " +
                                    std::to_string(count) + " is short of rows: run it again");
     }
     csv += shard.rows[shard.next_row++];
-    const CandidatePair& c = plan.candidates[i];
     if (shard.next_pair < shard.verified.size() &&
-        shard.verified[shard.next_pair].image1 == images[c.index1].name &&
-        shard.verified[shard.next_pair].image2 == images[c.index2].name) {
+        shard.verified[shard.next_pair].image1 == candidates[i][0] &&
+        shard.verified[shard.next_pair].image2 == candidates[i][1]) {
       verified.push_back(std::move(shard.verified[shard.next_pair++]));
     }
   }
@@ -504,8 +573,11 @@ MatchStageResult mergeMatchShards(const Survey& survey, const MatchStageOptions&
                                    ": pairs.bin and rows.csv disagree: run it again");
     }
   }
+  const PlanFigures figures{plan.value("images", size_t{0}),
+                            plan.value("images_with_navigation", size_t{0}), candidates.size(),
+                            plan.value("exhaustive", false), plan.value("navigation", "")};
   MatchStageResult result =
-      writeMatches(survey, options, plan, verified, csv, seconds, threads, count);
+      writeMatches(survey, options, figures, verified, csv, seconds, threads, count);
   fs::remove_all(survey.root() / ".shards" / kStage);
   return result;
 }
