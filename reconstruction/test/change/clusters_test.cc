@@ -164,5 +164,49 @@ TEST(Regions, OnlyChangesSignificantOverTheWholeSiteAreKept) {
       << "bound z " << familyWiseZ(options, 41);
 }
 
+TEST(Regions, ARegionGrowsAtTheMeasuringScaleToTheEdgesItsCoarseScaleBlurred) {
+  // A block of 4 x 4 core points (0.64 m², +0.4 m) on 12 x 12 of unchanged ground: the coarse
+  // cylinders average its edges with the floor, so only its middle 2 x 2 pass there; the fine
+  // ones see all of it. Beside it a hole (significant at the fine scale, lost), and apart a
+  // fine-significant patch that no coarse region seeds.
+  std::vector<Eigen::Vector3d> cores;
+  std::vector<M3C2Point> coarse, fine;
+  for (int i = 0; i < 12; ++i) {
+    for (int j = 0; j < 12; ++j) {
+      cores.emplace_back(0.2 * i, 0.2 * j, 10.0);
+      const bool block = i >= 4 && i < 8 && j >= 4 && j < 8;
+      const bool middle = i >= 5 && i < 7 && j >= 5 && j < 7;
+      const bool hole = i == 8 && j == 5;
+      const bool apart = i >= 10 && j < 2;
+      M3C2Point c, f;
+      c.distance = middle ? 0.3 : block ? 0.1 : 0.0;
+      c.level_of_detection = 0.1;
+      c.significant = middle;
+      f.distance = block ? 0.4 : hole ? -0.3 : apart ? 0.3 : 0.0;
+      f.level_of_detection = 0.05;
+      f.significant = block || hole || apart;
+      coarse.push_back(c);
+      fine.push_back(f);
+    }
+  }
+  RegionOptions options;
+  const std::vector<ChangeCluster> seeds = findRegions(cores, coarse, &fine, options);
+  ASSERT_EQ(seeds.size(), 1u);
+  EXPECT_EQ(seeds[0].core_points.size(), 4u);
+  EXPECT_NEAR(seeds[0].volume_gained_m3, 4 * 0.4 * 0.04, 1e-9);
+
+  options.grow_at_measuring_scale = true;
+  const std::vector<ChangeCluster> grown = findRegions(cores, coarse, &fine, options);
+  ASSERT_EQ(grown.size(), 1u) << "the apart patch has no coarse seed";
+  EXPECT_EQ(grown[0].core_points.size(), 16u) << "the hole beside it has the other sign";
+  EXPECT_NEAR(grown[0].area_m2, 0.64, 1e-9);
+  EXPECT_NEAR(grown[0].volume_gained_m3, 16 * 0.4 * 0.04, 1e-9);
+  EXPECT_NEAR(grown[0].volume_lost_m3, 0.0, 1e-9);
+  EXPECT_TRUE(grown[0].centroid.isApprox(Eigen::Vector3d(1.1, 1.1, 10.0), 1e-9));
+
+  // One scale: nothing to grow into (the measuring scale is the detection scale).
+  EXPECT_EQ(findRegions(cores, coarse, nullptr, options)[0].core_points.size(), 4u);
+}
+
 }  // namespace
 }  // namespace auv::recon::change

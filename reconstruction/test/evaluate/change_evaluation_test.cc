@@ -178,6 +178,28 @@ TEST_F(ChangeScoresTest, AtTwoScalesClustersAreFoundCoarseAndMeasuredFine) {
   EXPECT_TRUE(pit);
 }
 
+// At two scales with compare's growth (grow_regions), a region takes the linked points
+// significant at the fine scale: the pit's coarse pass flagged only its middle.
+TEST_F(ChangeScoresTest, AtTwoScalesRegionsGrowAtTheFineScaleAsCompareRecorded) {
+  change_.detection_distances = change_.distances;
+  change_.measuring_significant = change_.significant;  // the fine flags
+  for (size_t i = 0; i < change_.points.size(); ++i) {
+    const Eigen::Vector3d& p = change_.points[i];
+    const bool pit = p.x() > 4 && p.x() < 6 && p.y() > -6 && p.y() < -4;
+    const bool middle = p.x() > 4.6 && p.x() < 5.4 && p.y() > -5.4 && p.y() < -4.6;
+    if (pit && !middle) change_.significant[i] = 0;
+  }
+  const auto pitPoints = [this] {
+    for (const ClusterScore& c : scoreChanges(truth_, change_, ChangeScoreOptions()).clusters) {
+      if (c.cluster.mean_distance_m < 0) return c.cluster.core_points.size();
+    }
+    return size_t{0};
+  };
+  EXPECT_EQ(pitPoints(), 16u);
+  change_.grow_regions = true;
+  EXPECT_EQ(pitPoints(), 100u);
+}
+
 TEST_F(ChangeScoresTest, RegionsTestedFamilyWiseAsCompareRecorded) {
   auto falseClusters = [this] {
     int count = 0;

@@ -118,6 +118,42 @@ size_t measureCluster(ChangeCluster& cluster, const std::vector<M3C2Point>& comp
   return of_interest;
 }
 
+/// RegionOptions::grow_at_measuring_scale: each region, largest first, takes breadth first the
+/// core points within link_m of it that `measurement` finds significant with the region's sign
+/// and no region holds yet.
+void growRegions(std::vector<ChangeCluster>& regions,
+                 const std::vector<Eigen::Vector3d>& core_points,
+                 const std::vector<M3C2Point>& measurement, double link_m, double cell_m2) {
+  std::vector<char> taken(core_points.size(), 0);
+  for (const ChangeCluster& region : regions) {
+    for (size_t index : region.core_points) taken[index] = 1;
+  }
+  const IndexedCloud cloud(core_points);
+  for (ChangeCluster& region : regions) {
+    const bool gained = region.mean_distance_m > 0;
+    std::vector<size_t> queue = region.core_points;
+    while (!queue.empty()) {
+      const size_t k = queue.back();
+      queue.pop_back();
+      for (int j : cloud.within(core_points[k], link_m)) {
+        const size_t next = static_cast<size_t>(j);
+        const M3C2Point& p = measurement[next];
+        if (taken[next] || !p.valid() || !p.significant || (p.distance > 0) != gained) continue;
+        taken[next] = 1;
+        region.core_points.push_back(next);
+        queue.push_back(next);
+      }
+    }
+    std::sort(region.core_points.begin(), region.core_points.end());
+    region.area_m2 = static_cast<double>(region.core_points.size()) * cell_m2;
+    region.centroid.setZero();
+    for (size_t index : region.core_points) region.centroid += core_points[index];
+    region.centroid /= static_cast<double>(region.core_points.size());
+  }
+  std::sort(regions.begin(), regions.end(),
+            [](const ChangeCluster& a, const ChangeCluster& b) { return a.area_m2 > b.area_m2; });
+}
+
 }  // namespace
 
 void remeasureClusters(std::vector<ChangeCluster>& clusters,
@@ -177,6 +213,10 @@ std::vector<ChangeCluster> findRegions(const std::vector<Eigen::Vector3d>& core_
       clusterChanges(core_points, detection, options.spacing_m, options.link_m, options.min_area_m2,
                      options.min_change_m, 0.0);
   const std::vector<M3C2Point>& measuring = measurement ? *measurement : detection;
+  if (measurement && options.grow_at_measuring_scale) {
+    growRegions(regions, core_points, measuring, options.link_m,
+                options.spacing_m * options.spacing_m);
+  }
   remeasureClusters(regions, core_points, measuring, options.spacing_m, 0.0);
   const size_t measured = static_cast<size_t>(std::count_if(
       measuring.begin(), measuring.end(), [](const M3C2Point& p) { return p.valid(); }));

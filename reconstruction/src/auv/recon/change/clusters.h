@@ -44,6 +44,11 @@ struct RegionOptions {
   double family_confidence = 0.0;
   double footprint_m2 = 0.0;  ///< one independent measurement: the cylinder's cross-section
   double level_of_detection_z = 1.96;  ///< the z the levels of detection were computed at
+  /// Two scales: a region found at the detection scale also takes the core points linked to it
+  /// that are significant at the measuring scale with its sign (hysteresis, as Canny's edges:
+  /// the coarse scale seeds, the fine one extends). The coarse cylinders average a small
+  /// block's edges with the floor around it; the fine ones see them.
+  bool grow_at_measuring_scale = false;
 };
 
 /// The z a region's mean change must reach (RegionOptions::family_confidence) on a site of
@@ -84,8 +89,9 @@ void remeasureClusters(std::vector<ChangeCluster>& clusters,
                        const std::vector<M3C2Point>& measurement, double spacing_m,
                        double volume_margin_m);
 
-/// The regions as compare reports them: found in `detection` (clusterChanges) and measured in
-/// `measurement` when given (two scales), else in `detection` itself; those that fail the
+/// The regions as compare reports them: found in `detection` (clusterChanges), grown at the
+/// measuring scale when asked, and measured in `measurement` when given (two scales), else in
+/// `detection` itself; those that fail the
 /// family-wise test dropped (before the rims are shared out); the volumes take the rim.
 std::vector<ChangeCluster> findRegions(const std::vector<Eigen::Vector3d>& core_points,
                                        const std::vector<M3C2Point>& detection,

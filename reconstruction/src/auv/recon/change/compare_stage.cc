@@ -56,6 +56,7 @@ RegionOptions regionOptions(const CompareOptions& options) {
   regions.family_confidence = options.region_confidence;
   regions.footprint_m2 = M_PI * radius_m * radius_m;
   regions.level_of_detection_z = options.m3c2.confidence_z;
+  regions.grow_at_measuring_scale = options.grow_regions;
   return regions;
 }
 
@@ -230,6 +231,9 @@ void CompareOptions::bind(OptionSet& set) {
           "whole site (Bonferroni over its independent measurements); 0 = off");
   set.add("detection_scale", &detection_scale,
           "> 1: regions found by M3C2 at this multiple of d and D, measured at d and D");
+  set.add("grow_regions", &grow_regions,
+          "at two scales, a region also takes the linked core points significant at d and D "
+          "with its sign (a small block's edges, which the coarse scale averages away)");
   set.add("normal_scale_m", &m3c2.normal_scale_m, "m: M3C2 normal scale D (diameter)");
   set.add("projection_scale_m", &m3c2.projection_scale_m,
           "m: M3C2 projection scale d (cylinder diameter)");
@@ -364,6 +368,7 @@ nlohmann::json runCompare(const Survey& survey, const CompareOptions& options) {
         {"min_change_m", options.min_change_m},
         {"bias_radius_m", options.bias_radius_m},
         {"detection_scale", options.detection_scale},
+        {"grow_regions", options.grow_regions},
         {"volume_margin_m", region_options.volume_margin_m},
         {"region_confidence", options.region_confidence},
         {"region_footprint_m2", region_options.footprint_m2},

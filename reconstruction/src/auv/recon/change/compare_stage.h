@@ -50,6 +50,9 @@ struct CompareOptions {
   /// canyon pairs: precision 11/22 -> 13/23, false change on the control 3.15 -> 1.12 %, every
   /// fallen block's volume within 20 % (reconstruction/bench/change/README.md).
   double detection_scale = 2.0;
+  /// At two scales, a region also takes the linked core points significant at the measuring
+  /// scale with its sign (RegionOptions::grow_at_measuring_scale): a small block's edges.
+  bool grow_regions = true;
   /// > 0: a region is kept only when its mean change is significant at this confidence over
   /// the whole site, not only at its points (clusters.h, RegionOptions::family_confidence):
   /// M3C2's per-point 95 % leaves ~5 % of a site's independent measurements passing by chance.

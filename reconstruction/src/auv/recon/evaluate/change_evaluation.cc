@@ -81,6 +81,7 @@ WorldChange readComparison(const fs::path& file, std::string& missing) {
   // Two scales (compare's detection_scale > 1): the regions are made of the coarse flags.
   if (cloud.HasPointAttr("scalar_detection_significant") &&
       cloud.HasPointAttr("scalar_detection_distance")) {
+    change.measuring_significant = change.significant;
     change.significant = flags("scalar_detection_significant");
     change.detection_distances = scalars("scalar_detection_distance");
   }
@@ -271,6 +272,7 @@ json evaluateChange(const Survey& survey, const fs::path& ground_truth_run,
   change.min_change_m = sim.scale * compare_options.value("min_change_m", 0.0);
   change.volume_margin_m = sim.scale * compare_options.value("volume_margin_m", 0.0);
   change.region_confidence = compare_options.value("region_confidence", 0.0);
+  change.grow_regions = compare_options.value("grow_regions", false);
   change.region_footprint_m2 =
       sim.scale * sim.scale * compare_options.value("region_footprint_m2", 0.0);
   change.level_of_detection_z = compare_options.value("level_of_detection_z", 1.96);

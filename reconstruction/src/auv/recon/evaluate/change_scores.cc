@@ -34,6 +34,10 @@ std::vector<ClusterScore> scoreClusters(const ChangeTruth& truth, const WorldCha
   }
   if (two_scales) {
     fine = comparison;
+    for (size_t i = 0; i < fine.size(); ++i) {
+      fine[i].significant = i < change.measuring_significant.size() &&
+                            change.measuring_significant[i] && fine[i].valid();
+    }
     for (size_t i = 0; i < comparison.size(); ++i) {
       comparison[i].distance = change.detection_distances[i];
       comparison[i].significant = change.significant[i] && comparison[i].valid();
@@ -48,6 +52,7 @@ std::vector<ClusterScore> scoreClusters(const ChangeTruth& truth, const WorldCha
       options.min_cluster_area_m2 > 0 ? options.min_cluster_area_m2 : change.min_cluster_area_m2;
   regions.min_change_m = change.min_change_m;
   regions.volume_margin_m = change.volume_margin_m;
+  regions.grow_at_measuring_scale = change.grow_regions;
   if (!change.levels_of_detection.empty()) {
     regions.family_confidence = change.region_confidence;
     regions.footprint_m2 = change.region_footprint_m2;

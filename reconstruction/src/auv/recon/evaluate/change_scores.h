@@ -54,6 +54,8 @@ struct WorldChange {
   /// At two scales, the coarse distances the regions were found with (min_change_m); the
   /// regions are measured with `distances`. Empty at one scale.
   std::vector<double> detection_distances;
+  /// At two scales: compare's `significant` at the measuring scale (what regions grow into).
+  std::vector<char> measuring_significant;
   /// Per core point: compare's colour difference ΔE*ab (NaN: colours not compared) and whether
   /// it is significant. Both empty when changes.ply has none (an older compare).
   std::vector<double> delta_e;
@@ -65,6 +67,7 @@ struct WorldChange {
   double min_change_m = 0.0;          ///< m, compare's smallest change of interest
   double volume_margin_m = 0.0;       ///< m, compare's rim of a region's volume (clusters.h)
   double region_confidence = 0.0;     ///< compare's family-wise test of regions (0: off)
+  bool grow_regions = false;          ///< compare's growth at the measuring scale
   double region_footprint_m2 = 0.0;   ///< m², one independent measurement's area
   double level_of_detection_z = 1.96;
 
