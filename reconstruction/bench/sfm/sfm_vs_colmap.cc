@@ -146,10 +146,18 @@ int benchMain(int argc, char** argv) {
 
   std::map<std::string, scene::Image> truth;
   if (args.count("truth")) {
-    for (const auto& entry : fs::directory_iterator(args["truth"])) {
-      const std::string name = entry.path().filename().string();
-      if (name.rfind("images_", 0) != 0 || entry.path().extension() != ".txt") continue;
-      for (auto& [id, image] : scene::readColmapImages(entry.path())) truth[image.name] = image;
+    const fs::path truth_dir = args["truth"];
+    if (fs::is_directory(truth_dir)) {
+      for (const auto& entry : fs::directory_iterator(truth_dir)) {
+        const std::string name = entry.path().filename().string();
+        if (name.rfind("images_", 0) != 0 || entry.path().extension() != ".txt") continue;
+        for (auto& [id, image] : scene::readColmapImages(entry.path())) truth[image.name] = image;
+      }
+    }
+    if (truth.empty()) {  // a run's folder instead of its ground_truth/ measured nothing
+      std::cerr << "sfm_vs_colmap: --truth " << truth_dir.string()
+                << ": no images_*.txt poses there (give a simulator run's ground_truth/)\n";
+      return 2;
     }
     std::cerr << "bench: " << truth.size() << " ground-truth poses\n";
   }
