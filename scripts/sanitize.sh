@@ -68,6 +68,12 @@ export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1:new_
 export LSAN_OPTIONS="suppressions=$suppressions/lsan.txt:print_suppressions=0"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 export TSAN_OPTIONS="suppressions=$suppressions/tsan.txt:halt_on_error=1:second_deadlock_stack=1"
+if $thread; then
+  # clang 14's TSan cannot see glibc's clock-based locks (scripts/tsan_clock_locks.c): forward them.
+  shim="$PWD/build-$kind/libtsan_clock_locks.so"
+  cc -O2 -shared -fPIC -o "$shim" scripts/tsan_clock_locks.c -lpthread
+  export LD_PRELOAD="$shim"
+fi
 ./scripts/isolated-network.sh colcon test --merge-install --build-base "build-$kind" \
   --install-base "install-$kind" --event-handlers console_direct- console_cohesion+ \
   --return-code-on-test-failure --ctest-args --output-on-failure -j2 "${test_args[@]}"
