@@ -10,6 +10,22 @@
 
 #include "auv/sim/common/yaml_section.h"
 
+// ThreadSanitizer cannot see OpenCV's thread pool (TBB, not instrumented) hand the patches to
+// its workers and the baked texture back, and took the workers' reads for races; under TSan the
+// loop says so itself (docs/reliability.md, "Sanitizers").
+#if defined(__has_feature)
+#if __has_feature(thread_sanitizer)
+extern "C" void __tsan_acquire(void* addr);
+extern "C" void __tsan_release(void* addr);
+#define AUV_HAND_OVER_ACQUIRE(object) __tsan_acquire(object)
+#define AUV_HAND_OVER_RELEASE(object) __tsan_release(object)
+#endif
+#endif
+#ifndef AUV_HAND_OVER_ACQUIRE
+#define AUV_HAND_OVER_ACQUIRE(object) (void)(object)
+#define AUV_HAND_OVER_RELEASE(object) (void)(object)
+#endif
+
 namespace auv::sim::worldgen {
 namespace {
 
@@ -291,12 +307,16 @@ Mesh bakeTexturedMesh(const std::vector<SurfaceGrid>& grids, const AtlasOptions&
   Mesh mesh;
   mesh.texture = cv::Mat(height, width, CV_8UC3, cv::Scalar(110, 120, 120));
   const MaterialShader shader(options.seed);
+  AUV_HAND_OVER_RELEASE(&patches);
   cv::parallel_for_(cv::Range(0, static_cast<int>(patches.size())), [&](const cv::Range& range) {
+    AUV_HAND_OVER_ACQUIRE(&patches);
     for (int i = range.start; i < range.end; ++i) {
       const Patch& patch = patches[i];
       bakePatch(patch, grids[patch.grid], shader, patch.texel, options.coarse_step, mesh.texture);
     }
+    AUV_HAND_OVER_RELEASE(&patches);
   });
+  AUV_HAND_OVER_ACQUIRE(&patches);
 
   // Triangles with the texture coordinates of their patch; vertices shared within a grid.
   std::vector<size_t> grid_base(grids.size() + 1, 0);
